@@ -1,0 +1,47 @@
+# Test registration helpers.
+#
+# softevo_add_test(NAME name SOURCES a.cpp ... LIBS lib ... [LABELS l ...])
+#   one GoogleTest executable, tests discovered individually by ctest.
+# softevo_add_mpi_test(NAME name SOURCES a.cpp ... LIBS lib ... [LABELS l ...])
+#   linked with the MPI GoogleTest main (tests/mpi_gtest_main.cpp); registered at np=2 and, with
+#   --oversubscribe, at np=3. The root-user environment of Open MPI is set for every entry.
+include(GoogleTest)
+
+set(SOFTEVO_MPI_ENV "OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1;OMPI_MCA_rmaps_base_oversubscribe=1")
+
+function(softevo_add_test)
+  cmake_parse_arguments(T "" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  add_executable(${T_NAME} ${T_SOURCES})
+  target_link_libraries(${T_NAME} PRIVATE ${T_LIBS} GTest::gtest GTest::gtest_main)
+  set_target_properties(${T_NAME} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/tests)
+  if(NOT T_TIMEOUT)
+    set(T_TIMEOUT 300)
+  endif()
+  if(NOT T_LABELS)
+    set(T_LABELS unit)
+  endif()
+  gtest_discover_tests(${T_NAME}
+    WORKING_DIRECTORY ${CMAKE_SOURCE_DIR}
+    PROPERTIES LABELS "${T_LABELS}" TIMEOUT ${T_TIMEOUT}
+               ENVIRONMENT "SOFTEVO_SOURCE_DIR=${CMAKE_SOURCE_DIR};SOFTEVO_BINARY_DIR=${CMAKE_BINARY_DIR};${SOFTEVO_MPI_ENV}"
+    DISCOVERY_TIMEOUT 60)
+endfunction()
+
+function(softevo_add_mpi_test)
+  cmake_parse_arguments(T "" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  add_executable(${T_NAME} ${T_SOURCES} ${CMAKE_SOURCE_DIR}/tests/mpi_gtest_main.cpp)
+  target_link_libraries(${T_NAME} PRIVATE ${T_LIBS} MPI::MPI_CXX GTest::gtest)
+  set_target_properties(${T_NAME} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/tests)
+  if(NOT T_TIMEOUT)
+    set(T_TIMEOUT 300)
+  endif()
+  foreach(np 2 3)
+    add_test(NAME ${T_NAME}.np${np}
+      COMMAND ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} ${np} --oversubscribe
+              $<TARGET_FILE:${T_NAME}>
+      WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+    set_tests_properties(${T_NAME}.np${np} PROPERTIES
+      LABELS "mpi;${T_LABELS}" TIMEOUT ${T_TIMEOUT} PROCESSORS ${np}
+      ENVIRONMENT "SOFTEVO_SOURCE_DIR=${CMAKE_SOURCE_DIR};SOFTEVO_BINARY_DIR=${CMAKE_BINARY_DIR};${SOFTEVO_MPI_ENV}")
+  endforeach()
+endfunction()

@@ -1,0 +1,576 @@
+// Strict TOML config: the schema below is the single list of every key, its type, its allowed
+// values and its unit conversion. Parsing, validation, printing and hashing all walk it, so a key
+// cannot be parsed but not printed (or hashed).
+#include "common/config.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <variant>
+
+#define TOML_EXCEPTIONS 1
+#include <toml++/toml.h>
+
+namespace softevo {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kPascalPerBar = 1.0e5;
+
+using Target = std::variant<double*, std::int64_t*, bool*, std::string*, std::vector<double>*,
+                            std::vector<std::int64_t>*, std::vector<std::string>*>;
+
+struct KeyDef {
+  const char* section;
+  const char* key;
+  Target target;
+  double min = -kInf;  // inclusive range of numbers (each element of a number list)
+  double max = kInf;
+  std::vector<std::string> allowed = {};  // allowed strings (each element of a string list)
+  double scale = 1.0;                     // config unit -> SI (bar -> Pa)
+  const char* unit = "";                  // config unit, for messages
+  std::size_t list_length = 0;            // exact list length, 0 = any non-empty length
+  bool min_exclusive = false;
+};
+
+const std::vector<std::string> kSections = {"run",        "task", "physics", "pneumatics",
+                                            "controller", "body", "neat"};
+
+std::vector<KeyDef> schema(Config& c) {
+  const std::vector<std::string> activations = {"sigmoid", "sin",   "abs",  "square",
+                                                "exp",     "clamped", "gauss", "tanh"};
+  auto& r = c.run;
+  auto& t = c.task;
+  auto& p = c.physics;
+  auto& pn = c.pneumatics;
+  auto& ct = c.controller;
+  auto& b = c.body;
+  auto& n = c.neat;
+  return {
+      {"run", "seed", &r.seed, 0, 9.0e15},
+      {"run", "generations", &r.generations, 0, 1.0e7},
+      {"run", "eval_timeout_seconds", &r.eval_timeout_seconds, 0, kInf, {}, 1.0, "s"},
+      {"run", "on_failure", &r.on_failure, 0, 0, {"killed", "abort"}},
+
+      {"task", "kind", &t.kind, 0, 0, {"gait", "directed"}},
+      {"task", "control", &t.control, 0, 0, {"open", "closed"}},
+      {"task", "eval_seconds", &t.eval_seconds, 0, 3600, {}, 1.0, "s", 0, true},
+      {"task", "control_rate", &t.control_rate, 0, 10000, {}, 1.0, "Hz", 0, true},
+      {"task", "directions", &t.directions, -180, 180, {}, 1.0, "deg"},
+      {"task", "path_penalty_weight", &t.path_penalty_weight, 0, kInf},
+
+      {"physics", "integrator", &p.integrator, 0, 0, {"pneuvox", "symplectic"}},
+      {"physics", "dt_fraction", &p.dt_fraction, 0, 1.0, {}, 1.0, "", 0, true},
+      {"physics", "voxel_size", &p.voxel_size, 0, 10, {}, 1.0, "m", 0, true},
+      {"physics", "gravity", &p.gravity, 0, 1000, {}, 1.0, "m/s^2"},
+      {"physics", "floor", &p.floor},
+      {"physics", "self_collision", &p.self_collision},
+      {"physics", "static_friction", &p.static_friction, 0, 100},
+      {"physics", "kinetic_friction", &p.kinetic_friction, 0, 100},
+      {"physics", "internal_damping", &p.internal_damping, 0, 10},
+      {"physics", "global_damping", &p.global_damping, 0, 10},
+      {"physics", "collision_damping", &p.collision_damping, 0, 10},
+      {"physics", "youngs_modulus_min", &p.youngs_modulus_min, 0, 1e12, {}, 1.0, "Pa", 0, true},
+      {"physics", "youngs_modulus_max", &p.youngs_modulus_max, 0, 1e12, {}, 1.0, "Pa", 0, true},
+      {"physics", "material_count", &p.material_count, 1, 10},
+      {"physics", "density", &p.density, 0, 1e6, {}, 1.0, "kg/m^3", 0, true},
+
+      {"pneumatics", "supply_pressure", &pn.supply_pressure, 0, 100, {}, kPascalPerBar, "bar"},
+      {"pneumatics", "ambient_pressure", &pn.ambient_pressure, 0, 100, {}, kPascalPerBar, "bar"},
+      {"pneumatics", "conductivity", &pn.conductivity, 0, 1000, {}, 1.0, "m^3/(bar s)"},
+      {"pneumatics", "valve_cutoff", &pn.valve_cutoff, 0, 1e4, {}, 1.0, "Hz", 0, true},
+      {"pneumatics", "valve_filter_stages", &pn.valve_filter_stages, 0, 16},
+      {"pneumatics", "valve_filter_q", &pn.valve_filter_q, 0, 100, {}, 1.0, "", 0, true},
+      {"pneumatics", "initial_sensor_pressure", &pn.initial_sensor_pressure, 0, 100, {},
+       kPascalPerBar, "bar"},
+
+      {"controller", "hidden", &ct.hidden, 1, 64},
+      {"controller", "crossover_method", &ct.crossover_method, 0, 0, {"1pointpl", "random", "1point"}},
+      {"controller", "weight_init_sd", &ct.weight_init_sd, 0, 100},
+      {"controller", "gene_limit", &ct.gene_limit, 0, 1000, {}, 1.0, "", 0, true},
+      {"controller", "freq_min", &ct.freq_min, 0, 1000, {}, 1.0, "Hz", 0, true},
+      {"controller", "freq_max", &ct.freq_max, 0, 1000, {}, 1.0, "Hz", 0, true},
+      {"controller", "freq_step_size_init", &ct.freq_step_size_init, 0, 1000, {}, 1.0, "Hz"},
+
+      {"body", "lattice", &b.lattice, 2, 64, {}, 1.0, "cells", 3},
+      {"body", "distance_input", &b.distance_input, 0, 0, {"center", "pneuvox"}},
+      {"body", "presence_threshold", &b.presence_threshold, -kInf, kInf},
+      {"body", "pneumatic_threshold", &b.pneumatic_threshold, -kInf, kInf},
+      {"body", "max_chambers", &b.max_chambers, 1, 10},
+
+      {"neat", "pop_size", &n.pop_size, 2, 1e6},
+      {"neat", "compatibility_threshold", &n.compatibility_threshold, 0, kInf, {}, 1.0, "", 0, true},
+      {"neat", "compatibility_disjoint_coefficient", &n.compatibility_disjoint_coefficient, 0, kInf},
+      {"neat", "compatibility_weight_coefficient", &n.compatibility_weight_coefficient, 0, kInf},
+      {"neat", "conn_add_prob", &n.conn_add_prob, 0, 1},
+      {"neat", "conn_delete_prob", &n.conn_delete_prob, 0, 1},
+      {"neat", "node_add_prob", &n.node_add_prob, 0, 1},
+      {"neat", "node_delete_prob", &n.node_delete_prob, 0, 1},
+      {"neat", "activation_default", &n.activation_default, 0, 0,
+       {"random", "sigmoid", "sin", "abs", "square", "exp", "clamped", "gauss", "tanh"}},
+      {"neat", "activation_mutate_rate", &n.activation_mutate_rate, 0, 1},
+      {"neat", "activation_options", &n.activation_options, 0, 0, activations},
+      {"neat", "bias_init_mean", &n.bias_init_mean},
+      {"neat", "bias_init_stdev", &n.bias_init_stdev, 0, kInf},
+      {"neat", "bias_max_value", &n.bias_max_value},
+      {"neat", "bias_min_value", &n.bias_min_value},
+      {"neat", "bias_mutate_power", &n.bias_mutate_power, 0, kInf},
+      {"neat", "bias_mutate_rate", &n.bias_mutate_rate, 0, 1},
+      {"neat", "bias_replace_rate", &n.bias_replace_rate, 0, 1},
+      {"neat", "weight_init_mean", &n.weight_init_mean},
+      {"neat", "weight_init_stdev", &n.weight_init_stdev, 0, kInf},
+      {"neat", "weight_max_value", &n.weight_max_value},
+      {"neat", "weight_min_value", &n.weight_min_value},
+      {"neat", "weight_mutate_power", &n.weight_mutate_power, 0, kInf},
+      {"neat", "weight_mutate_rate", &n.weight_mutate_rate, 0, 1},
+      {"neat", "weight_replace_rate", &n.weight_replace_rate, 0, 1},
+      {"neat", "response_init_mean", &n.response_init_mean},
+      {"neat", "response_init_stdev", &n.response_init_stdev, 0, kInf},
+      {"neat", "response_max_value", &n.response_max_value},
+      {"neat", "response_min_value", &n.response_min_value},
+      {"neat", "response_mutate_power", &n.response_mutate_power, 0, kInf},
+      {"neat", "response_mutate_rate", &n.response_mutate_rate, 0, 1},
+      {"neat", "response_replace_rate", &n.response_replace_rate, 0, 1},
+      {"neat", "enabled_mutate_rate", &n.enabled_mutate_rate, 0, 1},
+      {"neat", "max_stagnation", &n.max_stagnation, 1, 1e9},
+      {"neat", "species_elitism", &n.species_elitism, 0, 1e9},
+      {"neat", "elitism", &n.elitism, 0, 1e9},
+      {"neat", "survival_threshold", &n.survival_threshold, 0, 1, {}, 1.0, "", 0, true},
+      {"neat", "tournament_size", &n.tournament_size, 1, 1e9},
+      {"neat", "min_species_size", &n.min_species_size, 1, 1e9},
+  };
+}
+
+// Shortest text that parses back to exactly `v` (std::to_chars round-trip guarantee), written
+// so that TOML reads it as a float.
+std::string format_double(double v) {
+  char buf[64];
+  auto res = std::to_chars(buf, buf + sizeof buf, v);
+  std::string s(buf, res.ptr);
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
+  return s;
+}
+
+std::string quote(const std::string& s) {
+  std::string out = "\"";
+  for (char ch : s) {
+    if (ch == '"' || ch == '\\') out += '\\';
+    out += ch;
+  }
+  return out + "\"";
+}
+
+std::string join(const std::vector<std::string>& items, const char* sep = ", ") {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? sep : "") + items[i];
+  return out;
+}
+
+std::string range_text(const KeyDef& def, bool integer) {
+  const char* kind = integer ? "integer" : "number";
+  const bool has_min = def.min != -kInf;
+  const bool has_max = def.max != kInf;
+  auto num = [&](double v) {
+    return integer ? std::to_string(static_cast<long long>(v)) : format_double(v);
+  };
+  std::string unit = *def.unit ? std::string(" ") + def.unit : "";
+  if (has_min && has_max) {
+    return std::string(kind) + (def.min_exclusive ? " in (" : " in [") + num(def.min) + ", " +
+           num(def.max) + "]" + unit;
+  }
+  if (has_min) return std::string(kind) + (def.min_exclusive ? " > " : " >= ") + num(def.min) + unit;
+  if (has_max) return std::string(kind) + " <= " + num(def.max) + unit;
+  return std::string(kind) + unit;
+}
+
+std::string allowed_text(const KeyDef& def) {
+  return std::visit(
+      [&](auto* target) -> std::string {
+        using T = std::remove_pointer_t<decltype(target)>;
+        if constexpr (std::is_same_v<T, double>) return range_text(def, false);
+        if constexpr (std::is_same_v<T, std::int64_t>) return range_text(def, true);
+        if constexpr (std::is_same_v<T, bool>) return "true or false";
+        if constexpr (std::is_same_v<T, std::string>) {
+          std::vector<std::string> q;
+          for (const auto& a : def.allowed) q.push_back(quote(a));
+          return "one of " + join(q);
+        }
+        if constexpr (std::is_same_v<T, std::vector<double>>) {
+          return std::string(def.list_length ? "array of " + std::to_string(def.list_length)
+                                             : "non-empty array of") +
+                 " numbers, each " + range_text(def, false);
+        }
+        if constexpr (std::is_same_v<T, std::vector<std::int64_t>>) {
+          return std::string(def.list_length ? "array of " + std::to_string(def.list_length)
+                                             : "non-empty array of") +
+                 " integers, each " + range_text(def, true);
+        }
+        if constexpr (std::is_same_v<T, std::vector<std::string>>) {
+          std::vector<std::string> q;
+          for (const auto& a : def.allowed) q.push_back(quote(a));
+          return "non-empty array of distinct strings from " + join(q);
+        }
+        return "";
+      },
+      def.target);
+}
+
+// Levenshtein distance, for "did you mean" hints on typos.
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diag = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+std::string suggestion(const std::string& name, const std::vector<std::string>& candidates) {
+  std::string best;
+  std::size_t best_d = std::max<std::size_t>(1, name.size() / 3) + 1;  // accept d <= that - 1
+  for (const auto& c : candidates) {
+    const std::size_t d = edit_distance(name, c);
+    if (d < best_d) {
+      best_d = d;
+      best = c;
+    }
+  }
+  return best.empty() ? "" : " (did you mean '" + best + "'?)";
+}
+
+struct Location {
+  std::string source;  // file name or "--set ..."
+  std::int64_t line = 0;
+  std::string prefix() const {
+    return line > 0 ? source + ":" + std::to_string(line) + ": " : source + ": ";
+  }
+};
+
+[[noreturn]] void fail(const Location& at, const std::string& message) {
+  throw ConfigError(at.prefix() + message);
+}
+
+std::string type_name(const toml::node& node) {
+  switch (node.type()) {
+    case toml::node_type::string: return "a string";
+    case toml::node_type::integer: return "an integer";
+    case toml::node_type::floating_point: return "a float";
+    case toml::node_type::boolean: return "a boolean";
+    case toml::node_type::array: return "an array";
+    case toml::node_type::table: return "a table";
+    default: return "a date/time";
+  }
+}
+
+double number_of(const toml::node& node, const KeyDef& def, const Location& at,
+                 const std::string& name, bool integer) {
+  double v = 0;
+  if (integer) {
+    if (!node.is_integer()) {
+      fail(at, name + " must be " + allowed_text(def) + ", got " + type_name(node));
+    }
+    v = static_cast<double>(node.as_integer()->get());
+  } else {
+    if (node.is_integer()) {
+      v = static_cast<double>(node.as_integer()->get());
+    } else if (node.is_floating_point()) {
+      v = node.as_floating_point()->get();
+    } else {
+      fail(at, name + " must be " + allowed_text(def) + ", got " + type_name(node));
+    }
+  }
+  const bool below = def.min_exclusive ? !(v > def.min) : !(v >= def.min);
+  if (!std::isfinite(v) || below || !(v <= def.max)) {
+    std::string shown;
+    if (integer) {
+      shown = std::to_string(node.as_integer()->get());
+    } else {
+      shown = format_double(v);
+    }
+    fail(at, name + " = " + shown + " is out of range; allowed: " + allowed_text(def));
+  }
+  return v;
+}
+
+std::string string_of(const toml::node& node, const KeyDef& def, const Location& at,
+                      const std::string& name) {
+  if (!node.is_string()) {
+    fail(at, name + " must be " + allowed_text(def) + ", got " + type_name(node));
+  }
+  std::string v = node.as_string()->get();
+  if (!def.allowed.empty() &&
+      std::find(def.allowed.begin(), def.allowed.end(), v) == def.allowed.end()) {
+    fail(at, name + " = " + quote(v) + " is not allowed" + suggestion(v, def.allowed) +
+                 "; allowed: " + allowed_text(def));
+  }
+  return v;
+}
+
+void assign(const KeyDef& def, const toml::node& node, const Location& at) {
+  const std::string name = std::string(def.section) + "." + def.key;
+  std::visit(
+      [&](auto* target) {
+        using T = std::remove_pointer_t<decltype(target)>;
+        if constexpr (std::is_same_v<T, double>) {
+          *target = number_of(node, def, at, name, false) * def.scale;
+        } else if constexpr (std::is_same_v<T, std::int64_t>) {
+          number_of(node, def, at, name, true);  // validates type and range
+          *target = node.as_integer()->get();
+        } else if constexpr (std::is_same_v<T, bool>) {
+          if (!node.is_boolean()) {
+            fail(at, name + " must be true or false, got " + type_name(node));
+          }
+          *target = node.as_boolean()->get();
+        } else if constexpr (std::is_same_v<T, std::string>) {
+          *target = string_of(node, def, at, name);
+        } else {
+          if (!node.is_array()) {
+            fail(at, name + " must be " + allowed_text(def) + ", got " + type_name(node));
+          }
+          const toml::array& arr = *node.as_array();
+          if (arr.empty() || (def.list_length && arr.size() != def.list_length)) {
+            fail(at, name + " has " + std::to_string(arr.size()) + " elements; allowed: " +
+                         allowed_text(def));
+          }
+          T values;
+          for (std::size_t i = 0; i < arr.size(); ++i) {
+            const std::string element = name + "[" + std::to_string(i) + "]";
+            if constexpr (std::is_same_v<T, std::vector<double>>) {
+              values.push_back(number_of(arr[i], def, at, element, false) * def.scale);
+            } else if constexpr (std::is_same_v<T, std::vector<std::int64_t>>) {
+              values.push_back(static_cast<std::int64_t>(number_of(arr[i], def, at, element, true)));
+            } else {
+              std::string v = string_of(arr[i], def, at, element);
+              if (std::find(values.begin(), values.end(), v) != values.end()) {
+                fail(at, element + " = " + quote(v) + " is listed twice");
+              }
+              values.push_back(std::move(v));
+            }
+          }
+          *target = std::move(values);
+        }
+      },
+      def.target);
+}
+
+std::vector<std::string> keys_of(const std::vector<KeyDef>& defs, const std::string& section) {
+  std::vector<std::string> keys;
+  for (const auto& d : defs) {
+    if (section == d.section) keys.emplace_back(d.key);
+  }
+  return keys;
+}
+
+const KeyDef* find_def(const std::vector<KeyDef>& defs, const std::string& section,
+                       const std::string& key) {
+  for (const auto& d : defs) {
+    if (section == d.section && key == d.key) return &d;
+  }
+  return nullptr;
+}
+
+void check_known_section(const std::string& section, const Location& at) {
+  if (std::find(kSections.begin(), kSections.end(), section) == kSections.end()) {
+    fail(at, "unknown section [" + section + "]" + suggestion(section, kSections) +
+                 "; allowed sections: " + join(kSections));
+  }
+}
+
+const KeyDef& known_key(const std::vector<KeyDef>& defs, const std::string& section,
+                        const std::string& key, const Location& at) {
+  const KeyDef* def = find_def(defs, section, key);
+  if (!def) {
+    const auto keys = keys_of(defs, section);
+    fail(at, "unknown key '" + section + "." + key + "'" + suggestion(key, keys) +
+                 "; allowed keys in [" + section + "]: " + join(keys));
+  }
+  return *def;
+}
+
+// Relations between keys that no single range can express.
+void check_consistency(const Config& c, const std::string& source) {
+  const Location at{source, 0};
+  if (c.physics.youngs_modulus_min > c.physics.youngs_modulus_max) {
+    fail(at, "physics.youngs_modulus_min must be <= physics.youngs_modulus_max");
+  }
+  if (c.controller.freq_min > c.controller.freq_max) {
+    fail(at, "controller.freq_min must be <= controller.freq_max");
+  }
+  if (c.neat.bias_min_value > c.neat.bias_max_value) {
+    fail(at, "neat.bias_min_value must be <= neat.bias_max_value");
+  }
+  if (c.neat.weight_min_value > c.neat.weight_max_value) {
+    fail(at, "neat.weight_min_value must be <= neat.weight_max_value");
+  }
+  if (c.neat.response_min_value > c.neat.response_max_value) {
+    fail(at, "neat.response_min_value must be <= neat.response_max_value");
+  }
+  if (c.neat.activation_default != "random" &&
+      std::find(c.neat.activation_options.begin(), c.neat.activation_options.end(),
+                c.neat.activation_default) == c.neat.activation_options.end()) {
+    fail(at, "neat.activation_default = " + quote(c.neat.activation_default) +
+                 " must be \"random\" or one of neat.activation_options");
+  }
+}
+
+void apply_table(Config& config, const toml::table& root, const std::string& source) {
+  auto defs = schema(config);
+  for (const auto& [section_key, section_node] : root) {
+    const std::string section(section_key.str());
+    const Location at{source, static_cast<std::int64_t>(section_key.source().begin.line)};
+    const toml::table* table = section_node.as_table();
+    if (!table) {
+      std::string home;
+      for (const auto& d : defs) {
+        if (section == d.key) home = d.section;
+      }
+      fail(at, "key '" + section + "' is outside any section" +
+                   (home.empty() ? "" : "; it belongs under [" + home + "]"));
+    }
+    check_known_section(section, at);
+    for (const auto& [key, node] : *table) {
+      const Location key_at{source, static_cast<std::int64_t>(key.source().begin.line)};
+      assign(known_key(defs, section, std::string(key.str()), key_at), node, key_at);
+    }
+  }
+}
+
+void apply_override(Config& config, const std::string& text) {
+  const Location at{"--set " + text, 0};
+  const auto eq = text.find('=');
+  const auto dot = text.find('.');
+  if (eq == std::string::npos || dot == std::string::npos || dot > eq) {
+    fail(at, "expected section.key=value");
+  }
+  const std::string section = text.substr(0, dot);
+  const std::string key = text.substr(dot + 1, eq - dot - 1);
+  const std::string value = text.substr(eq + 1);
+  check_known_section(section, at);
+  auto defs = schema(config);
+  const KeyDef& def = known_key(defs, section, key, at);
+  // The value uses TOML syntax (numbers, true/false, "strings", [arrays]); a bare word that is
+  // not valid TOML is taken as a string, so --set physics.integrator=symplectic works.
+  toml::table parsed;
+  try {
+    parsed = toml::parse("v = " + value);
+  } catch (const toml::parse_error&) {
+    parsed = toml::table{};
+    parsed.insert("v", value);
+  }
+  assign(def, *parsed.get("v"), at);
+}
+
+std::string value_text(const KeyDef& def) {
+  return std::visit(
+      [&](auto* target) -> std::string {
+        using T = std::remove_pointer_t<decltype(target)>;
+        if constexpr (std::is_same_v<T, double>) return format_double(*target / def.scale);
+        if constexpr (std::is_same_v<T, std::int64_t>) return std::to_string(*target);
+        if constexpr (std::is_same_v<T, bool>) return *target ? "true" : "false";
+        if constexpr (std::is_same_v<T, std::string>) return quote(*target);
+        if constexpr (std::is_same_v<T, std::vector<double>>) {
+          std::vector<std::string> items;
+          for (double v : *target) items.push_back(format_double(v / def.scale));
+          return "[" + join(items) + "]";
+        }
+        if constexpr (std::is_same_v<T, std::vector<std::int64_t>>) {
+          std::vector<std::string> items;
+          for (auto v : *target) items.push_back(std::to_string(v));
+          return "[" + join(items) + "]";
+        }
+        if constexpr (std::is_same_v<T, std::vector<std::string>>) {
+          std::vector<std::string> items;
+          for (const auto& v : *target) items.push_back(quote(v));
+          return "[" + join(items) + "]";
+        }
+        return "";
+      },
+      def.target);
+}
+
+}  // namespace
+
+Config parse_config(const std::string& toml_text, const std::string& source_name,
+                    const std::vector<std::string>& overrides) {
+  Config config;
+  toml::table root;
+  try {
+    root = toml::parse(toml_text, source_name);
+  } catch (const toml::parse_error& e) {
+    throw ConfigError(source_name + ":" + std::to_string(e.source().begin.line) +
+                      ": TOML syntax error: " + std::string(e.description()));
+  }
+  apply_table(config, root, source_name);
+  for (const auto& o : overrides) apply_override(config, o);
+  check_consistency(config, source_name);
+  return config;
+}
+
+Config load_config(const std::string& path, const std::vector<std::string>& overrides) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError(path + ": cannot open config file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw ConfigError(path + ": read error");
+  return parse_config(text.str(), path, overrides);
+}
+
+std::string canonical_text(const Config& config) {
+  Config copy = config;  // schema() binds to a mutable Config; printing never changes it
+  const auto defs = schema(copy);
+  std::string out;
+  for (const auto& section : kSections) {
+    out += "[" + section + "]\n";
+    for (const auto& d : defs) {
+      if (section == d.section) out += std::string(d.key) + " = " + value_text(d) + "\n";
+    }
+  }
+  return out;
+}
+
+std::uint64_t config_hash(const Config& config) {
+  // FNV-1a 64 (offset basis 14695981039346656037, prime 1099511628211).
+  std::uint64_t h = 14695981039346656037ULL;
+  for (unsigned char ch : canonical_text(config)) {
+    h ^= ch;
+    h *= 1099511628211ULL;
+  }
+  return h;
+}
+
+std::string hash_hex(std::uint64_t hash) {
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(hash));
+  return buf;
+}
+
+std::vector<StructuralMaterial> material_table(const PhysicsConfig& physics) {
+  // numpy.linspace(E_min, E_max, count): start + k*step, last value exactly E_max.
+  const auto count = static_cast<int>(physics.material_count);
+  std::vector<StructuralMaterial> table(count);
+  const double step =
+      count > 1 ? (physics.youngs_modulus_max - physics.youngs_modulus_min) / (count - 1) : 0.0;
+  for (int k = 0; k < count; ++k) {
+    table[k].youngs_modulus =
+        (k == count - 1 && count > 1) ? physics.youngs_modulus_max
+                                      : physics.youngs_modulus_min + k * step;
+    table[k].density = physics.density;
+  }
+  return table;
+}
+
+std::string experiment_name(const TaskConfig& task) {
+  return std::string(task.kind == "directed" ? "dir" : "gait") + "-" + task.control;
+}
+
+}  // namespace softevo

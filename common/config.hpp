@@ -1,0 +1,168 @@
+// Resolved run configuration: plain data shared by every module.
+//
+// Configs are TOML files (configs/*.toml) parsed strictly by load_config(): an unknown section or
+// key, a wrong type or an out-of-range value is a ConfigError naming file, line, key and the
+// allowed values. Everything inside the code is SI; pressures enter in bar and are converted to
+// Pa here, at the config boundary (SPEC.md section 1). Key names follow neat-python where the
+// thesis parameter has one. Defaults are the thesis experiment values of
+// ../shared/reference/pneuvox-model.md §1 and §8.8.
+#pragma once
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "common/body_plan.hpp"
+
+namespace softevo {
+
+struct RunConfig {
+  std::int64_t seed = 1;           // run seed; every evaluation seed derives from it
+  std::int64_t generations = 500;  // generations to evaluate
+  // Wall-clock limit of one evaluation [s]; 0 = no limit. A timeout is a status, not a crash.
+  double eval_timeout_seconds = 600.0;
+  // What a worker-side failure (exception, non-finite state, timeout) scores: "killed" scores it
+  // like a killed robot (fitness 0) and the run goes on; "abort" ends the run with an error.
+  std::string on_failure = "killed";
+};
+
+struct TaskConfig {
+  std::string kind = "gait";     // "gait" (SPEC 6, §7.1) or "directed" (§7.2, §7.4)
+  std::string control = "open";  // "open" or "closed" loop (pressure sensors as inputs, §4.1)
+  double eval_seconds = 10.0;    // nominal evaluation length [s]; frames = round(60 * seconds)
+  double control_rate = 60.0;    // controller rate [Hz] (§4.6)
+  // Target directions of the directed task [deg], in the order the thesis summed them (§7.4).
+  std::vector<double> directions = {0.0, -40.0, -20.0, 20.0, 40.0};
+  double path_penalty_weight = 0.1;  // omega of §7.2
+};
+
+struct PhysicsConfig {
+  std::string integrator = "pneuvox";  // "pneuvox" (§2.12-2.13) or "symplectic" (§2.9 upstream)
+  double dt_fraction = 1.0;            // time step = recommended step (§2.14) x dt_fraction
+  double voxel_size = 0.01;            // voxel edge [m]
+  double gravity = 9.80665;            // [m/s^2], acting along -z
+  bool floor = true;                   // floor contact at z = 0 (voxel centres, §2.8)
+  bool self_collision = true;          // voxel-voxel collisions (§2.10)
+  double static_friction = 0.9;        // mu_s [-]
+  double kinetic_friction = 0.9;       // mu_k [-]
+  double internal_damping = 0.1;       // zeta_int [-] (bond damping ratio)
+  double global_damping = 0.001;       // zeta_glob [-]
+  double collision_damping = 0.1;      // zeta_col [-]
+  // Structural material k (1..material_count) has E_k = linspace(min, max, count)[k-1] (§1).
+  double youngs_modulus_min = 1.0e4;  // [Pa]
+  double youngs_modulus_max = 1.0e5;  // [Pa]
+  std::int64_t material_count = 10;
+  double density = 1000.0;  // [kg/m^3]
+};
+
+struct PneumaticsConfig {
+  double supply_pressure = 1.2e5;    // inlet reservoir, absolute [Pa] (config: bar)
+  double ambient_pressure = 1.0e5;   // outlet reservoir, absolute [Pa] (config: bar)
+  double conductivity = 0.025;       // conduit conductivity scale [m^3/(bar s)] (§3.5)
+  double valve_cutoff = 10.0;        // low-pass cut-off of the valve opening [Hz] (§3.5)
+  std::int64_t valve_filter_stages = 4;
+  double valve_filter_q = 0.707;
+  // First-frame pressure sensor reading, absolute [Pa] (config: bar; SPEC 3, default 0.0 bar).
+  double initial_sensor_pressure = 0.0;
+};
+
+struct ControllerConfig {
+  std::int64_t hidden = 4;                  // Elman hidden (= context) units (§4.1)
+  std::string crossover_method = "1pointpl";  // "1pointpl", "random" or "1point" (§8.6)
+  double weight_init_sd = 3.0;              // init SD of genes and initial step size (§8.2)
+  double gene_limit = 5.0;                  // genes and step sizes clipped to +-gene_limit
+  double freq_min = 1.0;                    // oscillator frequency range [Hz]
+  double freq_max = 5.0;                    // [Hz]
+  double freq_step_size_init = 0.2;         // initial step size of the frequency gene [Hz]
+};
+
+struct BodyConfig {
+  std::vector<std::int64_t> lattice = {10, 10, 10};  // CPPN query lattice X, Y, Z
+  std::string distance_input = "center";             // "center" or "pneuvox" (SPEC 5)
+  double presence_threshold = 0.1;
+  double pneumatic_threshold = 0.1;
+  std::int64_t max_chambers = 10;  // chambers beyond this stay unactuated voids (§6.5 step 9)
+};
+
+// neat-python 0.92 names and semantics (§8.8).
+struct NeatConfig {
+  std::int64_t pop_size = 50;
+  double compatibility_threshold = 3.5;
+  double compatibility_disjoint_coefficient = 2.0;
+  double compatibility_weight_coefficient = 1.0;
+  double conn_add_prob = 0.0713;
+  double conn_delete_prob = 0.03;
+  double node_add_prob = 0.05;
+  double node_delete_prob = 0.0;
+  std::string activation_default = "random";
+  double activation_mutate_rate = 0.01;
+  std::vector<std::string> activation_options = {"sigmoid", "sin",     "abs",  "square",
+                                                 "exp",     "clamped", "gauss"};
+  double bias_init_mean = 0.0;
+  double bias_init_stdev = 1.0;
+  double bias_max_value = 3.0;
+  double bias_min_value = -3.0;
+  double bias_mutate_power = 0.0025;
+  double bias_mutate_rate = 0.5;
+  double bias_replace_rate = 0.0;
+  double weight_init_mean = 0.0;
+  double weight_init_stdev = 1.0;
+  double weight_max_value = 3.0;
+  double weight_min_value = -3.0;
+  double weight_mutate_power = 0.0025;
+  double weight_mutate_rate = 0.5;
+  double weight_replace_rate = 0.0;
+  double response_init_mean = 1.0;
+  double response_init_stdev = 0.0;
+  double response_max_value = 30.0;
+  double response_min_value = -30.0;
+  double response_mutate_power = 0.0;
+  double response_mutate_rate = 0.0;
+  double response_replace_rate = 0.0;
+  double enabled_mutate_rate = 0.01;
+  std::int64_t max_stagnation = 15;
+  std::int64_t species_elitism = 1;
+  std::int64_t elitism = 1;
+  double survival_threshold = 1.0;
+  std::int64_t tournament_size = 2;
+  std::int64_t min_species_size = 2;
+};
+
+struct Config {
+  RunConfig run;
+  TaskConfig task;
+  PhysicsConfig physics;
+  PneumaticsConfig pneumatics;
+  ControllerConfig controller;
+  BodyConfig body;
+  NeatConfig neat;
+};
+
+// A config problem: message already names file, line, key and the allowed values.
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Parse a TOML file strictly, then apply overrides "section.key=value" (TOML value syntax; a bare
+// word is taken as a string). Throws ConfigError.
+Config load_config(const std::string& path, const std::vector<std::string>& overrides = {});
+// Same from TOML text; `source_name` is used in error messages.
+Config parse_config(const std::string& toml_text, const std::string& source_name,
+                    const std::vector<std::string>& overrides = {});
+
+// Every key in schema order, one per line, shortest round-trip numbers, pressures in bar.
+// Parsing this text gives back an identical Config.
+std::string canonical_text(const Config& config);
+// FNV-1a 64 of canonical_text(): the config identity in archives and on the wire.
+std::uint64_t config_hash(const Config& config);
+std::string hash_hex(std::uint64_t hash);  // 16 lower-case hex digits
+
+// Structural materials 1..material_count of the thesis: E_k = linspace(E_min, E_max, count)
+// (numpy semantics, pneuvox-model.md §1/§6.4), density as configured. Index k-1 = material k.
+std::vector<StructuralMaterial> material_table(const PhysicsConfig& physics);
+// "gait-open", "gait-closed", "dir-open" or "dir-closed" from task.kind and task.control.
+std::string experiment_name(const TaskConfig& task);
+
+}  // namespace softevo

@@ -1,0 +1,84 @@
+// The robot file `softevo.robot/1` (SPEC.md section 9) as plain data, plus its strict reader
+// and writer (robot_file.cpp). What `softevo eval` reads and `softevo export` writes.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "common/body_plan.hpp"
+
+namespace softevo {
+
+// The 9 named controller vectors of pneuvox-model.md §4.4, in canonical order. The same layout
+// carries the values and (in the genome) their per-gene mutation step sizes.
+struct ControllerVectors {
+  std::vector<double> weights_hidden;          // n_in*H,  index c*H + i: input c -> hidden i
+  std::vector<double> bias_hidden;             // H
+  std::vector<double> weights_out;             // H*n_out, index c*n_out + k: hidden c -> out k
+  std::vector<double> bias_out;                // n_out
+  std::vector<double> weights_recurrent;       // H*H,     index c*H + i: context c -> hidden i
+  std::vector<double> weights_recurrent_self;  // H (diagonal context -> context)
+  std::vector<double> weights_context;         // H (diagonal hidden -> context)
+  std::vector<double> bias_context;            // H
+  std::vector<double> freq;                    // 1: oscillator frequency [Hz]
+};
+
+struct ControllerSpec {
+  std::string kind = "elman";
+  bool closed_loop = false;  // "control": "closed" feeds chamber pressures (§4.1)
+  bool directed = false;     // feeds the direction sensor (§7.3)
+  int hidden = 4;
+  int outputs = 20;
+  ControllerVectors vectors;  // freq[0] = frequency [Hz]
+  // Inputs: [sin, cos, (direction), (up to 10 pressure sensors)] (§4.1).
+  int input_count() const { return 2 + (directed ? 1 : 0) + (closed_loop ? 10 : 0); }
+  double frequency() const { return vectors.freq.empty() ? 0.0 : vectors.freq[0]; }
+};
+
+struct CppnNodeRecord {
+  int key = 0;
+  double bias = 0.0;
+  double response = 1.0;
+  std::string activation;  // sigmoid sin abs square exp clamped gauss (tanh for tests)
+  std::string aggregation = "sum";
+};
+
+struct CppnConnectionRecord {
+  int in = 0;
+  int out = 0;
+  double weight = 0.0;
+  bool enabled = true;
+};
+
+// Optional "genome" section: what the body was developed from.
+struct RobotGenomeRecord {
+  std::vector<CppnNodeRecord> nodes;              // input keys -1..-4 are implicit
+  std::vector<CppnConnectionRecord> connections;  // in summation order
+  ControllerVectors controller_step_sizes;
+  std::vector<int> body_lattice = {10, 10, 10};
+  std::string distance_input = "pneuvox";  // "pneuvox" or "center"
+};
+
+struct RobotFile {
+  std::string name;
+  BodyPlan body;  // lattice, cells, materials (defaults E = 10 kPa x k, 1000 kg/m^3), voxel size
+  ControllerSpec controller;
+  std::optional<RobotGenomeRecord> genome;
+  std::string reference_json;  // "reference" object verbatim (never interpreted), "" if absent
+};
+
+// Strict reader: unknown keys, wrong types, wrong lengths are a RobotFileError naming the file,
+// the key and the problem.
+class RobotFileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+RobotFile read_robot_file(const std::string& path);
+RobotFile parse_robot_json(const std::string& json_text, const std::string& source_name);
+std::string robot_to_json(const RobotFile& robot);  // pretty JSON, full double precision
+void write_robot_file(const RobotFile& robot, const std::string& path);  // atomic (tmp + rename)
+
+}  // namespace softevo

@@ -1,0 +1,98 @@
+// Wire format: messages are bytes with a fixed header, then fields written one by one in
+// little-endian order (ARCHITECTURE.md section 4). Never memcpy a struct: every field is
+// spelled out, so the bytes are the same on every platform and compiler.
+//
+// Header (16 bytes): magic u32 = 0x4F564553 ("SEVO" read as little-endian bytes 'S','E','V','O'),
+// format version u16, kind u16, payload length u64. The payload follows.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "common/eval_types.hpp"
+
+namespace softevo {
+
+inline constexpr std::uint32_t kWireMagic = 0x4F564553;  // bytes "SEVO"
+inline constexpr std::uint16_t kWireVersion = 1;
+inline constexpr std::size_t kWireHeaderSize = 16;
+// Largest payload we accept: guards against a corrupt length allocating gigabytes.
+inline constexpr std::uint64_t kWireMaxPayload = 1ULL << 30;
+
+enum class MessageKind : std::uint16_t {
+  eval_request = 1,
+  eval_result = 2,
+  shutdown = 3,
+  genome = 4,
+  population = 5,
+  config_text = 6,
+};
+
+// Malformed, truncated or oversized input: the message names the field and the offsets.
+class WireError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class WireWriter {
+ public:
+  void u8(std::uint8_t v);
+  void u16(std::uint16_t v);
+  void u32(std::uint32_t v);
+  void u64(std::uint64_t v);
+  void i32(std::int32_t v) { u32(static_cast<std::uint32_t>(v)); }
+  void i64(std::int64_t v) { u64(static_cast<std::uint64_t>(v)); }
+  void f64(double v);  // IEEE-754 bits, little-endian
+  void boolean(bool v) { u8(v ? 1 : 0); }
+  void string(const std::string& s);                  // u64 length + bytes
+  void bytes(std::span<const std::uint8_t> b);        // u64 length + bytes
+  void f64_vector(const std::vector<double>& v);      // u64 count + values
+  const std::vector<std::uint8_t>& data() const { return data_; }
+  std::vector<std::uint8_t> take() { return std::move(data_); }
+
+ private:
+  std::vector<std::uint8_t> data_;
+};
+
+class WireReader {
+ public:
+  // `what` names the message in error texts ("eval request", "genome", ...).
+  WireReader(std::span<const std::uint8_t> data, std::string what);
+  std::uint8_t u8(const char* field);
+  std::uint16_t u16(const char* field);
+  std::uint32_t u32(const char* field);
+  std::uint64_t u64(const char* field);
+  std::int32_t i32(const char* field) { return static_cast<std::int32_t>(u32(field)); }
+  std::int64_t i64(const char* field) { return static_cast<std::int64_t>(u64(field)); }
+  double f64(const char* field);
+  bool boolean(const char* field);
+  std::string string(const char* field);
+  std::vector<std::uint8_t> bytes(const char* field);
+  std::vector<double> f64_vector(const char* field);
+  // Throws if bytes remain: an oversized message is as wrong as a truncated one.
+  void finish() const;
+  std::size_t remaining() const { return data_.size() - offset_; }
+
+ private:
+  void need(std::size_t n, const char* field) const;
+  std::span<const std::uint8_t> data_;
+  std::size_t offset_ = 0;
+  std::string what_;
+};
+
+// Frame a payload with the header / check and strip the header (kind must match).
+std::vector<std::uint8_t> frame_message(MessageKind kind, std::span<const std::uint8_t> payload);
+std::span<const std::uint8_t> unframe_message(std::span<const std::uint8_t> message,
+                                              MessageKind expected_kind);
+MessageKind peek_message_kind(std::span<const std::uint8_t> message);
+
+// Work units and results on the wire (framed, ready to send).
+std::vector<std::uint8_t> encode_eval_request(const EvalRequest& request);
+EvalRequest decode_eval_request(std::span<const std::uint8_t> message);
+std::vector<std::uint8_t> encode_eval_result(const EvalResult& result);
+EvalResult decode_eval_result(std::span<const std::uint8_t> message);
+
+}  // namespace softevo

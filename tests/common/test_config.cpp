@@ -1,0 +1,136 @@
+// Strict config parsing: defaults, overrides, canonical text and hash, and a folder of
+// deliberately broken configs (tests/data/bad_configs), each carrying its exact expected error
+// on its first line ("# expect: ...").
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "common/config.hpp"
+
+namespace softevo {
+namespace fs = std::filesystem;
+
+static fs::path source_dir() {
+  const char* env = std::getenv("SOFTEVO_SOURCE_DIR");
+  return env ? fs::path(env) : fs::current_path();
+}
+
+TEST(Config, DefaultsAreTheThesisValues) {
+  const Config c = parse_config("", "empty.toml");
+  EXPECT_EQ(c.neat.pop_size, 50);
+  EXPECT_DOUBLE_EQ(c.neat.compatibility_threshold, 3.5);
+  EXPECT_DOUBLE_EQ(c.neat.conn_add_prob, 0.0713);
+  EXPECT_EQ(c.physics.integrator, "pneuvox");
+  EXPECT_DOUBLE_EQ(c.pneumatics.supply_pressure, 1.2e5);  // bar converted to Pa
+  EXPECT_DOUBLE_EQ(c.pneumatics.initial_sensor_pressure, 0.0);
+  EXPECT_EQ(c.task.directions.size(), 5u);
+}
+
+TEST(Config, BarIsConvertedToPascalAtTheBoundary) {
+  const Config c = parse_config("[pneumatics]\nsupply_pressure = 1.5\n", "p.toml");
+  EXPECT_DOUBLE_EQ(c.pneumatics.supply_pressure, 1.5e5);
+  EXPECT_NE(canonical_text(c).find("supply_pressure = 1.5\n"), std::string::npos);
+}
+
+TEST(Config, OverridesApplyAfterTheFileAndAreValidated) {
+  const Config c = parse_config("[neat]\npop_size = 20\n", "o.toml",
+                                {"neat.pop_size=30", "physics.integrator=symplectic",
+                                 "task.directions=[0, 90]", "physics.self_collision=false"});
+  EXPECT_EQ(c.neat.pop_size, 30);
+  EXPECT_EQ(c.physics.integrator, "symplectic");
+  EXPECT_EQ(c.task.directions, (std::vector<double>{0, 90}));
+  EXPECT_FALSE(c.physics.self_collision);
+  try {
+    parse_config("", "o.toml", {"neat.pop_size=1"});
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "--set neat.pop_size=1: neat.pop_size = 1 is out of range; allowed: integer in "
+              "[2, 1000000]");
+  }
+  EXPECT_THROW(parse_config("", "o.toml", {"neat.pop_size"}), ConfigError);
+  EXPECT_THROW(parse_config("", "o.toml", {"nope.key=1"}), ConfigError);
+}
+
+TEST(Config, CanonicalTextRoundTripsAndHashIsStable) {
+  const Config c = parse_config("[run]\nseed = 7\n[physics]\ndt_fraction = 0.3\n", "c.toml");
+  const std::string text = canonical_text(c);
+  const Config again = parse_config(text, "canonical");
+  EXPECT_EQ(canonical_text(again), text);
+  EXPECT_EQ(config_hash(again), config_hash(c));
+  EXPECT_EQ(hash_hex(config_hash(c)).size(), 16u);
+  // Any change of a value changes the hash.
+  EXPECT_NE(config_hash(parse_config("[run]\nseed = 8\n", "x")), config_hash(c));
+  // Formatting differences (comments, order, int vs float spelling) do not.
+  EXPECT_EQ(config_hash(parse_config("# c\n[physics]\ndt_fraction = 0.30\n[run]\nseed=7\n", "y")),
+            config_hash(c));
+}
+
+TEST(Config, HashOfDefaultsIsPinned) {
+  // The hash is archived with every run; changing the canonical form or a default changes it.
+  // Update this value deliberately (and say why in the commit) when the schema changes.
+  EXPECT_EQ(hash_hex(config_hash(Config{})), "33eaaf9fe334a91f");
+}
+
+TEST(Config, MaterialTableIsNumpyLinspace) {
+  const auto table = material_table(PhysicsConfig{});
+  ASSERT_EQ(table.size(), 10u);
+  EXPECT_DOUBLE_EQ(table[0].youngs_modulus, 1e4);
+  EXPECT_DOUBLE_EQ(table[4].youngs_modulus, 5e4);
+  EXPECT_EQ(table[9].youngs_modulus, 1e5);  // last value exact
+  EXPECT_DOUBLE_EQ(table[3].density, 1000.0);
+}
+
+TEST(Config, EveryShippedConfigParses) {
+  int count = 0;
+  for (const auto& entry : fs::directory_iterator(source_dir() / "configs")) {
+    if (entry.path().extension() != ".toml") continue;
+    EXPECT_NO_THROW(load_config(entry.path().string())) << entry.path();
+    ++count;
+  }
+  EXPECT_GT(count, 0);
+}
+
+TEST(Config, MissingFileIsAClearError) {
+  try {
+    load_config("/nonexistent/x.toml");
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), "/nonexistent/x.toml: cannot open config file");
+  }
+}
+
+TEST(Config, BrokenConfigsGiveTheirExactError) {
+  const fs::path dir = source_dir() / "tests/data/bad_configs";
+  int checked = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (entry.path().extension() != ".toml") continue;
+    std::ifstream in(entry.path());
+    std::string first_line;
+    std::getline(in, first_line);
+    const std::string marker = "# expect: ";
+    ASSERT_EQ(first_line.rfind(marker, 0), 0u) << entry.path() << " lacks an expect line";
+    const std::string expected = first_line.substr(marker.size());
+    std::stringstream rest;
+    rest << in.rdbuf();
+    const std::string name = entry.path().filename().string();
+    try {
+      parse_config(first_line + "\n" + rest.str(), name);
+      ADD_FAILURE() << name << " parsed without error";
+    } catch (const ConfigError& e) {
+      if (expected.find("TOML syntax error") != std::string::npos) {
+        // The parser's own wording is toml++'s; pin file, line and our prefix.
+        EXPECT_EQ(std::string(e.what()).rfind(name + ":3: TOML syntax error: ", 0), 0u)
+            << e.what();
+      } else {
+        EXPECT_EQ(std::string(e.what()), expected) << name;
+      }
+    }
+    ++checked;
+  }
+  EXPECT_GE(checked, 10);
+}
+
+}  // namespace softevo

@@ -1,0 +1,18 @@
+// Subcommands of the single-process CLI `softevo`. Each lives in its own cmd_*.cpp and adds
+// itself to the app; softevo_main.cpp calls every register function. A subcommand's callback
+// stores its exit code in `exit_code`; an exception escaping it is printed by main (exit 2).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace softevo::cli {
+
+// Shared exit codes of the CLI tools.
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitMismatch = 1;  // a check ran and found a difference
+inline constexpr int kExitUsage = 2;     // bad arguments, unreadable or malformed input
+
+void register_version(CLI::App& app, int& exit_code);
+void register_config(CLI::App& app, int& exit_code);
+
+}  // namespace softevo::cli

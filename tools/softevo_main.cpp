@@ -1,0 +1,22 @@
+// `softevo`: single-process command line for everything that is not the distributed run.
+#include <cstdio>
+#include <exception>
+
+#include "tools/commands.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"softevo: co-evolution of pneumatic soft robot bodies and brains (single process)"};
+  app.require_subcommand(1);
+  int exit_code = softevo::cli::kExitOk;
+  softevo::cli::register_version(app, exit_code);
+  softevo::cli::register_config(app, exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : softevo::cli::kExitUsage;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "softevo: error: %s\n", e.what());
+    return softevo::cli::kExitUsage;
+  }
+  return exit_code;
+}
