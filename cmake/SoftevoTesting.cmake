@@ -20,10 +20,13 @@ function(softevo_add_test)
   if(NOT T_LABELS)
     set(T_LABELS unit)
   endif()
+  # gtest_discover_tests flattens its PROPERTIES into one list (CMake 3.25), so a list-valued
+  # ENVIRONMENT would keep only its first entry: the unit tests get just the source tree (the
+  # build tree they find from their own executable; none of them starts mpirun).
   gtest_discover_tests(${T_NAME}
     WORKING_DIRECTORY ${CMAKE_SOURCE_DIR}
     PROPERTIES LABELS "${T_LABELS}" TIMEOUT ${T_TIMEOUT}
-               ENVIRONMENT "SOFTEVO_SOURCE_DIR=${CMAKE_SOURCE_DIR};SOFTEVO_BINARY_DIR=${CMAKE_BINARY_DIR};${SOFTEVO_MPI_ENV}"
+               ENVIRONMENT "SOFTEVO_SOURCE_DIR=${CMAKE_SOURCE_DIR}"
     DISCOVERY_TIMEOUT 60)
 endfunction()
 

@@ -41,7 +41,7 @@ const std::vector<std::string> kSections = {"run",        "task", "physics", "pn
                                             "controller", "body", "neat"};
 
 std::vector<KeyDef> schema(Config& c) {
-  const std::vector<std::string> activations = {"sigmoid", "sin",   "abs",  "square",
+  const std::vector<std::string> activations = {"sigmoid", "sin",     "abs",   "square",
                                                 "exp",     "clamped", "gauss", "tanh"};
   auto& r = c.run;
   auto& t = c.task;
@@ -85,11 +85,22 @@ std::vector<KeyDef> schema(Config& c) {
       {"pneumatics", "valve_cutoff", &pn.valve_cutoff, 0, 1e4, {}, 1.0, "Hz", 0, true},
       {"pneumatics", "valve_filter_stages", &pn.valve_filter_stages, 0, 16},
       {"pneumatics", "valve_filter_q", &pn.valve_filter_q, 0, 100, {}, 1.0, "", 0, true},
-      {"pneumatics", "initial_sensor_pressure", &pn.initial_sensor_pressure, 0, 100, {},
-       kPascalPerBar, "bar"},
+      {"pneumatics",
+       "initial_sensor_pressure",
+       &pn.initial_sensor_pressure,
+       0,
+       100,
+       {},
+       kPascalPerBar,
+       "bar"},
 
       {"controller", "hidden", &ct.hidden, 1, 64},
-      {"controller", "crossover_method", &ct.crossover_method, 0, 0, {"1pointpl", "random", "1point"}},
+      {"controller",
+       "crossover_method",
+       &ct.crossover_method,
+       0,
+       0,
+       {"1pointpl", "random", "1point"}},
       {"controller", "weight_init_sd", &ct.weight_init_sd, 0, 100},
       {"controller", "gene_limit", &ct.gene_limit, 0, 1000, {}, 1.0, "", 0, true},
       {"controller", "freq_min", &ct.freq_min, 0, 1000, {}, 1.0, "Hz", 0, true},
@@ -103,14 +114,28 @@ std::vector<KeyDef> schema(Config& c) {
       {"body", "max_chambers", &b.max_chambers, 1, 10},
 
       {"neat", "pop_size", &n.pop_size, 2, 1e6},
-      {"neat", "compatibility_threshold", &n.compatibility_threshold, 0, kInf, {}, 1.0, "", 0, true},
-      {"neat", "compatibility_disjoint_coefficient", &n.compatibility_disjoint_coefficient, 0, kInf},
+      {"neat",
+       "compatibility_threshold",
+       &n.compatibility_threshold,
+       0,
+       kInf,
+       {},
+       1.0,
+       "",
+       0,
+       true},
+      {"neat", "compatibility_disjoint_coefficient", &n.compatibility_disjoint_coefficient, 0,
+       kInf},
       {"neat", "compatibility_weight_coefficient", &n.compatibility_weight_coefficient, 0, kInf},
       {"neat", "conn_add_prob", &n.conn_add_prob, 0, 1},
       {"neat", "conn_delete_prob", &n.conn_delete_prob, 0, 1},
       {"neat", "node_add_prob", &n.node_add_prob, 0, 1},
       {"neat", "node_delete_prob", &n.node_delete_prob, 0, 1},
-      {"neat", "activation_default", &n.activation_default, 0, 0,
+      {"neat",
+       "activation_default",
+       &n.activation_default,
+       0,
+       0,
        {"random", "sigmoid", "sin", "abs", "square", "exp", "clamped", "gauss", "tanh"}},
       {"neat", "activation_mutate_rate", &n.activation_mutate_rate, 0, 1},
       {"neat", "activation_options", &n.activation_options, 0, 0, activations},
@@ -182,7 +207,8 @@ std::string range_text(const KeyDef& def, bool integer) {
     return std::string(kind) + (def.min_exclusive ? " in (" : " in [") + num(def.min) + ", " +
            num(def.max) + "]" + unit;
   }
-  if (has_min) return std::string(kind) + (def.min_exclusive ? " > " : " >= ") + num(def.min) + unit;
+  if (has_min)
+    return std::string(kind) + (def.min_exclusive ? " > " : " >= ") + num(def.min) + unit;
   if (has_max) return std::string(kind) + " <= " + num(def.max) + unit;
   return std::string(kind) + unit;
 }
@@ -262,13 +288,20 @@ struct Location {
 
 std::string type_name(const toml::node& node) {
   switch (node.type()) {
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a float";
-    case toml::node_type::boolean: return "a boolean";
-    case toml::node_type::array: return "an array";
-    case toml::node_type::table: return "a table";
-    default: return "a date/time";
+    case toml::node_type::string:
+      return "a string";
+    case toml::node_type::integer:
+      return "an integer";
+    case toml::node_type::floating_point:
+      return "a float";
+    case toml::node_type::boolean:
+      return "a boolean";
+    case toml::node_type::array:
+      return "an array";
+    case toml::node_type::table:
+      return "a table";
+    default:
+      return "a date/time";
   }
 }
 
@@ -339,8 +372,8 @@ void assign(const KeyDef& def, const toml::node& node, const Location& at) {
           }
           const toml::array& arr = *node.as_array();
           if (arr.empty() || (def.list_length && arr.size() != def.list_length)) {
-            fail(at, name + " has " + std::to_string(arr.size()) + " elements; allowed: " +
-                         allowed_text(def));
+            fail(at, name + " has " + std::to_string(arr.size()) +
+                         " elements; allowed: " + allowed_text(def));
           }
           T values;
           for (std::size_t i = 0; i < arr.size(); ++i) {
@@ -348,7 +381,8 @@ void assign(const KeyDef& def, const toml::node& node, const Location& at) {
             if constexpr (std::is_same_v<T, std::vector<double>>) {
               values.push_back(number_of(arr[i], def, at, element, false) * def.scale);
             } else if constexpr (std::is_same_v<T, std::vector<std::int64_t>>) {
-              values.push_back(static_cast<std::int64_t>(number_of(arr[i], def, at, element, true)));
+              values.push_back(
+                  static_cast<std::int64_t>(number_of(arr[i], def, at, element, true)));
             } else {
               std::string v = string_of(arr[i], def, at, element);
               if (std::find(values.begin(), values.end(), v) != values.end()) {
@@ -561,9 +595,8 @@ std::vector<StructuralMaterial> material_table(const PhysicsConfig& physics) {
   const double step =
       count > 1 ? (physics.youngs_modulus_max - physics.youngs_modulus_min) / (count - 1) : 0.0;
   for (int k = 0; k < count; ++k) {
-    table[k].youngs_modulus =
-        (k == count - 1 && count > 1) ? physics.youngs_modulus_max
-                                      : physics.youngs_modulus_min + k * step;
+    table[k].youngs_modulus = (k == count - 1 && count > 1) ? physics.youngs_modulus_max
+                                                            : physics.youngs_modulus_min + k * step;
     table[k].density = physics.density;
   }
   return table;

@@ -57,10 +57,10 @@ struct PhysicsConfig {
 };
 
 struct PneumaticsConfig {
-  double supply_pressure = 1.2e5;    // inlet reservoir, absolute [Pa] (config: bar)
-  double ambient_pressure = 1.0e5;   // outlet reservoir, absolute [Pa] (config: bar)
-  double conductivity = 0.025;       // conduit conductivity scale [m^3/(bar s)] (§3.5)
-  double valve_cutoff = 10.0;        // low-pass cut-off of the valve opening [Hz] (§3.5)
+  double supply_pressure = 1.2e5;   // inlet reservoir, absolute [Pa] (config: bar)
+  double ambient_pressure = 1.0e5;  // outlet reservoir, absolute [Pa] (config: bar)
+  double conductivity = 0.025;      // conduit conductivity scale [m^3/(bar s)] (§3.5)
+  double valve_cutoff = 10.0;       // low-pass cut-off of the valve opening [Hz] (§3.5)
   std::int64_t valve_filter_stages = 4;
   double valve_filter_q = 0.707;
   // First-frame pressure sensor reading, absolute [Pa] (config: bar; SPEC 3, default 0.0 bar).
@@ -68,13 +68,13 @@ struct PneumaticsConfig {
 };
 
 struct ControllerConfig {
-  std::int64_t hidden = 4;                  // Elman hidden (= context) units (§4.1)
+  std::int64_t hidden = 4;                    // Elman hidden (= context) units (§4.1)
   std::string crossover_method = "1pointpl";  // "1pointpl", "random" or "1point" (§8.6)
-  double weight_init_sd = 3.0;              // init SD of genes and initial step size (§8.2)
-  double gene_limit = 5.0;                  // genes and step sizes clipped to +-gene_limit
-  double freq_min = 1.0;                    // oscillator frequency range [Hz]
-  double freq_max = 5.0;                    // [Hz]
-  double freq_step_size_init = 0.2;         // initial step size of the frequency gene [Hz]
+  double weight_init_sd = 3.0;                // init SD of genes and initial step size (§8.2)
+  double gene_limit = 5.0;                    // genes and step sizes clipped to +-gene_limit
+  double freq_min = 1.0;                      // oscillator frequency range [Hz]
+  double freq_max = 5.0;                      // [Hz]
+  double freq_step_size_init = 0.2;           // initial step size of the frequency gene [Hz]
 };
 
 struct BodyConfig {

@@ -26,9 +26,9 @@ bool is_killed(EvalStatus status);         // anything but ok scores like a kill
 struct DirectionComponents {
   double direction_deg = 0.0;
   double fitness = 0.0;
-  double distance = 0.0;    // D [cm], signed distance along the target line
-  double path_length = 0.0; // L [cm]
-  double angle_error = 0.0; // delta [rad]
+  double distance = 0.0;               // D [cm], signed distance along the target line
+  double path_length = 0.0;            // L [cm]
+  double angle_error = 0.0;            // delta [rad]
   double perpendicular_penalty = 0.0;  // P (already x omega) [cm]
   EvalStatus status = EvalStatus::ok;
 };

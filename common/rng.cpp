@@ -18,7 +18,9 @@ Rng::Rng(std::uint64_t seed) {
   for (auto& word : state_) word = splitmix64(sm);
 }
 
-static inline std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+static inline std::uint64_t rotl(std::uint64_t x, int k) {
+  return (x << k) | (x >> (64 - k));
+}
 
 std::uint64_t Rng::next_u64() {
   // xoshiro256** 1.0: result = rotl(s1 * 5, 7) * 9, then the linear state transition.
@@ -33,9 +35,13 @@ std::uint64_t Rng::next_u64() {
   return result;
 }
 
-double Rng::uniform() { return static_cast<double>(next_u64() >> 11) * 0x1.0p-53; }
+double Rng::uniform() {
+  return static_cast<double>(next_u64() >> 11) * 0x1.0p-53;
+}
 
-double Rng::uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
+double Rng::uniform(double lo, double hi) {
+  return lo + (hi - lo) * uniform();
+}
 
 double Rng::normal() {
   // Box-Muller: u1 in (0, 1] so log(u1) is finite.
@@ -44,7 +50,9 @@ double Rng::normal() {
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
 }
 
-double Rng::normal(double mean, double stddev) { return mean + stddev * normal(); }
+double Rng::normal(double mean, double stddev) {
+  return mean + stddev * normal();
+}
 
 std::uint64_t Rng::uniform_int(std::uint64_t n) {
   if (n == 0) throw std::invalid_argument("Rng::uniform_int: n must be > 0");
@@ -62,7 +70,9 @@ std::uint64_t Rng::uniform_int(std::uint64_t n) {
   return static_cast<std::uint64_t>(m >> 64);
 }
 
-bool Rng::coin(double p_true) { return uniform() < p_true; }
+bool Rng::coin(double p_true) {
+  return uniform() < p_true;
+}
 
 void Rng::set_state(const State& state) {
   if (state[0] == 0 && state[1] == 0 && state[2] == 0 && state[3] == 0) {

@@ -19,13 +19,13 @@ class Rng {
 
   explicit Rng(std::uint64_t seed = 0);
 
-  std::uint64_t next_u64();                   // raw xoshiro256** output
-  double uniform();                           // [0, 1)
-  double uniform(double lo, double hi);       // [lo, hi)
-  double normal();                            // N(0, 1)
-  double normal(double mean, double stddev);  // N(mean, stddev^2)
+  std::uint64_t next_u64();                    // raw xoshiro256** output
+  double uniform();                            // [0, 1)
+  double uniform(double lo, double hi);        // [lo, hi)
+  double normal();                             // N(0, 1)
+  double normal(double mean, double stddev);   // N(mean, stddev^2)
   std::uint64_t uniform_int(std::uint64_t n);  // [0, n), n > 0
-  bool coin(double p_true);                   // uniform() < p_true
+  bool coin(double p_true);                    // uniform() < p_true
 
   const State& state() const { return state_; }  // for checkpoints
   void set_state(const State& state);            // throws on the all-zero state

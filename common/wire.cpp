@@ -4,7 +4,9 @@
 
 namespace softevo {
 
-void WireWriter::u8(std::uint8_t v) { data_.push_back(v); }
+void WireWriter::u8(std::uint8_t v) {
+  data_.push_back(v);
+}
 void WireWriter::u16(std::uint16_t v) {
   for (int i = 0; i < 2; ++i) data_.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
 }
@@ -14,7 +16,9 @@ void WireWriter::u32(std::uint32_t v) {
 void WireWriter::u64(std::uint64_t v) {
   for (int i = 0; i < 8; ++i) data_.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
 }
-void WireWriter::f64(double v) { u64(std::bit_cast<std::uint64_t>(v)); }
+void WireWriter::f64(double v) {
+  u64(std::bit_cast<std::uint64_t>(v));
+}
 void WireWriter::string(const std::string& s) {
   u64(s.size());
   data_.insert(data_.end(), s.begin(), s.end());
@@ -64,7 +68,9 @@ std::uint64_t WireReader::u64(const char* field) {
   offset_ += 8;
   return v;
 }
-double WireReader::f64(const char* field) { return std::bit_cast<double>(u64(field)); }
+double WireReader::f64(const char* field) {
+  return std::bit_cast<double>(u64(field));
+}
 bool WireReader::boolean(const char* field) {
   const std::uint8_t v = u8(field);
   if (v > 1) {

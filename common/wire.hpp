@@ -47,9 +47,9 @@ class WireWriter {
   void i64(std::int64_t v) { u64(static_cast<std::uint64_t>(v)); }
   void f64(double v);  // IEEE-754 bits, little-endian
   void boolean(bool v) { u8(v ? 1 : 0); }
-  void string(const std::string& s);                  // u64 length + bytes
-  void bytes(std::span<const std::uint8_t> b);        // u64 length + bytes
-  void f64_vector(const std::vector<double>& v);      // u64 count + values
+  void string(const std::string& s);              // u64 length + bytes
+  void bytes(std::span<const std::uint8_t> b);    // u64 length + bytes
+  void f64_vector(const std::vector<double>& v);  // u64 count + values
   const std::vector<std::uint8_t>& data() const { return data_; }
   std::vector<std::uint8_t> take() { return std::move(data_); }
 

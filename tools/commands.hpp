@@ -14,5 +14,8 @@ inline constexpr int kExitUsage = 2;     // bad arguments, unreadable or malform
 
 void register_version(CLI::App& app, int& exit_code);
 void register_config(CLI::App& app, int& exit_code);
+void register_bench_physics(CLI::App& app, int& exit_code);
+void register_bench_xor(CLI::App& app, int& exit_code);
+void register_develop(CLI::App& app, int& exit_code);
 
 }  // namespace softevo::cli

@@ -10,6 +10,9 @@ int main(int argc, char** argv) {
   int exit_code = softevo::cli::kExitOk;
   softevo::cli::register_version(app, exit_code);
   softevo::cli::register_config(app, exit_code);
+  softevo::cli::register_bench_physics(app, exit_code);
+  softevo::cli::register_bench_xor(app, exit_code);
+  softevo::cli::register_develop(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -122,8 +122,7 @@ TEST(Config, BrokenConfigsGiveTheirExactError) {
     } catch (const ConfigError& e) {
       if (expected.find("TOML syntax error") != std::string::npos) {
         // The parser's own wording is toml++'s; pin file, line and our prefix.
-        EXPECT_EQ(std::string(e.what()).rfind(name + ":3: TOML syntax error: ", 0), 0u)
-            << e.what();
+        EXPECT_EQ(std::string(e.what()).rfind(name + ":3: TOML syntax error: ", 0), 0u) << e.what();
       } else {
         EXPECT_EQ(std::string(e.what()), expected) << name;
       }

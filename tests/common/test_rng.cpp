@@ -64,9 +64,9 @@ TEST(Rng, NormalMoments) {
     sum2 += z * z;
     sum4 += z * z * z * z;
   }
-  EXPECT_NEAR(sum / n, 0.0, 4 / std::sqrt(n));              // SE of the mean = 1/sqrt(n)
-  EXPECT_NEAR(sum2 / n, 1.0, 4 * std::sqrt(2.0 / n));       // SE of the variance
-  EXPECT_NEAR(sum4 / n, 3.0, 4 * std::sqrt(96.0 / n));      // kurtosis 3, Var(z^4) = 96
+  EXPECT_NEAR(sum / n, 0.0, 4 / std::sqrt(n));          // SE of the mean = 1/sqrt(n)
+  EXPECT_NEAR(sum2 / n, 1.0, 4 * std::sqrt(2.0 / n));   // SE of the variance
+  EXPECT_NEAR(sum4 / n, 3.0, 4 * std::sqrt(96.0 / n));  // kurtosis 3, Var(z^4) = 96
 }
 
 TEST(Rng, UniformIntIsUniform) {

@@ -1,0 +1,133 @@
+// Immutable description of one simulated robot body: voxels, links, materials, constants.
+//
+// Built once from a BodyPlan + PhysicsConfig by build_model() and never changed afterwards (the
+// MuJoCo split of ARCHITECTURE.md §2): flat arrays indexed by voxel id or link id, cross
+// references as integer ids / CSR offsets, no pointers. Everything that changes during a
+// simulation lives in State (physics/state.hpp), per-step buffers in Scratch (physics/step.hpp).
+//
+// Precision follows the reference (pneuvox-model.md §1, §2.1, §11 item 9): the voxel size goes
+// through a float, material constants are computed and stored in float32, positions and momenta
+// are double. Float constants are kept as `float` members so that every product the reference
+// does in float is done in float here too.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <stdexcept>
+#include <vector>
+
+#include "common/body_plan.hpp"
+#include "common/config.hpp"
+#include "physics/quat.hpp"
+
+namespace softevo::physics {
+
+enum class Integrator : std::uint8_t {
+  pneuvox = 0,     // exact two-part fork step, §2.12-2.13
+  symplectic = 1,  // upstream single-pass symplectic Euler, §2.9
+};
+
+// Link axis; also the order of the per-axis permutation of §2.2.
+enum class Axis : std::uint8_t { x = 0, y = 1, z = 2 };
+
+// Per-voxel constants read together by the voxel passes (one cache line per voxel).
+// All from the voxel's own material (§2.1, Appendix A); float as in the reference.
+struct VoxelConst {
+  float mass;           // m = rho s^3 [kg]
+  float inv_mass;       // 1/m [1/kg]
+  float inv_inertia;    // 1/I, I = m s^2/6 [1/(kg m^2)]
+  float c_glob;         // zeta_glob * 2 sqrt(m E s) [N s/m]
+  float c_glob_rot;     // zeta_glob * 2 sqrt(I E s^3) [N m s]
+  float c_col;          // zeta_col * 2 sqrt(m E s) [N s/m]
+  float k_pen;          // 2 E s [N/m]
+  float gravity_force;  // -m g (z component) [N]
+  float damp_base;      // 2 sqrt(m) zeta_int [sqrt(kg)]; /previous_dt = link damping multiplier
+  float mu_static;      // [-]
+  float mu_kinetic;     // [-]
+  float pad = 0.0f;     // keeps the struct at 48 bytes
+};
+
+// Per-link beam constants (§2.1, link material of the two end materials, L = s, all float).
+struct LinkConst {
+  float e_area;     // E_L (stress = E_L * strain, linear) [Pa]; sigma*A gives the axial force
+  float area;       // A = s^2 (nu = 0) [m^2]
+  float a2;         // E_L L^3 / 12 [N m]
+  float b1;         // E_L L [N/m]
+  float b2;         // E_L L^2 / 2 [N]
+  float b3;         // E_L L^3 / 6 [N m]
+  float sq_a1;      // sqrt(a1) [sqrt(N/m)]
+  float sq_a2xip;   // sqrt(a2 L^2 / 6)
+  float sq_b1;      // sqrt(b1)
+  float sq_b2xfmp;  // sqrt(b2 L / 2)
+  float sq_b3xip;   // sqrt(b3 L^2 / 6)
+  float pad = 0.0f;
+};
+
+struct Model {
+  // ---- configuration -------------------------------------------------------------------------
+  Integrator integrator = Integrator::pneuvox;
+  std::array<int, 3> lattice{0, 0, 0};  // body plan lattice X, Y, Z [cells]
+  double voxel_size = 0.0;     // s = (double)(float)plan.voxel_size [m] (§1: through a float)
+  float dt_f = 0.0f;           // time step as the float the reference passes around [s]
+  double dt = 0.0;             // = dt_f: §2.14 recommended step x dt_fraction [s]
+  bool floor = true;           // floor contact at z = 0 (voxel centres, §2.8)
+  bool self_collision = true;  // §2.10
+
+  // ---- voxels (index = voxel id, insertion order x outer, y, z inner; §2.1, §5 step 4) -----
+  int voxel_count = 0;
+  std::vector<std::array<int, 3>> voxel_cell;  // lattice index (i,j,k) (voxels)
+  std::vector<int> cell_to_voxel;              // (X*Y*Z) voxel id or -1; index = (x*Y + y)*Z + z
+  std::vector<int> voxel_material;             // structural material id k = 1..K (voxels)
+  std::vector<double> voxel_mass;              // [kg] (voxels), = VoxelConst::mass
+  std::vector<VoxelConst> voxel_const;         // (voxels)
+  std::vector<std::uint8_t> voxel_fixed;       // 1 = all DOFs fixed (validation scenes) (voxels)
+  std::vector<std::uint8_t> voxel_surface;     // 1 = fewer than 6 links (§2.1 "surface") (voxels)
+  int free_voxel_count = 0;                    // voxels that are not fixed
+
+  // ---- links (index = link id, creation order of §2.1) ---------------------------------------
+  int link_count = 0;
+  std::vector<int> link_neg;  // negative-end voxel N (lower lattice index along the axis)
+  std::vector<int> link_pos;  // positive-end voxel P
+  std::vector<Axis> link_axis;
+  std::vector<LinkConst> link_const;
+  double rest_length = 0.0;  // L = s for every link [m] (double, as Voxelyze's baseSize)
+
+  // ---- voxel -> links CSR, direction order X+, X-, Y+, Y-, Z+, Z- (§2.1) ---------------------
+  // Entry e in [voxel_link_begin[v], voxel_link_begin[v+1]): link id = entry >> 1,
+  // end = entry & 1 (0: v is the negative end N, 1: v is the positive end P).
+  std::vector<int> voxel_link_begin;  // (voxels + 1)
+  std::vector<int> voxel_link_entry;  // (2 * links)
+
+  // ---- self-collision (§2.10) ------------------------------------------------------------------
+  std::vector<int> surface_voxels;  // ids of surface voxels, ascending
+  // Surface voxels within 5 link hops (the "nearby" list), as a bitmask over the 231 lattice
+  // offsets with |di|+|dj|+|dk| <= 5 (4 words per voxel; bit = nearby_bit_of_offset()).
+  std::vector<std::uint64_t> nearby_mask;  // (voxels x 4)
+  double collision_watch_radius = 0.0;     // 2.5 s [m] (float as in the reference)
+  double collision_recalc_distance = 0.0;  // 0.5 s [m] (float)
+
+  int cell_index(int x, int y, int z) const { return (x * lattice[1] + y) * lattice[2] + z; }
+};
+
+// Lattice offset -> bit index 0..230 in Model::nearby_mask, or -1 if |di|+|dj|+|dk| > 5.
+int nearby_bit_of_offset(int di, int dj, int dk);
+// True if surface voxel b is in the "nearby" list of voxel a (within 5 link hops).
+bool is_nearby(const Model& model, int a, int b);
+
+struct BuildOptions {
+  // Lattice cells (x, y, z) whose voxel is fixed in place (all 6 DOFs; validation scenes).
+  // Each must be a structural cell of the plan.
+  std::vector<std::array<int, 3>> fixed_cells;
+};
+
+// Build the model of §2.1 / §5 step 4: one voxel per structural cell (1..K) in the order x outer,
+// y, z inner; chamber (11+) and empty cells make no voxel; links between face-adjacent voxels.
+// Throws std::invalid_argument with a reason for malformed plans or configs (unknown integrator,
+// bad material id, non-positive sizes, dt_fraction <= 0, ...).
+Model build_model(const BodyPlan& plan, const PhysicsConfig& cfg, const BuildOptions& options = {});
+
+// §2.14 recommended time step (float arithmetic) of a built model, without dt_fraction.
+float recommended_time_step(const Model& model);
+
+}  // namespace softevo::physics

@@ -1,0 +1,104 @@
+// Vector and quaternion helpers of the voxel physics, written to the exact formulas of
+// pneuvox-model.md §2.11 (the reference never renormalises a quaternion, and its Taylor branches
+// leave orientations slightly non-unit; the gaits depend on that, so we reproduce it).
+//
+// Vec3 is Eigen::Vector3d (three packed doubles, no alignment requirement). The hot loops use
+// .x()/.y()/.z() and spell every product out so that the operation order (and thus the rounding,
+// with -ffp-contract=off) is the one written in the comment.
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+
+namespace softevo::physics {
+
+using Vec3 = Eigen::Vector3d;  // double 3-vector; the role of Voxelyze's Vec3D<double>
+
+// Quaternion stored as (w, x, y, z) doubles; identity = (1, 0, 0, 0).
+struct Quat {
+  double w = 1.0;
+  double x = 0.0;
+  double y = 0.0;
+  double z = 0.0;
+};
+
+// a x b, component order as Voxelyze's Vec3D::Cross.
+inline Vec3 cross(const Vec3& a, const Vec3& b) {
+  return {a.y() * b.z() - a.z() * b.y(), a.z() * b.x() - a.x() * b.z(),
+          a.x() * b.y() - a.y() * b.x()};
+}
+
+inline Quat conj(const Quat& q) {
+  return {q.w, -q.x, -q.y, -q.z};
+}
+
+// §2.11: Hamilton product a ⊗ b. "Rotate by A then by B" = B ⊗ A.
+inline Quat mul(const Quat& a, const Quat& b) {
+  return {
+      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
+}
+
+// §2.11: v' = q v q*, expanded: t = (0,v) ⊗ q*, then v' = vector part of q ⊗ t.
+inline Vec3 rotate(const Quat& q, const Vec3& f) {
+  const double fx = f.x(), fy = f.y(), fz = f.z();
+  const double tw = fx * q.x + fy * q.y + fz * q.z;
+  const double tx = fx * q.w - fy * q.z + fz * q.y;
+  const double ty = fx * q.z + fy * q.w - fz * q.x;
+  const double tz = -fx * q.y + fy * q.x + fz * q.w;
+  return {q.w * tx + q.x * tw + q.y * tz - q.z * ty, q.w * ty - q.x * tz + q.y * tw + q.z * tx,
+          q.w * tz + q.x * ty - q.y * tx + q.z * tw};
+}
+
+// §2.11: inverse rotation = rotation by the conjugate.
+inline Vec3 rotate_inv(const Quat& q, const Vec3& f) {
+  return rotate(conj(q), f);
+}
+
+// §2.11: quaternion from rotation vector r (Taylor branch for half-angles below ~2.7e-4 rad).
+inline Quat quat_from_rotvec(const Vec3& r) {
+  const double hx = r.x() / 2, hy = r.y() / 2, hz = r.z() / 2;  // theta = r/2
+  const double t = hx * hx + hy * hy + hz * hz;                 // |theta|^2
+  double w, s;
+  if (t * t < 5.328e-15) {
+    w = 1.0 - t / 2;
+    s = 1.0 - t / 6;
+  } else {
+    const double mag = std::sqrt(t);
+    w = std::cos(mag);
+    s = std::sin(mag) / mag;
+  }
+  return {w, hx * s, hy * s, hz * s};
+}
+
+// §2.11: rotation vector of q (no renormalisation; w outside (-1,1) gives 0).
+inline Vec3 rotvec(const Quat& q) {
+  if (q.w >= 1.0 || q.w <= -1.0) return Vec3::Zero();
+  const double t = 1.0 - q.w * q.w;
+  if (t < 2.4e-3) {
+    const double k = std::sqrt((2 - 2 * q.w) / t);
+    return {q.x * 2.0 * k, q.y * 2.0 * k, q.z * 2.0 * k};
+  }
+  const double a = std::acos(q.w), rs = std::sqrt(t);
+  return {q.x * 2.0 * a / rs, q.y * 2.0 * a / rs, q.z * 2.0 * a / rs};
+}
+
+// §2.11 "angle to +X": the rotation taking direction d onto +X; identity for d = 0.
+inline Quat quat_to_pos_x(const Vec3& d) {
+  if (d.x() == 0.0 && d.y() == 0.0 && d.z() == 0.0) return {};
+  const double a = d.y() / d.x(), b = d.z() / d.x();
+  if (std::fabs(a) < 1.732e-2 && std::fabs(b) < 1.732e-2) {
+    const double y = b / 2, z = -a / 2;
+    return {1.0 - 0.5 * (y * y + z * z), 0.0, y, z};
+  }
+  const double len = std::sqrt(d.x() * d.x() + d.y() * d.y() + d.z() * d.z());
+  const double nx = d.x() / len, ny = d.y() / len, nz = d.z() / len;
+  const double theta = std::acos(nx);
+  if (theta > 3.14159265358979 - 1e-7) return {0.0, 0.0, 1.0, 0.0};
+  const double k = 1.0 / std::sqrt(ny * ny + nz * nz);
+  const double half = theta / 2;
+  const double sh = std::sin(half);
+  return {std::cos(half), 0.0, nz * k * sh, -ny * k * sh};
+}
+
+}  // namespace softevo::physics

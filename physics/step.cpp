@@ -1,0 +1,617 @@
+// The time step of pneuvox-model.md §2.12 (fork, "pneuvox") and §2.9 (upstream, "symplectic").
+//
+// Precision: state is double; constants are float (Model); products the reference forms in float
+// (dt * (1/m), k_pen * pen, mu * N, strain, stress * A, collision forces) are formed in float
+// here too, and a float times a double is promoted exactly as in the reference. The build uses
+// -ffp-contract=off, so the written operation order is the executed one.
+#include "physics/step.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace softevo::physics {
+
+const char* to_string(StepStatus status) {
+  switch (status) {
+    case StepStatus::ok:
+      return "ok";
+    case StepStatus::diverged:
+      return "diverged";
+    case StepStatus::non_finite:
+      return "non_finite";
+  }
+  return "unknown";
+}
+
+Scratch make_scratch(const Model& model) {
+  Scratch sc;
+  const std::size_t nl = model.link_count, nv = model.voxel_count;
+  sc.link_end_load.assign(2 * nl, Scratch::EndLoad{Vec3::Zero(), Vec3::Zero()});
+  sc.collision_force.assign(nv, Vec3::Zero());
+  sc.part2_force.assign(nv, Vec3::Zero());
+  sc.fric.assign(nv, Vec3::Zero());
+  sc.old_pos.assign(nv, Vec3::Zero());
+  sc.ext_moment.assign(nv, {0.0f, 0.0f, 0.0f});
+  const std::size_t ns = model.surface_voxels.size();
+  std::size_t cap = ns * 128;
+  if (ns > 1 && cap > ns * (ns - 1) / 2) cap = ns * (ns - 1) / 2;
+  sc.pair_force.assign(cap, {0.0f, 0.0f, 0.0f});
+  std::size_t buckets = 1;
+  while (buckets < 2 * ns + 2) buckets <<= 1;
+  sc.grid_head.assign(buckets, -1);
+  sc.grid_next.assign(ns, -1);
+  sc.grid_cell.assign(ns * 3, 0);
+  sc.candidates.reserve(ns);
+  return sc;
+}
+
+namespace {
+
+// ---- §2.2 axis permutation ("as if the link pointed along +X") --------------------------------
+inline Vec3 to_x(Axis a, double x, double y, double z) {
+  switch (a) {
+    case Axis::x:
+      return {x, y, z};
+    case Axis::y:
+      return {y, -x, z};
+    default:
+      return {z, y, -x};
+  }
+}
+inline Quat to_x(Axis a, const Quat& q) {
+  switch (a) {
+    case Axis::x:
+      return q;
+    case Axis::y:
+      return {q.w, q.y, -q.x, q.z};
+    default:
+      return {q.w, q.z, q.y, -q.x};
+  }
+}
+inline Vec3 from_x(Axis a, const Vec3& v) {
+  switch (a) {
+    case Axis::x:
+      return v;
+    case Axis::y:
+      return {-v.y(), v.x(), v.z()};
+    default:
+      return {-v.z(), v.y(), v.x()};
+  }
+}
+
+// §2.3 small-angle hysteresis thresholds (float, as the reference's static float constants).
+constexpr float kSmallBend = 0.05f;        // turn below this -> small angle
+constexpr float kSmallExt = 0.5f;          // extension below this -> small angle
+constexpr float kHysteresis = 1.2f;        // leave small angle above 1.2x the thresholds
+constexpr float kStrainDiverged = 100.0f;  // §2.12 item 1
+
+// Result of the link kinematics (§2.3): the new link state and the frame quaternions. Kept in
+// locals (not written through State references) so the force code reads registers.
+struct LinkKinematics {
+  Vec3 pos2;  // [m]
+  Vec3 a1v;   // [rad]
+  Vec3 a2v;   // [rad]
+  Quat q1;    // rotation to +X of the large-angle frame (identity in small-angle mode)
+  Quat q2;    // orientation of P in the link frame
+  bool small;
+  bool switched;  // the hysteresis changed mode: local velocity becomes invalid
+};
+
+// §2.3 "orient link": pos2, angle1v, angle2v and the small-angle flag with hysteresis. Reads
+// voxel state and the link's current mode only; the caller stores the result.
+inline void orient_link(const Model& m, const State& st, int i, Axis axis, LinkKinematics& k) {
+  const int n = m.link_neg[i], p = m.link_pos[i];
+  const Vec3& pn = st.pos[n];
+  const Vec3& pp = st.pos[p];
+  const Vec3 d0 = to_x(axis, pp.x() - pn.x(), pp.y() - pn.y(), pp.z() - pn.z());
+  const Quat r = conj(to_x(axis, st.orient[n]));  // total rotation so far = conj(q1)
+  const Vec3 d = rotate(r, d0);
+  k.q1 = Quat{};
+  k.q2 = mul(r, to_x(axis, st.orient[p]));
+  const double l = m.rest_length;
+  // §2.3 step 3: small-angle test in float with floating-point abs.
+  const float turn = static_cast<float>((std::fabs(d.z()) + std::fabs(d.y())) / d.x());
+  const float ext = static_cast<float>(std::fabs(1 - d.x() / l));
+  const bool was_small = st.link_small_angle[i] != 0;
+  bool small = was_small;
+  if (!was_small && turn < kSmallBend && ext < kSmallExt) {
+    small = true;
+  } else if (was_small && (turn > kHysteresis * kSmallBend || ext > kHysteresis * kSmallExt)) {
+    small = false;
+  }
+  k.small = small;
+  k.switched = small != was_small;
+  if (small) {
+    k.pos2 = Vec3(d.x() - l, d.y(), d.z());
+    k.a1v = Vec3::Zero();  // rotvec(identity) = 0
+  } else {
+    k.q1 = quat_to_pos_x(d);
+    k.q2 = mul(k.q1, k.q2);
+    k.pos2 = Vec3(std::sqrt(d.x() * d.x() + d.y() * d.y() + d.z() * d.z()) - l, 0.0, 0.0);
+    k.a1v = rotvec(k.q1);
+  }
+  k.a2v = rotvec(k.q2);
+}
+
+// Full link pass (§2.3-2.6) for every link in list order. Returns true if any strain > 100.
+bool link_pass_forces(const Model& m, State& st, Scratch& sc) {
+  bool diverged = false;
+  const float prev_dt = st.previous_dt;
+  for (int i = 0; i < m.link_count; ++i) {
+    const Axis axis = m.link_axis[i];
+    LinkKinematics k;
+    orient_link(m, st, i, axis, k);
+    const Vec3& pos2 = k.pos2;
+    const Vec3& a1 = k.a1v;
+    const Vec3& a2 = k.a2v;
+    const LinkConst& c = m.link_const[i];
+
+    // §2.4: strain = pos2.x / L (float), sigma = E_L strain (linear material, float)
+    const float strain = static_cast<float>(pos2.x() / m.rest_length);
+    if (strain > kStrainDiverged) diverged = true;
+    const float stress = c.e_area * strain;
+    const float b1 = c.b1, b2 = c.b2, b3 = c.b3, a2c = c.a2;
+    // §2.4 F_N = (sigma A, b1 y - b2 (t1z + t2z), b1 z + b2 (t1y + t2y)), F_P = -F_N
+    Vec3 fn(static_cast<double>(stress * c.area), b1 * pos2.y() - b2 * (a1.z() + a2.z()),
+            b1 * pos2.z() + b2 * (a1.y() + a2.y()));
+    Vec3 fp(-fn.x(), -fn.y(), -fn.z());
+    Vec3 mn(a2c * (a2.x() - a1.x()), -b2 * pos2.z() - b3 * (2 * a1.y() + a2.y()),
+            b2 * pos2.y() - b3 * (2 * a1.z() + a2.z()));
+    Vec3 mp(a2c * (a1.x() - a2.x()), -b2 * pos2.z() - b3 * (a1.y() + 2 * a2.y()),
+            b2 * pos2.y() - b3 * (a1.z() + 2 * a2.z()));
+
+    // §2.5 internal damping from the change since the previous link update; skipped (and the
+    // flag set) after a mode switch or at the first update
+    if (st.link_vel_valid[i] && !k.switched) {
+      const Vec3& old_pos2 = st.link_pos2[i];
+      const Vec3& old_a1 = st.link_angle1v[i];
+      const Vec3& old_a2 = st.link_angle2v[i];
+      const double dpx = 0.5 * (pos2.x() - old_pos2.x()), dpy = 0.5 * (pos2.y() - old_pos2.y()),
+                   dpz = 0.5 * (pos2.z() - old_pos2.z());
+      const double d1x = 0.5 * (a1.x() - old_a1.x()), d1y = 0.5 * (a1.y() - old_a1.y()),
+                   d1z = 0.5 * (a1.z() - old_a1.z());
+      const double d2x = 0.5 * (a2.x() - old_a2.x()), d2y = 0.5 * (a2.y() - old_a2.y()),
+                   d2z = 0.5 * (a2.z() - old_a2.z());
+      const float sq_a1 = c.sq_a1, sq_a2 = c.sq_a2xip, sq_b1 = c.sq_b1, sq_b2 = c.sq_b2xfmp,
+                  sq_b3 = c.sq_b3xip;
+      const double vx = sq_a1 * dpx, vy = sq_b1 * dpy - sq_b2 * (d1z + d2z),
+                   vz = sq_b1 * dpz + sq_b2 * (d1y + d2y);
+      // c_V = 2 sqrt(m_V) zeta_int / previousDt_V (float)
+      const float cn = m.voxel_const[m.link_neg[i]].damp_base / prev_dt;
+      const float cp = m.voxel_const[m.link_pos[i]].damp_base / prev_dt;
+      fn += Vec3(cn * vx, cn * vy, cn * vz);
+      fp -= Vec3(cp * vx, cp * vy, cp * vz);
+      const double hn = 0.5 * cn, hp = 0.5 * cp;
+      mn -= Vec3(hn * (-sq_a2 * (d2x - d1x)), hn * (sq_b2 * dpz + sq_b3 * (2 * d1y + d2y)),
+                 hn * (-sq_b2 * dpy + sq_b3 * (2 * d1z + d2z)));
+      mp -= Vec3(hp * (sq_a2 * (d2x - d1x)), hp * (sq_b2 * dpz + sq_b3 * (d1y + 2 * d2y)),
+                 hp * (-sq_b2 * dpy + sq_b3 * (d1z + 2 * d2z)));
+    }
+    st.link_vel_valid[i] = 1;
+    st.link_small_angle[i] = k.small;
+    st.link_strain[i] = strain;
+    st.link_pos2[i] = pos2;
+    st.link_angle1v[i] = a1;
+    st.link_angle2v[i] = a2;
+
+    // §2.6 back to the end voxels' local frames
+    if (!k.small) {
+      fn = rotate_inv(k.q1, fn);
+      mn = rotate_inv(k.q1, mn);
+    }
+    fp = rotate_inv(k.q2, fp);
+    mp = rotate_inv(k.q2, mp);
+    Scratch::EndLoad* out = &sc.link_end_load[2 * static_cast<std::size_t>(i)];
+    out[0].force = from_x(axis, fn);
+    out[0].moment = from_x(axis, mn);
+    out[1].force = from_x(axis, fp);
+    out[1].moment = from_x(axis, mp);
+  }
+  return diverged;
+}
+
+// Mid-step link pass of the fork (§2.9 item 6): same kinematics and state update, forces
+// discarded (so they are not computed). The local-velocity flag ends up set, as after any update.
+void link_pass_state_only(const Model& m, State& st) {
+  for (int i = 0; i < m.link_count; ++i) {
+    LinkKinematics k;
+    orient_link(m, st, i, m.link_axis[i], k);
+    st.link_strain[i] = static_cast<float>(k.pos2.x() / m.rest_length);
+    st.link_vel_valid[i] = 1;
+    st.link_small_angle[i] = k.small;
+    st.link_pos2[i] = k.pos2;
+    st.link_angle1v[i] = k.a1v;
+    st.link_angle2v[i] = k.a2v;
+  }
+}
+
+// Sum of the link forces and moments acting on voxel v (local frame), direction order 0..5.
+inline void gather_links(const Model& m, const Scratch& sc, int v, Vec3& force, Vec3& moment) {
+  force = Vec3::Zero();
+  moment = Vec3::Zero();
+  const int end = m.voxel_link_begin[v + 1];
+  for (int e = m.voxel_link_begin[v]; e < end; ++e) {
+    const Scratch::EndLoad& load = sc.link_end_load[m.voxel_link_entry[e]];
+    force += load.force;
+    moment += load.moment;
+  }
+}
+
+inline int cell_coord(double x, double inv_h) {
+  const double c = std::floor(x * inv_h);
+  if (!(c > -1.0e9)) return -1000000000;  // also catches NaN
+  if (c > 1.0e9) return 1000000000;
+  return static_cast<int>(c);
+}
+
+inline std::size_t bucket_of(int cx, int cy, int cz, std::size_t mask) {
+  const std::uint64_t h = static_cast<std::uint64_t>(static_cast<std::uint32_t>(cx)) * 73856093u ^
+                          static_cast<std::uint64_t>(static_cast<std::uint32_t>(cy)) * 19349663u ^
+                          static_cast<std::uint64_t>(static_cast<std::uint32_t>(cz)) * 83492791u;
+  return static_cast<std::size_t>(h) & mask;
+}
+
+// §2.10 pair rebuild. Same pairs, in the same order, as the reference's O(N^2) scan: for each
+// surface voxel a in list order, every later surface voxel b with |pos_a - pos_b|^2 <= (2.5 s)^2
+// that is not within 5 link hops; found here through a uniform grid of cell size 2.5 s.
+void rebuild_pairs(const Model& m, State& st, Scratch& sc) {
+  const auto& surf = m.surface_voxels;
+  const int ns = static_cast<int>(surf.size());
+  const float radius = static_cast<float>(m.collision_watch_radius);
+  const float thresh_sq = radius * radius;  // float, as Voxelyze's threshRadiusSq
+  const double inv_h = 1.0 / static_cast<double>(radius);
+  const std::size_t mask = sc.grid_head.size() - 1;
+  std::fill(sc.grid_head.begin(), sc.grid_head.end(), -1);
+  // insert in reverse so that each bucket lists its voxels in ascending slot order
+  for (int si = ns - 1; si >= 0; --si) {
+    const Vec3& p = st.pos[surf[si]];
+    const int cx = cell_coord(p.x(), inv_h), cy = cell_coord(p.y(), inv_h),
+              cz = cell_coord(p.z(), inv_h);
+    sc.grid_cell[3 * si] = cx;
+    sc.grid_cell[3 * si + 1] = cy;
+    sc.grid_cell[3 * si + 2] = cz;
+    const std::size_t b = bucket_of(cx, cy, cz, mask);
+    sc.grid_next[si] = sc.grid_head[b];
+    sc.grid_head[b] = si;
+  }
+  int count = 0;
+  for (int si = 0; si < ns; ++si) {
+    const int a = surf[si];
+    const Vec3& pa = st.pos[a];
+    // Voxelyze: lastColWatchPosition = (Vec3D<float>)pos for every non-interior voxel
+    st.col_watch_pos[a] = {static_cast<float>(pa.x()), static_cast<float>(pa.y()),
+                           static_cast<float>(pa.z())};
+    sc.candidates.clear();
+    const int cx = sc.grid_cell[3 * si], cy = sc.grid_cell[3 * si + 1],
+              cz = sc.grid_cell[3 * si + 2];
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const int qx = cx + dx, qy = cy + dy, qz = cz + dz;
+          for (int sj = sc.grid_head[bucket_of(qx, qy, qz, mask)]; sj >= 0; sj = sc.grid_next[sj]) {
+            if (sj <= si) continue;  // slots ascend with voxel id: keep b > a only
+            if (sc.grid_cell[3 * sj] != qx || sc.grid_cell[3 * sj + 1] != qy ||
+                sc.grid_cell[3 * sj + 2] != qz)
+              continue;  // another cell hashed to this bucket
+            const int b = surf[sj];
+            const Vec3& pb = st.pos[b];
+            const double ex = pa.x() - pb.x(), ey = pa.y() - pb.y(), ez = pa.z() - pb.z();
+            if (ex * ex + ey * ey + ez * ez > thresh_sq) continue;
+            if (is_nearby(m, a, b)) continue;
+            sc.candidates.push_back(sj);
+          }
+        }
+    // creation order is ascending partner id (insertion sort; lists are short)
+    auto& cand = sc.candidates;
+    for (std::size_t x = 1; x < cand.size(); ++x) {
+      const int key = cand[x];
+      std::size_t y = x;
+      for (; y > 0 && cand[y - 1] > key; --y) cand[y] = cand[y - 1];
+      cand[y] = key;
+    }
+    for (int sj : cand) {
+      if (count == static_cast<int>(st.col_pairs.size())) {
+        // pathological pile-up beyond the reserved slots: grow (the only allocation in a step)
+        st.col_pairs.resize(st.col_pairs.size() * 2 + 64);
+        ++st.counters.collision_pair_growths;
+      }
+      st.col_pairs[count++] = CollisionPair{a, surf[sj]};
+    }
+  }
+  st.col_pair_count = count;
+  if (sc.pair_force.size() < st.col_pairs.size())
+    sc.pair_force.resize(st.col_pairs.size(), {0.0f, 0.0f, 0.0f});
+  st.collisions_stale = false;
+  ++st.counters.collision_rebuilds;
+}
+
+// §2.10: staleness check, rebuild if stale, pair forces -> collision_force (collisionF of §2.7).
+void update_collisions(const Model& m, State& st, Scratch& sc) {
+  if (!st.collisions_stale) {
+    const float rd = static_cast<float>(m.collision_recalc_distance);
+    const float rd_sq = rd * rd;
+    for (int v : m.surface_voxels) {
+      const Vec3& p = st.pos[v];
+      const auto& w = st.col_watch_pos[v];
+      const double ex = p.x() - w[0], ey = p.y() - w[1], ez = p.z() - w[2];
+      if (ex * ex + ey * ey + ez * ez > rd_sq) {
+        st.collisions_stale = true;
+        break;
+      }
+    }
+  }
+  if (st.collisions_stale) rebuild_pairs(m, st, sc);
+
+  std::fill(sc.collision_force.begin(), sc.collision_force.end(), Vec3::Zero());
+  // D0 = (s + s) * 0.625 (sum of the two base sizes x envelope radius), float
+  const float nom_dist = static_cast<float>((m.voxel_size + m.voxel_size) * 0.625f);
+  for (int k = 0; k < st.col_pair_count; ++k) {
+    const int a = st.col_pairs[k].a, b = st.col_pairs[k].b;
+    const Vec3& p1 = st.pos[a];
+    const Vec3& p2 = st.pos[b];
+    const float ox = static_cast<float>(p2.x() - p1.x()), oy = static_cast<float>(p2.y() - p1.y()),
+                oz = static_cast<float>(p2.z() - p1.z());
+    const float len = std::sqrt(ox * ox + oy * oy + oz * oz);
+    const float rel_dist = nom_dist - len;  // overlap, > 0 when touching
+    if (!(rel_dist > 0)) continue;          // F = 0
+    const float ux = ox / len, uy = oy / len, uz = oz / len;
+    const VoxelConst& c1 = m.voxel_const[a];
+    const VoxelConst& c2 = m.voxel_const[b];
+    // k_c = harmonic mean of the k_pen, c_c = mean of C_col (float)
+    const float kc = 2.0f / (1.0f / c1.k_pen + 1.0f / c2.k_pen);
+    const float cc = 0.5f * (c1.c_col + c2.c_col);
+    const Vec3& m1 = st.lin_mom[a];
+    const Vec3& m2 = st.lin_mom[b];
+    const double v1x = m1.x() * c1.inv_mass, v1y = m1.y() * c1.inv_mass, v1z = m1.z() * c1.inv_mass;
+    const double v2x = m2.x() * c2.inv_mass, v2y = m2.y() * c2.inv_mass, v2z = m2.z() * c2.inv_mass;
+    const double dux = ux, duy = uy, duz = uz;
+    // v_rel = v1.n - v2.n (positive = approaching), float
+    const float rel_vel = static_cast<float>((v1x * dux + v1y * duy + v1z * duz) -
+                                             (v2x * dux + v2y * duy + v2z * duz));
+    const float mag = kc * rel_dist + cc * rel_vel;
+    const float fx = ux * mag, fy = uy * mag, fz = uz * mag;
+    // voxel 1 receives -F, voxel 2 receives +F (collisionF = -sum of contactForce)
+    sc.collision_force[a] -= Vec3(fx, fy, fz);
+    sc.collision_force[b] -= Vec3(-fx, -fy, -fz);
+  }
+}
+
+// §2.8 floorForce(Fsum): normal spring-damper + friction at the start-of-step velocity; may
+// clear the static flag. Returns fric (normal + friction).
+inline Vec3 floor_force(const VoxelConst& c, const Vec3& pos, const Vec3& vel, const Vec3& fsum,
+                        std::uint8_t& static_flag) {
+  const float pen = static_cast<float>(0.0 - pos.z());  // s/2 - s/2 - z
+  if (!(pen >= 0)) {
+    static_flag = 0;
+    return Vec3::Zero();
+  }
+  const float normal = c.k_pen * pen;  // N = 2 E s pen (float)
+  Vec3 fric(0.0, 0.0, normal - c.c_col * vel.z());
+  if (static_flag) {
+    const double sx = fsum.x() + fric.x(), sy = fsum.y() + fric.y();
+    const float surface_sq = static_cast<float>(sx * sx + sy * sy);
+    const float limit = c.mu_static * normal;
+    if (surface_sq > limit * limit) static_flag = 0;  // breaks: no friction on this step
+  } else {
+    const double hl = std::sqrt(vel.x() * vel.x() + vel.y() * vel.y() + 0.0 * 0.0);
+    if (hl > 0) {
+      const float f = c.mu_kinetic * normal;
+      fric -= Vec3(f * (vel.x() / hl), f * (vel.y() / hl), f * (0.0 / hl));
+    }
+  }
+  return fric;
+}
+
+// §2.12 steps 3-9 (after the link pass and the collisions): the fork's two-part step.
+bool fork_voxel_passes(const Model& m, State& st, Scratch& sc, std::span<const Vec3> ext) {
+  const float dt = m.dt_f;
+  const int nv = m.voxel_count;
+  // 4. CoG = mean position of the non-fixed voxels
+  Vec3 cog = Vec3::Zero();
+  for (int v = 0; v < nv; ++v)
+    if (!m.voxel_fixed[v]) cog += st.pos[v];
+  if (m.free_voxel_count > 0) cog /= static_cast<double>(m.free_voxel_count);
+  Vec3 la = Vec3::Zero(), lb = Vec3::Zero();
+  st.previous_dt = dt;
+
+  // 5. part 1; L_A (start state) and L_B (after part 1) are summed per voxel in list order
+  for (int v = 0; v < nv; ++v) {
+    if (m.voxel_fixed[v]) continue;
+    const VoxelConst& c = m.voxel_const[v];
+    Vec3& pos = st.pos[v];
+    Vec3& mom = st.lin_mom[v];
+    Vec3& am = st.ang_mom[v];
+    Quat& q = st.orient[v];
+    la += cross(pos - cog, mom) + am;
+    sc.old_pos[v] = pos;
+    Vec3 lsum, msum;
+    gather_links(m, sc, v, lsum, msum);
+    // §2.7 linkF = q (sum of link forces) - v C_glob
+    const Vec3 vel(mom.x() * c.inv_mass, mom.y() * c.inv_mass, mom.z() * c.inv_mass);
+    const Vec3 rl = rotate(q, lsum);
+    const Vec3 link_f(rl.x() - vel.x() * c.c_glob, rl.y() - vel.y() * c.c_glob,
+                      rl.z() - vel.z() * c.c_glob);
+    Vec3 ext_f = Vec3::Zero();
+    if (!ext.empty())
+      ext_f = Vec3(static_cast<float>(ext[v].x()), static_cast<float>(ext[v].y()),
+                   static_cast<float>(ext[v].z()));
+    const Vec3 grav_f(0.0, 0.0, c.gravity_force);
+    const Vec3& col_f = sc.collision_force[v];
+    Vec3 fric = Vec3::Zero();
+    if (m.floor) {
+      const Vec3 fsum = ((link_f + ext_f) + grav_f) + col_f;
+      fric = floor_force(c, pos, vel, fsum, st.static_friction[v]);
+    }
+    // pos += (linkF + extF) dt (dt/m), linMom += (linkF + extF) dt
+    const Vec3 fle = link_f + ext_f;
+    const float dt_m = dt * c.inv_mass;
+    pos += Vec3(fle.x() * dt * dt_m, fle.y() * dt * dt_m, fle.z() * dt * dt_m);
+    mom += Vec3(fle.x() * dt, fle.y() * dt, fle.z() * dt);
+    // §2.7 curMoment = q (sum of link moments) - omega C_glob,rot
+    const Vec3 rm = rotate(q, msum);
+    const Vec3 cur_m(rm.x() - am.x() * c.inv_inertia * c.c_glob_rot,
+                     rm.y() - am.y() * c.inv_inertia * c.c_glob_rot,
+                     rm.z() - am.z() * c.inv_inertia * c.c_glob_rot);
+    const float dt_i = dt * c.inv_inertia;
+    q = mul(
+        quat_from_rotvec(Vec3(cur_m.x() * dt * dt_i, cur_m.y() * dt * dt_i, cur_m.z() * dt * dt_i)),
+        q);
+    am += Vec3(cur_m.x() * dt, cur_m.y() * dt, cur_m.z() * dt);
+    sc.part2_force[v] = (grav_f + col_f) + fric;
+    sc.fric[v] = fric;
+    lb += cross(pos - cog, mom) + am;
+  }
+
+  // 6. mid-step link update (state only)
+  link_pass_state_only(m, st);
+
+  // 7. correction moment -dL / dt / N_all (float), same for every non-fixed voxel
+  const Vec3 dl = lb - la;
+  const double n_all = static_cast<double>(nv);
+  const double dtd = dt;
+  const float me_x = static_cast<float>(-dl.x() / dtd / n_all);
+  const float me_y = static_cast<float>(-dl.y() / dtd / n_all);
+  const float me_z = static_cast<float>(-dl.z() / dtd / n_all);
+
+  // 8. part 2
+  double check = 0.0;
+  for (int v = 0; v < nv; ++v) {
+    if (m.voxel_fixed[v]) continue;
+    const VoxelConst& c = m.voxel_const[v];
+    Vec3& pos = st.pos[v];
+    Vec3& mom = st.lin_mom[v];
+    Vec3& am = st.ang_mom[v];
+    Quat& q = st.orient[v];
+    const Vec3& f2 = sc.part2_force[v];
+    const float dt_m = dt * c.inv_mass;
+    pos += Vec3(f2.x() * dt * dt_m, f2.y() * dt * dt_m, f2.z() * dt * dt_m);
+    pos += Vec3(mom.x() * dt_m, mom.y() * dt_m, mom.z() * dt_m);
+    mom += Vec3(f2.x() * dt, f2.y() * dt, f2.z() * dt);
+    if (m.floor) {
+      // §2.8 static-friction capture at the new position, whole-step displacement
+      const float pen = static_cast<float>(0.0 - pos.z());
+      std::uint8_t& sf = st.static_friction[v];
+      if (pen >= 0) {
+        const Vec3& fr = sc.fric[v];
+        const Vec3& op = sc.old_pos[v];
+        const double work = fr.x() * (pos.x() - op.x()) + fr.y() * (pos.y() - op.y());
+        const double hke = 0.5 * c.inv_mass * (mom.x() * mom.x() + mom.y() * mom.y());
+        if (hke + work <= 0) sf = 1;
+        if (sf) {
+          mom.x() = 0.0;
+          mom.y() = 0.0;
+          pos.x() = op.x();
+          pos.y() = op.y();
+        }
+      } else {
+        sf = 0;
+      }
+    }
+    // angMom += M_ext dt (float moment promoted to double, times the float dt)
+    am.x() += static_cast<double>(me_x) * dtd;
+    am.y() += static_cast<double>(me_y) * dtd;
+    am.z() += static_cast<double>(me_z) * dtd;
+    q = mul(quat_from_rotvec(Vec3(am.x() * c.inv_inertia * dt, am.y() * c.inv_inertia * dt,
+                                  am.z() * c.inv_inertia * dt)),
+            q);
+    sc.ext_moment[v] = {me_x, me_y, me_z};
+    // NaN/inf anywhere makes the running sum non-finite (checked once after the loop; finite
+    // values beyond ~1e307 that overflow the sum are reported as non-finite too)
+    check +=
+        pos.x() + pos.y() + pos.z() + mom.x() + mom.y() + mom.z() + am.x() + am.y() + am.z() + q.w;
+  }
+  return std::isfinite(check);
+}
+
+// §2.9 upstream single-pass symplectic Euler with the same forces.
+bool symplectic_voxel_pass(const Model& m, State& st, Scratch& sc, std::span<const Vec3> ext) {
+  const float dt = m.dt_f;
+  const int nv = m.voxel_count;
+  st.previous_dt = dt;
+  double check = 0.0;
+  for (int v = 0; v < nv; ++v) {
+    if (m.voxel_fixed[v]) continue;
+    const VoxelConst& c = m.voxel_const[v];
+    Vec3& pos = st.pos[v];
+    Vec3& mom = st.lin_mom[v];
+    Vec3& am = st.ang_mom[v];
+    Quat& q = st.orient[v];
+    Vec3 lsum, msum;
+    gather_links(m, sc, v, lsum, msum);
+    const Vec3 vel(mom.x() * c.inv_mass, mom.y() * c.inv_mass, mom.z() * c.inv_mass);
+    // force(): links (rotated to global) + external - global damping + gravity + collisions
+    Vec3 f = rotate(q, lsum);
+    if (!ext.empty())
+      f += Vec3(static_cast<float>(ext[v].x()), static_cast<float>(ext[v].y()),
+                static_cast<float>(ext[v].z()));
+    f -= Vec3(vel.x() * c.c_glob, vel.y() * c.c_glob, vel.z() * c.c_glob);
+    f.z() += c.gravity_force;
+    f += sc.collision_force[v];
+    const float pen = static_cast<float>(0.0 - pos.z());  // at the old position (upstream)
+    const bool contact = m.floor && pen >= 0;
+    if (m.floor) f += floor_force(c, pos, vel, f, st.static_friction[v]);
+    mom += Vec3(f.x() * dt, f.y() * dt, f.z() * dt);
+    const float dt_m = dt * c.inv_mass;
+    Vec3 tr(mom.x() * dt_m, mom.y() * dt_m, mom.z() * dt_m);
+    if (m.floor) {
+      std::uint8_t& sf = st.static_friction[v];
+      if (contact) {
+        const double work = f.x() * tr.x() + f.y() * tr.y();
+        const double hke = 0.5 * c.inv_mass * (mom.x() * mom.x() + mom.y() * mom.y());
+        if (hke + work <= 0) sf = 1;
+        if (sf) {
+          mom.x() = mom.y() = 0.0;
+          tr.x() = tr.y() = 0.0;
+        }
+      } else {
+        sf = 0;
+      }
+    }
+    pos += tr;
+    const Vec3 rm = rotate(q, msum);
+    const Vec3 cur_m(rm.x() - am.x() * c.inv_inertia * c.c_glob_rot,
+                     rm.y() - am.y() * c.inv_inertia * c.c_glob_rot,
+                     rm.z() - am.z() * c.inv_inertia * c.c_glob_rot);
+    am += Vec3(cur_m.x() * dt, cur_m.y() * dt, cur_m.z() * dt);
+    q = mul(quat_from_rotvec(Vec3(am.x() * c.inv_inertia * dt, am.y() * c.inv_inertia * dt,
+                                  am.z() * c.inv_inertia * dt)),
+            q);
+    // NaN/inf anywhere makes the running sum non-finite (checked once after the loop; finite
+    // values beyond ~1e307 that overflow the sum are reported as non-finite too)
+    check +=
+        pos.x() + pos.y() + pos.z() + mom.x() + mom.y() + mom.z() + am.x() + am.y() + am.z() + q.w;
+  }
+  return std::isfinite(check);
+}
+
+}  // namespace
+
+StepStatus step(const Model& model, State& state, Scratch& scratch,
+                std::span<const Vec3> external_force) {
+  if (!external_force.empty() &&
+      external_force.size() != static_cast<std::size_t>(model.voxel_count))
+    throw std::invalid_argument("physics::step: external_force has " +
+                                std::to_string(external_force.size()) + " entries, model has " +
+                                std::to_string(model.voxel_count) + " voxels");
+  // 1. link pass; strain > 100 -> nothing else advances
+  if (link_pass_forces(model, state, scratch)) {
+    ++state.counters.diverged_steps;
+    return StepStatus::diverged;
+  }
+  // 2. collisions
+  if (model.self_collision) update_collisions(model, state, scratch);
+  const bool finite = model.integrator == Integrator::pneuvox
+                          ? fork_voxel_passes(model, state, scratch, external_force)
+                          : symplectic_voxel_pass(model, state, scratch, external_force);
+  state.time += model.dt_f;  // 9.
+  if (!finite) {
+    ++state.counters.non_finite_steps;
+    return StepStatus::non_finite;
+  }
+  ++state.counters.steps;
+  return StepStatus::ok;
+}
+
+}  // namespace softevo::physics

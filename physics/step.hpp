@@ -1,0 +1,62 @@
+// One physics time step: step(model, state, scratch, external_force).
+//
+// Integrator (Model::integrator, from physics.integrator):
+//  - pneuvox:    the thesis fork's two-part step of pneuvox-model.md §2.12-2.13, exactly: link
+//                pass, collisions, CoG + L_A, part 1 (link + external forces, doubled position
+//                term), mid-step link pass, L_B, angular-momentum correction, part 2 (gravity,
+//                collision, floor; static-friction capture of §2.8).
+//  - symplectic: upstream Voxelyze single-pass symplectic Euler (§2.9) with the same forces.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "physics/model.hpp"
+#include "physics/state.hpp"
+
+namespace softevo::physics {
+
+enum class StepStatus : std::uint8_t {
+  ok = 0,
+  diverged = 1,    // some link strain > 100: voxels not advanced (§2.12 item 1)
+  non_finite = 2,  // a NaN/inf appeared in the state (the reference would abort, §2.6/§2.15)
+};
+
+const char* to_string(StepStatus status);
+
+// Per-step buffers derived from State each step; allocated once by make_scratch(), never
+// reallocated by step() (except the documented pair-capacity growth, see State::col_pairs).
+struct Scratch {
+  // link pass output: force/moment on each link end in that end voxel's local frame (§2.6),
+  // index = 2 * link + end (0 = N, 1 = P), i.e. exactly Model::voxel_link_entry, so the voxel
+  // pass gathers its loads without a branch.
+  struct EndLoad {
+    Vec3 force;   // [N]
+    Vec3 moment;  // [N m]
+  };
+  std::vector<EndLoad> link_end_load;  // (2 x links)
+  // voxel pass (pneuvox part 1 -> part 2 carry-over, §2.1 "fork-only per-voxel scratch")
+  std::vector<Vec3> collision_force;             // collisionF [N] (voxels)
+  std::vector<Vec3> part2_force;                 // gravityF + collisionF + fric [N] (voxels)
+  std::vector<Vec3> fric;                        // floor normal + friction force [N] (voxels)
+  std::vector<Vec3> old_pos;                     // position at the start of the step [m] (voxels)
+  std::vector<std::array<float, 3>> ext_moment;  // §2.12 correction moment [N m] (voxels)
+  // self-collision: per-pair force (float, §2.10) and the broadphase grid
+  std::vector<std::array<float, 3>> pair_force;  // [N] (pairs; sized to pair capacity)
+  std::vector<int> grid_head;   // spatial hash bucket -> first surface voxel, -1 = empty
+  std::vector<int> grid_next;   // surface voxel slot -> next in bucket
+  std::vector<int> grid_cell;   // surface voxel slot -> bucket
+  std::vector<int> candidates;  // partner buffer of one voxel during a rebuild
+};
+
+Scratch make_scratch(const Model& model);
+
+// Advance `state` by one time step model.dt. external_force[v] is the force applied to voxel v
+// [N], global frame (e.g. pneumatic pressure forces, set by the caller before every step); it is
+// rounded to float as the reference's External stores it. An empty span means no external force;
+// otherwise its size must equal model.voxel_count (else std::invalid_argument).
+StepStatus step(const Model& model, State& state, Scratch& scratch,
+                std::span<const Vec3> external_force = {});
+
+}  // namespace softevo::physics

@@ -1,0 +1,51 @@
+// The fixed scenes of the golden-hash determinism test, shared by the test and by the helper
+// executable that recomputes them in a separate process.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/rng.hpp"
+#include "physics/model.hpp"
+#include "physics/scenes.hpp"
+#include "physics/step.hpp"
+
+namespace softevo::physics::golden {
+
+inline constexpr int kSteps = 1500;
+
+// A 5x4x3 body of two materials (30 kPa / 100 kPa checkerboard) with a hole, lifted 0.3 s,
+// random initial momenta (Rng seed 2024) and a time-varying external force on four voxels:
+// exercises links in both angle modes, damping, floor contact, friction and self-collision.
+inline std::uint64_t run_scene(const std::string& integrator) {
+  BodyPlan plan = solid_block(5, 4, 3, 3.0e4);
+  plan.materials.push_back(StructuralMaterial{1.0e5, 1000.0});
+  for (int x = 0; x < 5; ++x)
+    for (int y = 0; y < 4; ++y)
+      for (int z = 0; z < 3; ++z)
+        if ((x + y + z) % 2) plan.cells[plan.cell_index(x, y, z)] = 2;
+  plan.cells[plan.cell_index(2, 1, 1)] = kEmptyCell;
+  plan.cells[plan.cell_index(3, 2, 1)] = kFirstChamberCell;
+  PhysicsConfig cfg;
+  cfg.integrator = integrator;
+  const Model m = build_model(plan, cfg);
+  State st = initial_state(m);
+  Scratch sc = make_scratch(m);
+  Rng rng(2024);
+  for (int v = 0; v < m.voxel_count; ++v) {
+    st.pos[v].z() += 0.3 * m.voxel_size;
+    st.lin_mom[v] = Vec3(rng.normal(), rng.normal(), rng.normal()) * 2e-5;
+    st.ang_mom[v] = Vec3(rng.normal(), rng.normal(), rng.normal()) * 2e-10;
+  }
+  std::vector<Vec3> ext(m.voxel_count, Vec3::Zero());
+  for (int i = 0; i < kSteps; ++i) {
+    const double phase = (i % 200) < 100 ? 1.0 : -1.0;
+    for (int v = 0; v < m.voxel_count; v += m.voxel_count / 4)
+      ext[v] = Vec3(0.0, 0.0, 0.02 * phase);
+    step(m, st, sc, ext);
+  }
+  return state_hash(st);
+}
+
+}  // namespace softevo::physics::golden

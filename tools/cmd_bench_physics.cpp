@@ -1,0 +1,112 @@
+// `softevo bench physics [--json] [--steps N] [--runs R] [--scene NAME]`: raw physics speed
+// (issue 3). Named scenes of 1 cm voxels, E = 100 kPa, the thesis material settings, floor,
+// gravity and self-collision on (../shared/reference/measurements.md "Raw physics speed"), for
+// both integrators. Each figure is the best of R runs of N steps from the initial state, in CPU
+// seconds of this thread (the machine is shared; wall time is printed alongside).
+#include <ctime>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "physics/model.hpp"
+#include "physics/scenes.hpp"
+#include "physics/step.hpp"
+#include "tools/bench_common.hpp"
+#include "tools/commands.hpp"
+
+namespace softevo::cli {
+
+namespace {
+
+struct Scene {
+  const char* name;
+  int x, y, z;
+};
+
+struct BenchRow {
+  std::string scene, integrator;
+  int voxels = 0, links = 0, steps = 0, failed_steps = 0;
+  double cpu_seconds = 0.0, wall_seconds = 0.0;
+};
+
+BenchRow bench_one(const Scene& scene, const std::string& integrator, int steps, int runs) {
+  PhysicsConfig cfg;  // thesis defaults: floor, gravity, self-collision, damping 0.1/0.001/0.1
+  cfg.integrator = integrator;
+  const physics::Model model =
+      physics::build_model(physics::solid_block(scene.x, scene.y, scene.z, 1.0e5), cfg);
+  BenchRow row{scene.name, integrator, model.voxel_count, model.link_count, steps};
+  row.cpu_seconds = 1e300;
+  for (int r = 0; r < runs; ++r) {
+    physics::State state = physics::initial_state(model);
+    physics::Scratch scratch = physics::make_scratch(model);
+    int failed = 0;
+    const double c0 = thread_cpu_seconds(), w0 = wall_seconds();
+    for (int i = 0; i < steps; ++i)
+      failed += physics::step(model, state, scratch) != physics::StepStatus::ok;
+    const double cpu = thread_cpu_seconds() - c0, wall = wall_seconds() - w0;
+    if (cpu < row.cpu_seconds) {
+      row.cpu_seconds = cpu;
+      row.wall_seconds = wall;
+      row.failed_steps = failed;
+    }
+  }
+  return row;
+}
+
+}  // namespace
+
+void register_bench_physics(CLI::App& app, int& exit_code) {
+  CLI::App* bench = bench_group(app);
+  auto* cmd = bench->add_subcommand(
+      "physics", "microseconds per voxel-step of the voxel physics on named scenes");
+  auto json = std::make_shared<bool>(false);
+  auto steps = std::make_shared<int>(3000);
+  auto runs = std::make_shared<int>(3);
+  auto only = std::make_shared<std::string>();
+  cmd->add_flag("--json", *json, "print a JSON list of result objects");
+  cmd->add_option("--steps", *steps, "steps per run (default 3000)")->check(CLI::PositiveNumber);
+  cmd->add_option("--runs", *runs, "runs per figure, best is kept (default 3)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--scene", *only, "only scenes whose name contains this");
+  cmd->callback([&exit_code, json, steps, runs, only] {
+    const std::vector<Scene> scenes = {
+        {"block10x10x10", 10, 10, 10}, {"block4x4x4", 4, 4, 4}, {"beam10x2x2", 10, 2, 2}};
+    nlohmann::json out = nlohmann::json::array();
+    if (!*json)
+      std::printf("%-14s %-10s %6s %6s %12s %14s %10s %8s\n", "scene", "integrator", "voxels",
+                  "links", "us/vox-step", "steps/second", "wall/cpu", "failed");
+    int failed = 0;
+    for (const Scene& scene : scenes) {
+      if (!only->empty() && std::string(scene.name).find(*only) == std::string::npos) continue;
+      for (const char* integrator : {"pneuvox", "symplectic"}) {
+        const BenchRow r = bench_one(scene, integrator, *steps, *runs);
+        const double us = r.cpu_seconds * 1e6 / (static_cast<double>(r.steps) * r.voxels);
+        const double sps = r.steps / r.cpu_seconds;
+        failed += r.failed_steps;
+        if (*json) {
+          out.push_back({{"scene", r.scene},
+                         {"integrator", r.integrator},
+                         {"voxels", r.voxels},
+                         {"links", r.links},
+                         {"steps", r.steps},
+                         {"runs", *runs},
+                         {"us_per_voxel_step", us},
+                         {"steps_per_second", sps},
+                         {"cpu_seconds", r.cpu_seconds},
+                         {"wall_seconds", r.wall_seconds},
+                         {"failed_steps", r.failed_steps}});
+        } else {
+          std::printf("%-14s %-10s %6d %6d %12.4f %14.1f %10.2f %8d\n", r.scene.c_str(),
+                      r.integrator.c_str(), r.voxels, r.links, us, sps,
+                      r.wall_seconds / r.cpu_seconds, r.failed_steps);
+        }
+      }
+    }
+    if (*json) std::printf("%s\n", out.dump(2).c_str());
+    exit_code = failed == 0 ? kExitOk : kExitMismatch;
+  });
+}
+
+}  // namespace softevo::cli
