@@ -17,5 +17,10 @@ void register_config(CLI::App& app, int& exit_code);
 void register_bench_physics(CLI::App& app, int& exit_code);
 void register_bench_xor(CLI::App& app, int& exit_code);
 void register_develop(CLI::App& app, int& exit_code);
+void register_eval(CLI::App& app, int& exit_code);
+void register_champions(CLI::App& app, int& exit_code);
+void register_bench_eval(CLI::App& app, int& exit_code);
+void register_info(CLI::App& app, int& exit_code);
+void register_export(CLI::App& app, int& exit_code);
 
 }  // namespace softevo::cli

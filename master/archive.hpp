@@ -1,0 +1,155 @@
+// Run archive `softevo.run/1` (HDF5): what a distributed run records, written by rank 0 only.
+// The schema is documented in docs/archive.md; this header is its single implementation.
+//
+// Crash safety: an archive on disk is always a complete, valid file. Every change (new run,
+// one more generation + checkpoint, state change) is made on a copy next to the target
+// (".<name>.tmp.<pid>"), the copy is fsync'ed and renamed over the target, then the directory
+// is fsync'ed (copy-append-rename). A crash leaves either the old or the new file, never a half
+// written one; the cost is one file copy per generation (page-cache speed, small next to the
+// evaluation of a generation).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "common/eval_types.hpp"
+
+namespace softevo::master {
+
+inline constexpr const char* kArchiveFormat = "softevo.run/1";
+// Per direction: fitness, distance, path_length, angle_error, perpendicular_penalty, status.
+inline constexpr int kComponentCount = 6;
+// Columns of /stats: generation, best, mean, sd, species_count, evaluations_per_second.
+inline constexpr int kStatsColumns = 6;
+
+// A missing, unreadable, foreign or malformed archive; the message names the file and object.
+class ArchiveError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Root attributes of the archive.
+struct RunInfo {
+  std::string format = kArchiveFormat;
+  std::string version;
+  std::string git_commit;
+  std::int64_t seed = 0;
+  std::int32_t ranks = 1;         // (not part of the run's identity)
+  std::string host;               // (not part of the run's identity)
+  std::string start_time;         // ISO 8601 UTC (not part of the run's identity)
+  std::string end_time;           // ISO 8601 UTC, "" while running
+  std::string config_hash;        // 16 lower-case hex digits (hash_hex(config_hash(config)))
+  std::string experiment;         // "gait-open" | "gait-closed" | "dir-open" | "dir-closed"
+  std::string state = "running";  // "running" | "complete" | "interrupted"
+  std::int64_t generations_done = 0;
+};
+
+// One evaluated generation: one row per individual, sorted by id.
+struct GenerationRecord {
+  std::int64_t generation = 0;
+  std::vector<std::int64_t> id;
+  std::vector<std::int64_t> parent1;  // -1: none
+  std::vector<std::int64_t> parent2;  // -1: none
+  std::vector<std::int64_t> species;
+  std::vector<std::uint8_t> status;  // EvalStatus
+  std::vector<double> fitness;
+  std::vector<std::int32_t> voxels;
+  std::vector<std::int32_t> chambers;
+  std::vector<double> wall_seconds;               // [s] summed over the genome's work units
+  std::vector<std::int32_t> worker_rank;          // rank that evaluated the first work unit
+  std::vector<std::vector<std::uint8_t>> genome;  // evo::encode_genome bytes
+  int n_directions = 1;                           // gait: 1
+  std::vector<double> components;                 // row-major [n][n_directions][kComponentCount]
+  // Group attributes.
+  double best = 0.0;
+  double mean = 0.0;
+  double sd = 0.0;  // population standard deviation (divide by n)
+  std::int64_t species_count = 0;
+  std::int64_t evaluations = 0;    // work units evaluated (gait: n, directed: n x directions)
+  double eval_wall_seconds = 0.0;  // [s] wall time of the evaluation phase
+
+  std::size_t size() const { return id.size(); }
+  // Throws ArchiveError if the columns have different lengths or ids are not ascending.
+  void check() const;
+};
+
+struct StatsRow {
+  double generation = 0.0;
+  double best = 0.0;
+  double mean = 0.0;
+  double sd = 0.0;
+  double species_count = 0.0;
+  double evaluations_per_second = 0.0;  // (timing: not part of the run's identity)
+};
+
+// The population that continues the run: Population::serialize() after the last evaluated
+// generation, i.e. the NEXT population; `generation` = its generation number = generations_done.
+struct Checkpoint {
+  std::int64_t generation = 0;
+  std::vector<std::uint8_t> population;
+};
+
+// Population statistics of a fitness column (best = max, sd with divisor n; empty -> zeros).
+struct FitnessStats {
+  double best = 0.0;
+  double mean = 0.0;
+  double sd = 0.0;
+};
+FitnessStats fitness_stats(const std::vector<double>& fitness);
+
+// ---- writing (rank 0 only; every call is atomic, see the file comment) -------------------------
+
+// Throws ArchiveError unless a file can be created next to `path` (directory exists and is
+// writable, `path` is not a directory). Touches nothing that exists.
+void check_output_path(const std::string& path);
+// New archive with root attributes, /config, an empty /stats and no generation.
+void create_archive(const std::string& path, const RunInfo& info, const std::string& config_text);
+// Adds /generations/<G>, appends a /stats row, replaces /checkpoint and the root attributes.
+void append_generation(const std::string& path, const RunInfo& info, const GenerationRecord& record,
+                       const StatsRow& stats, const Checkpoint& checkpoint);
+// Removes ".<name>.tmp.<pid>" files next to `path` left by a process that no longer exists
+// (a run killed while writing); returns how many were removed.
+int remove_stale_temp_files(const std::string& path);
+// Replaces the root attributes (state changes, end time).
+void update_run_info(const std::string& path, const RunInfo& info);
+
+// ---- reading ---------------------------------------------------------------------------------
+
+class Archive {
+ public:
+  // Opens read-only and checks the format attribute; throws ArchiveError.
+  explicit Archive(const std::string& path);
+  ~Archive();
+  Archive(const Archive&) = delete;
+  Archive& operator=(const Archive&) = delete;
+
+  const std::string& path() const { return path_; }
+  RunInfo info() const;
+  std::string config_text() const;
+  std::vector<std::int64_t> generations() const;  // ascending
+  GenerationRecord generation(std::int64_t g) const;
+  std::vector<StatsRow> stats() const;
+  std::optional<Checkpoint> checkpoint() const;
+
+ private:
+  std::string path_;
+  std::int64_t file_ = -1;  // hid_t
+};
+
+// FNV-1a 64 over every archived (generation, id, status, fitness bits), generations ascending,
+// rows in id order, each field little-endian (i64, i64, u8, u64 bits). Equal digests = equal
+// evolutionary outcomes, whatever the rank count or timing.
+std::uint64_t fitness_digest(const Archive& archive);
+// FNV-1a 64 over everything deterministic: config text and hash, seed, experiment, state,
+// generations_done, every generation's columns except wall_seconds/worker_rank (parents,
+// species, status, fitness, voxels, chambers, components, genomes), the deterministic /stats
+// columns and the checkpoint. Excludes version, git commit, host, ranks, times and timings.
+std::uint64_t content_digest(const Archive& archive);
+
+// "000042"
+std::string generation_group_name(std::int64_t generation);
+
+}  // namespace softevo::master

@@ -1,0 +1,284 @@
+#include "master/run.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <ctime>
+#include <exception>
+#include <filesystem>
+#include <numeric>
+
+#include "common/version.hpp"
+#include "evo/genome.hpp"
+#include "master/signals.hpp"
+
+namespace softevo::master {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+int direction_count(const Config& config) {
+  return config.task.kind == "directed" ? static_cast<int>(config.task.directions.size()) : 0;
+}
+
+}  // namespace
+
+std::string iso8601_now() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+std::string host_name() {
+  char buf[256] = {0};
+  if (::gethostname(buf, sizeof buf - 1) != 0) return "unknown";
+  return buf;
+}
+
+bool LocalExecutor::evaluate(GenerationScheduler& scheduler,
+                             const std::function<EvalRequest(const WorkUnit&)>& make_request,
+                             ProgressReporter& progress) {
+  while (auto unit = scheduler.next()) {
+    if (stop_requested() == StopRequest::now) return false;
+    EvalResult result = evaluate_(make_request(*unit));
+    result.worker_rank = 0;
+    scheduler.complete(result);
+    progress.unit_done(scheduler.units_done(), scheduler.units_total());
+  }
+  return true;
+}
+
+PreparedRun prepare_run(const Config& config, const RunOptions& options, int ranks) {
+  PreparedRun run;
+  run.config = config;
+  run.config_text = canonical_text(config);
+  run.config_hash = config_hash(config);
+  run.options = options;
+  const std::string& out = options.out_path;
+  const std::string hash = hash_hex(run.config_hash);
+
+  RunInfo& info = run.info;
+  info.version = kVersion;
+  info.git_commit = kGitCommit;
+  info.seed = config.run.seed;
+  info.ranks = ranks;
+  info.host = options.host.empty() ? host_name() : options.host;
+  info.start_time = iso8601_now();
+  info.config_hash = hash;
+  info.experiment = experiment_name(config.task);
+  info.state = "running";
+
+  std::error_code ec;
+  const bool exists = fs::exists(out, ec);
+  try {
+    check_output_path(out);
+  } catch (const ArchiveError& e) {
+    throw StartupError(e.what());
+  }
+  if (exists && options.resume) {
+    try {
+      const Archive archive(out);
+      const RunInfo old = archive.info();
+      if (old.config_hash != hash || archive.config_text() != run.config_text)
+        throw StartupError(out + ": cannot resume: the archive was written with config hash " +
+                           old.config_hash + ", this run has " + hash +
+                           " (use the same config file, --set overrides and --seed)");
+      info.start_time = old.start_time;
+      info.generations_done = old.generations_done;
+      const std::vector<std::int64_t> gens = archive.generations();
+      if (static_cast<std::int64_t>(gens.size()) != old.generations_done ||
+          (!gens.empty() && gens.back() != old.generations_done - 1))
+        throw StartupError(
+            out + ": cannot resume: generations_done = " + std::to_string(old.generations_done) +
+            " but " + std::to_string(gens.size()) + " generation groups");
+      if (old.generations_done >= config.run.generations) {
+        run.already_complete = true;
+        run.info = old;
+        return run;
+      }
+      const std::optional<Checkpoint> cp = archive.checkpoint();
+      if (old.generations_done > 0) {
+        if (!cp || cp->generation != old.generations_done)
+          throw StartupError(out + ": cannot resume: no checkpoint for generation " +
+                             std::to_string(old.generations_done));
+        run.population.emplace(evo::Population::deserialize(cp->population, config));
+        if (run.population->generation() != cp->generation)
+          throw StartupError(out + ": cannot resume: checkpoint population is at generation " +
+                             std::to_string(run.population->generation()) + ", expected " +
+                             std::to_string(cp->generation));
+      }
+      run.resumed = true;
+    } catch (const ArchiveError& e) {
+      throw StartupError(std::string("cannot resume: ") + e.what());
+    } catch (const StartupError&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw StartupError(out + ": cannot resume: bad checkpoint: " + e.what());
+    }
+  } else if (exists && !options.overwrite) {
+    throw StartupError(out +
+                       " exists: pass --resume to continue it, --overwrite to replace it, or "
+                       "choose another --out");
+  }
+  if (!run.population)
+    run.population.emplace(
+        evo::Population::create(config, static_cast<std::uint64_t>(config.run.seed)));
+  return run;
+}
+
+RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporter& progress) {
+  if (run.already_complete) return RunOutcome::already_complete;
+  const Config& config = run.config;
+  const std::string& out = run.options.out_path;
+  RunInfo& info = run.info;
+  info.ranks = executor.ranks();
+  bool archive_written = false;
+  try {
+    remove_stale_temp_files(out);  // debris of a run killed while writing (SIGKILL, crash)
+    if (run.resumed) {
+      info.state = "running";
+      info.end_time.clear();
+      update_run_info(out, info);
+    } else {
+      create_archive(out, info, run.config_text);
+    }
+    archive_written = true;
+
+    evo::Population& population = *run.population;
+    const int n_directions = direction_count(config);
+    RunOutcome outcome = RunOutcome::complete;
+    while (population.generation() < config.run.generations) {
+      if (stop_requested() != StopRequest::none) {
+        outcome = RunOutcome::interrupted;
+        break;
+      }
+      const auto t_generation = Clock::now();
+      const std::int64_t g = population.generation();
+      const std::vector<evo::Individual>& members = population.members();
+      std::vector<std::vector<std::uint8_t>> encoded(members.size());
+      std::vector<std::int64_t> ids(members.size());
+      for (std::size_t i = 0; i < members.size(); ++i) {
+        encoded[i] = evo::encode_genome(members[i].genome);
+        ids[i] = members[i].id;
+      }
+      GenerationScheduler scheduler(g, ids, n_directions);
+      const auto make_request = [&](const WorkUnit& unit) {
+        EvalRequest r;
+        r.config_hash = run.config_hash;
+        r.generation = g;
+        r.genome_id = unit.genome_id;
+        r.direction_index = unit.direction_index;
+        r.genome = encoded[unit.member];
+        return r;
+      };
+      progress.generation_started(g, scheduler.units_total());
+      const auto t_eval = Clock::now();
+      if (!executor.evaluate(scheduler, make_request, progress)) {
+        outcome = RunOutcome::interrupted;
+        break;
+      }
+      const double eval_seconds = seconds_since(t_eval);
+      if (config.run.on_failure == "abort") {
+        const auto failures = scheduler.failures();
+        if (!failures.empty()) {
+          const EvalResult& f = *failures.front();
+          throw RunError("genome " + std::to_string(f.genome_id) + " (generation " +
+                         std::to_string(g) + ", direction " + std::to_string(f.direction_index) +
+                         ") failed on rank " + std::to_string(f.worker_rank) + ": " + f.message +
+                         " (run.on_failure = abort)");
+        }
+      }
+      const std::vector<GenomeOutcome> outcomes = scheduler.outcomes();
+
+      // Archive rows in id order.
+      std::vector<std::size_t> order(members.size());
+      std::iota(order.begin(), order.end(), std::size_t{0});
+      std::sort(order.begin(), order.end(),
+                [&](std::size_t a, std::size_t b) { return members[a].id < members[b].id; });
+      GenerationRecord rec;
+      rec.generation = g;
+      rec.n_directions = n_directions == 0 ? 1 : n_directions;
+      std::vector<evo::Evaluation> evaluations;
+      evaluations.reserve(members.size());
+      for (std::size_t i : order) {
+        const evo::Individual& m = members[i];
+        const GenomeOutcome& o = outcomes[i];
+        rec.id.push_back(m.id);
+        rec.parent1.push_back(m.parent1);
+        rec.parent2.push_back(m.parent2);
+        rec.species.push_back(m.species);
+        rec.status.push_back(static_cast<std::uint8_t>(o.status));
+        rec.fitness.push_back(o.fitness);
+        rec.voxels.push_back(o.voxels);
+        rec.chambers.push_back(o.chambers);
+        rec.wall_seconds.push_back(o.wall_seconds);
+        rec.worker_rank.push_back(o.worker_rank);
+        rec.genome.push_back(encoded[i]);
+        for (const DirectionComponents& c : o.components) {
+          rec.components.insert(rec.components.end(),
+                                {c.fitness, c.distance, c.path_length, c.angle_error,
+                                 c.perpendicular_penalty, static_cast<double>(c.status)});
+        }
+        evaluations.push_back(evo::Evaluation{m.id, o.fitness, o.status != EvalStatus::ok});
+      }
+      const FitnessStats fs = fitness_stats(rec.fitness);
+      rec.best = fs.best;
+      rec.mean = fs.mean;
+      rec.sd = fs.sd;
+      rec.species_count = static_cast<std::int64_t>(population.species_count());
+      rec.evaluations = static_cast<std::int64_t>(scheduler.units_total());
+      rec.eval_wall_seconds = eval_seconds;
+
+      try {
+        population.advance(evaluations);
+      } catch (const std::exception& e) {
+        throw RunError("generation " + std::to_string(g) + ": reproduction failed: " + e.what());
+      }
+      StatsRow stats{static_cast<double>(g),
+                     rec.best,
+                     rec.mean,
+                     rec.sd,
+                     static_cast<double>(rec.species_count),
+                     eval_seconds > 0 ? static_cast<double>(rec.evaluations) / eval_seconds : 0.0};
+      info.generations_done = g + 1;
+      append_generation(out, info, rec, stats,
+                        Checkpoint{population.generation(), population.serialize()});
+      progress.generation_finished(GenerationSummary{g, rec.best, rec.mean, rec.species_count,
+                                                     rec.evaluations, eval_seconds,
+                                                     seconds_since(t_generation)});
+      if (stop_requested() != StopRequest::none &&
+          population.generation() < config.run.generations) {
+        outcome = RunOutcome::interrupted;
+        break;
+      }
+    }
+    info.state = outcome == RunOutcome::complete ? "complete" : "interrupted";
+    info.end_time = iso8601_now();
+    update_run_info(out, info);
+    return outcome;
+  } catch (const std::exception& e) {
+    // Leave the archive marked as not running (best effort: it already holds the last
+    // consistent checkpoint whatever happens here).
+    if (archive_written) {
+      try {
+        info.state = "interrupted";
+        info.end_time = iso8601_now();
+        update_run_info(out, info);
+      } catch (...) {
+      }
+    }
+    if (dynamic_cast<const RunError*>(&e) != nullptr) throw;
+    throw RunError(e.what());
+  }
+}
+
+}  // namespace softevo::master

@@ -1,0 +1,28 @@
+#!/bin/bash
+# Submit the 4x10 grid and its aggregation job (runs only if every array task succeeded).
+#   slurm/submit.sh                      # the full grid: 40 tasks, 5 ranks each
+#   SOFTEVO_ARRAY=0,10,20,30 SOFTEVO_NTASKS=2 SOFTEVO_ARGS="--generations 2" slurm/submit.sh
+# Prints "ARRAY_JOB_ID AGGREGATION_JOB_ID". Environment: see slurm/grid.sbatch, plus
+#   SOFTEVO_ARRAY (array spec, default 0-39), SOFTEVO_NTASKS (ranks per task, default 5),
+#   SOFTEVO_TIME (time limit per task, default 7-00:00:00), SOFTEVO_BUILD (default build).
+set -euo pipefail
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+BUILD=${SOFTEVO_BUILD:-$ROOT/build}
+export SOFTEVO_ROOT=$ROOT
+export SOFTEVO_MPI=${SOFTEVO_MPI:-$BUILD/bin/softevo-mpi}
+export SOFTEVO_CLI=${SOFTEVO_CLI:-$BUILD/bin/softevo}
+export SOFTEVO_RUNS=${SOFTEVO_RUNS:-$ROOT/runs}
+export SOFTEVO_ARRAY=${SOFTEVO_ARRAY:-0-39}
+export SOFTEVO_REPS=${SOFTEVO_REPS:-10}
+for b in "$SOFTEVO_MPI" "$SOFTEVO_CLI"; do
+  [ -x "$b" ] || { echo "submit.sh: $b not built (cmake --build $BUILD)" >&2; exit 2; }
+done
+mkdir -p "$SOFTEVO_RUNS"
+ARRAY=$(sbatch --parsable --array="$SOFTEVO_ARRAY" --ntasks="${SOFTEVO_NTASKS:-5}" \
+  --time="${SOFTEVO_TIME:-7-00:00:00}" --chdir="$SOFTEVO_RUNS" \
+  --output="$SOFTEVO_RUNS/softevo-grid-%A_%a.out" "$ROOT/slurm/grid.sbatch")
+ARRAY=${ARRAY%%;*}
+AGG=$(sbatch --parsable --dependency="afterok:$ARRAY" --chdir="$SOFTEVO_RUNS" \
+  --output="$SOFTEVO_RUNS/softevo-grid-aggregate-%j.out" "$ROOT/slurm/aggregate.sbatch")
+AGG=${AGG%%;*}
+echo "$ARRAY $AGG"

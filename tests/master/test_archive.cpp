@@ -1,0 +1,208 @@
+// Run archive: round trip of every field, atomic updates (a failed update leaves the previous
+// file byte for byte), digests that see every deterministic field and ignore timing fields.
+#include "master/archive.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace softevo::master {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct TmpDir {
+  std::string path;
+  TmpDir() {
+    char t[] = "/tmp/softevo-archive-test-XXXXXX";
+    path = mkdtemp(t);
+  }
+  ~TmpDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+std::string bytes_of(const std::string& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+RunInfo sample_info() {
+  RunInfo i;
+  i.version = "0.1.0";
+  i.git_commit = "abc";
+  i.seed = 3;
+  i.ranks = 2;
+  i.host = "h";
+  i.start_time = "2026-01-01T00:00:00Z";
+  i.config_hash = "0123456789abcdef";
+  i.experiment = "dir-open";
+  return i;
+}
+
+GenerationRecord sample_record(std::int64_t g, int n, int ndir) {
+  GenerationRecord r;
+  r.generation = g;
+  r.n_directions = ndir;
+  for (int i = 0; i < n; ++i) {
+    r.id.push_back(10 * g + i);
+    r.parent1.push_back(i == 0 ? -1 : i - 1);
+    r.parent2.push_back(-1);
+    r.species.push_back(1 + i % 2);
+    r.status.push_back(i == 1 ? 4 : 0);
+    r.fitness.push_back(0.5 * i + g);
+    r.voxels.push_back(20 + i);
+    r.chambers.push_back(1 + i);
+    r.wall_seconds.push_back(0.25 * i);
+    r.worker_rank.push_back(1 + i % 2);
+    r.genome.push_back(
+        std::vector<std::uint8_t>(static_cast<std::size_t>(5 + i), static_cast<std::uint8_t>(i)));
+    for (int d = 0; d < ndir * kComponentCount; ++d) r.components.push_back(i * 100.0 + d);
+  }
+  const FitnessStats s = fitness_stats(r.fitness);
+  r.best = s.best;
+  r.mean = s.mean;
+  r.sd = s.sd;
+  r.species_count = 2;
+  r.evaluations = n * ndir;
+  r.eval_wall_seconds = 1.5;
+  return r;
+}
+
+TEST(Archive, RoundTripsEveryField) {
+  TmpDir d;
+  const std::string p = d.path + "/run.h5";
+  RunInfo info = sample_info();
+  create_archive(p, info, "[run]\nseed = 3\n");
+  const GenerationRecord r0 = sample_record(0, 4, 5);
+  info.generations_done = 1;
+  append_generation(p, info, r0, StatsRow{0, r0.best, r0.mean, r0.sd, 2, 7.5},
+                    Checkpoint{1, {1, 2, 3}});
+  const Archive a(p);
+  const RunInfo got = a.info();
+  EXPECT_EQ(got.format, "softevo.run/1");
+  EXPECT_EQ(got.seed, 3);
+  EXPECT_EQ(got.ranks, 2);
+  EXPECT_EQ(got.experiment, "dir-open");
+  EXPECT_EQ(got.state, "running");
+  EXPECT_EQ(got.generations_done, 1);
+  EXPECT_EQ(a.config_text(), "[run]\nseed = 3\n");
+  EXPECT_EQ(a.generations(), std::vector<std::int64_t>{0});
+  const GenerationRecord g = a.generation(0);
+  EXPECT_EQ(g.id, r0.id);
+  EXPECT_EQ(g.parent1, r0.parent1);
+  EXPECT_EQ(g.species, r0.species);
+  EXPECT_EQ(g.status, r0.status);
+  EXPECT_EQ(g.fitness, r0.fitness);
+  EXPECT_EQ(g.voxels, r0.voxels);
+  EXPECT_EQ(g.chambers, r0.chambers);
+  EXPECT_EQ(g.wall_seconds, r0.wall_seconds);
+  EXPECT_EQ(g.worker_rank, r0.worker_rank);
+  EXPECT_EQ(g.genome, r0.genome);
+  EXPECT_EQ(g.n_directions, 5);
+  EXPECT_EQ(g.components, r0.components);
+  EXPECT_EQ(g.best, 1.5);
+  EXPECT_EQ(g.evaluations, 20);
+  const auto stats = a.stats();
+  ASSERT_EQ(stats.size(), 1u);
+  EXPECT_EQ(stats[0].evaluations_per_second, 7.5);
+  ASSERT_TRUE(a.checkpoint().has_value());
+  EXPECT_EQ(a.checkpoint()->generation, 1);
+  EXPECT_EQ(a.checkpoint()->population, (std::vector<std::uint8_t>{1, 2, 3}));
+  EXPECT_THROW(a.generation(1), ArchiveError);
+}
+
+TEST(Archive, FailedUpdateLeavesThePreviousFileIntact) {
+  TmpDir d;
+  const std::string p = d.path + "/run.h5";
+  RunInfo info = sample_info();
+  create_archive(p, info, "x");
+  const GenerationRecord r0 = sample_record(0, 3, 1);
+  append_generation(p, info, r0, StatsRow{}, Checkpoint{1, {9}});
+  const std::string before = bytes_of(p);
+  // Appending the same generation again fails inside the edit (group exists) ...
+  EXPECT_THROW(append_generation(p, info, r0, StatsRow{}, Checkpoint{2, {8}}), ArchiveError);
+  // ... and an inconsistent record fails before it.
+  GenerationRecord bad = sample_record(1, 3, 1);
+  bad.fitness.pop_back();
+  EXPECT_THROW(append_generation(p, info, bad, StatsRow{}, Checkpoint{2, {8}}), ArchiveError);
+  EXPECT_TRUE(bytes_of(p) == before);
+  for (const auto& e : fs::directory_iterator(d.path))
+    EXPECT_EQ(e.path().filename(), "run.h5") << "left behind: " << e.path();
+}
+
+TEST(Archive, DigestsSeeResultsButNotTiming) {
+  TmpDir d;
+  const auto make = [&](const std::string& name, auto&& tweak) {
+    const std::string p = d.path + "/" + name;
+    RunInfo info = sample_info();
+    GenerationRecord r = sample_record(0, 4, 1);
+    StatsRow s{0, r.best, r.mean, r.sd, 2, 3.0};
+    tweak(info, r, s);
+    create_archive(p, info, "cfg");
+    append_generation(p, info, r, s, Checkpoint{1, {7}});
+    const Archive a(p);
+    return std::make_pair(fitness_digest(a), content_digest(a));
+  };
+  const auto base = make("a.h5", [](RunInfo&, GenerationRecord&, StatsRow&) {});
+  const auto timing = make("b.h5", [](RunInfo& i, GenerationRecord& r, StatsRow& s) {
+    i.host = "other";
+    i.ranks = 3;
+    i.start_time = "2030-01-01T00:00:00Z";
+    r.wall_seconds[0] = 99;
+    r.worker_rank[0] = 7;
+    r.eval_wall_seconds = 42;
+    s.evaluations_per_second = 1e3;
+  });
+  EXPECT_EQ(base, timing);
+  const auto fitness = make("c.h5", [](RunInfo&, GenerationRecord& r, StatsRow&) {
+    r.fitness[2] = std::nextafter(r.fitness[2], 10.0);
+  });
+  EXPECT_NE(base.first, fitness.first);
+  EXPECT_NE(base.second, fitness.second);
+  const auto genome =
+      make("d.h5", [](RunInfo&, GenerationRecord& r, StatsRow&) { r.genome[1][0] ^= 1; });
+  EXPECT_EQ(base.first, genome.first);  // fitness digest: only (generation, id, status, fitness)
+  EXPECT_NE(base.second, genome.second);
+}
+
+TEST(Archive, RejectsForeignAndMissingFiles) {
+  TmpDir d;
+  EXPECT_THROW(Archive(d.path + "/none.h5"), ArchiveError);
+  std::ofstream(d.path + "/text.h5") << "not hdf5";
+  EXPECT_THROW(Archive(d.path + "/text.h5"), ArchiveError);
+  EXPECT_THROW(check_output_path(d.path + "/no/dir/x.h5"), ArchiveError);
+  EXPECT_THROW(check_output_path(d.path), ArchiveError);
+  EXPECT_NO_THROW(check_output_path(d.path + "/fine.h5"));
+  EXPECT_FALSE(fs::exists(d.path + "/fine.h5"));
+}
+
+TEST(Archive, StaleTemporaryCopiesOfDeadProcessesAreRemoved) {
+  TmpDir d;
+  const std::string p = d.path + "/run.h5";
+  const std::string dead = d.path + "/.run.h5.tmp.999999999";  // beyond pid_max: never alive
+  const std::string live = d.path + "/.run.h5.tmp." + std::to_string(::getpid());
+  const std::string other = d.path + "/.other.h5.tmp.999999999";
+  for (const auto& f : {dead, live, other}) std::ofstream(f) << "x";
+  EXPECT_EQ(remove_stale_temp_files(p), 1);
+  EXPECT_FALSE(fs::exists(dead));
+  EXPECT_TRUE(fs::exists(live));
+  EXPECT_TRUE(fs::exists(other));
+}
+
+TEST(Archive, FitnessStatsUsePopulationSd) {
+  const FitnessStats s = fitness_stats({1.0, 3.0});
+  EXPECT_EQ(s.best, 3.0);
+  EXPECT_EQ(s.mean, 2.0);
+  EXPECT_EQ(s.sd, 1.0);
+}
+
+}  // namespace
+}  // namespace softevo::master

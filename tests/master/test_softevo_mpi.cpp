@@ -1,0 +1,492 @@
+// MPI integration tests of softevo-mpi (issue 6). The program runs in-process on the world
+// communicator or on a sub-communicator of its first k ranks (np = 1, 2, 3 in one binary), with
+// the real evaluator on a tiny problem (5x5x5 lattice, 0.1 s robots, population 6). A killed
+// run is a real child process (the softevo-mpi binary, started as an MPI singleton).
+// Expectations depend only on the outcome, never on rank count or timing.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <mpi.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "common/robot.hpp"
+#include "common/wire.hpp"
+#include "evo/genome.hpp"
+#include "master/archive.hpp"
+#include "master/mpi_driver.hpp"
+#include "master/signals.hpp"
+#include "worker/evaluate_robot.hpp"
+#include "worker/worker_loop.hpp"
+
+extern char** environ;
+
+namespace softevo::master {
+namespace {
+
+namespace fs = std::filesystem;
+
+int world_rank() {
+  int r = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  return r;
+}
+int world_size() {
+  int s = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &s);
+  return s;
+}
+
+// A barrier that sleeps instead of spinning (idle ranks must not steal the cores of a run).
+void sleepy_barrier() {
+  MPI_Request req;
+  MPI_Ibarrier(MPI_COMM_WORLD, &req);
+  int done = 0;
+  while (!done) {
+    MPI_Test(&req, &done, MPI_STATUS_IGNORE);
+    if (!done) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+}
+
+std::string bcast_string(std::string s) {
+  unsigned long long n = s.size();
+  MPI_Bcast(&n, 1, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
+  s.resize(n);
+  if (n > 0) MPI_Bcast(s.data(), static_cast<int>(n), MPI_CHAR, 0, MPI_COMM_WORLD);
+  return s;
+}
+
+// Temporary directory made by rank 0, known to every rank.
+struct TempDir {
+  std::string path;
+  TempDir() {
+    std::string p;
+    if (world_rank() == 0) {
+      char tmpl[] = "/tmp/softevo-mpi-test-XXXXXX";
+      p = mkdtemp(tmpl);
+    }
+    path = bcast_string(p);
+  }
+  ~TempDir() {
+    sleepy_barrier();
+    if (world_rank() == 0) {
+      std::error_code ec;
+      fs::remove_all(path, ec);
+    }
+  }
+  std::string file(const std::string& name) const { return path + "/" + name; }
+};
+
+constexpr const char* kTinyConfig = R"(# tiny real problem for the MPI integration tests
+[run]
+seed = 7
+generations = 3
+[task]
+kind = "gait"
+control = "open"
+eval_seconds = 0.1
+[body]
+lattice = [5, 5, 5]
+[neat]
+pop_size = 6
+)";
+
+std::string write_config(const TempDir& dir, const std::string& name, const std::string& text) {
+  const std::string p = dir.file(name);
+  if (world_rank() == 0) std::ofstream(p) << text;
+  sleepy_barrier();
+  return p;
+}
+
+// Runs softevo-mpi on the first `nranks` ranks of the world (collective over the world).
+// Returns the exit code of rank 0 on every rank.
+int run_on(int nranks, const std::vector<std::string>& args, bool quiet = true) {
+  const int wr = world_rank();
+  MPI_Comm sub;
+  MPI_Comm_split(MPI_COMM_WORLD, wr < nranks ? 0 : MPI_UNDEFINED, wr, &sub);
+  int rc = -1;
+  if (sub != MPI_COMM_NULL) {
+    std::vector<std::string> storage = {"softevo-mpi"};
+    storage.insert(storage.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (auto& s : storage) argv.push_back(s.data());
+    argv.push_back(nullptr);
+    MpiMainHooks hooks;
+    hooks.quiet = quiet;
+    rc = softevo_mpi_main(static_cast<int>(storage.size()), argv.data(), sub, hooks);
+    MPI_Comm_free(&sub);
+  }
+  sleepy_barrier();
+  MPI_Bcast(&rc, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  return rc;
+}
+
+struct Digests {
+  std::string fitness, content, state;
+  std::int64_t generations_done = -1;
+};
+Digests digests(const std::string& path) {
+  Digests d;
+  if (world_rank() == 0) {
+    const Archive a(path);
+    d.fitness = hash_hex(fitness_digest(a));
+    d.content = hash_hex(content_digest(a));
+    d.state = a.info().state;
+    d.generations_done = a.info().generations_done;
+  }
+  d.fitness = bcast_string(d.fitness);
+  d.content = bcast_string(d.content);
+  d.state = bcast_string(d.state);
+  MPI_Bcast(&d.generations_done, 1, MPI_INT64_T, 0, MPI_COMM_WORLD);
+  return d;
+}
+
+std::string file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// ---- the binary as a child process (rank 0 only) ----------------------------------------------
+std::string mpi_binary() {
+  const char* b = std::getenv("SOFTEVO_BINARY_DIR");
+  return std::string(b != nullptr ? b : "build") + "/bin/softevo-mpi";
+}
+
+// Starts softevo-mpi as an MPI singleton: the launcher's OMPI_/PMIX_ variables are removed so
+// the child does not try to join this test's MPI job.
+pid_t spawn_child(const std::vector<std::string>& args, const std::string& log) {
+  std::vector<std::string> env;
+  for (char** e = environ; *e != nullptr; ++e) {
+    const std::string v = *e;
+    if (v.rfind("OMPI_", 0) == 0 || v.rfind("PMIX_", 0) == 0 || v.rfind("OPAL_", 0) == 0 ||
+        v.rfind("ORTE_", 0) == 0)
+      continue;
+    env.push_back(v);
+  }
+  env.push_back("OMPI_ALLOW_RUN_AS_ROOT=1");
+  env.push_back("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1");
+  std::vector<std::string> argv_s = {mpi_binary()};
+  argv_s.insert(argv_s.end(), args.begin(), args.end());
+  std::vector<char*> argv, envp;
+  for (auto& s : argv_s) argv.push_back(s.data());
+  argv.push_back(nullptr);
+  for (auto& s : env) envp.push_back(s.data());
+  envp.push_back(nullptr);
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), envp.data());
+  posix_spawn_file_actions_destroy(&fa);
+  return rc == 0 ? pid : -1;
+}
+
+// Waits (max 120 s) until the archive has at least `g` generations; false on timeout or if the
+// child ended first.
+bool wait_for_generations(const std::string& path, std::int64_t g, pid_t child) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (std::chrono::steady_clock::now() < deadline) {
+    int st = 0;
+    if (waitpid(child, &st, WNOHANG) == child) return false;
+    std::error_code ec;
+    if (fs::exists(path, ec)) {
+      try {
+        if (Archive(path).info().generations_done >= g) return true;
+      } catch (const ArchiveError&) {
+        // the child creates the file atomically; a failed open is a genuine error
+        return false;
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return false;
+}
+
+int wait_exit(pid_t child, bool* signalled = nullptr) {
+  int st = 0;
+  waitpid(child, &st, 0);
+  if (signalled != nullptr) *signalled = WIFSIGNALED(st);
+  return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+}
+
+// ---- tests ---------------------------------------------------------------------------------
+
+TEST(SoftevoMpi, TinyRunWritesValidArchive) {
+  TempDir dir;
+  const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
+  const std::string out = dir.file("run.h5");
+  ASSERT_EQ(run_on(world_size(), {"--config", cfg, "--out", out}), 0);
+  if (world_rank() != 0) return;
+  const Archive a(out);
+  const RunInfo info = a.info();
+  EXPECT_EQ(info.format, "softevo.run/1");
+  EXPECT_EQ(info.state, "complete");
+  EXPECT_EQ(info.generations_done, 3);
+  EXPECT_EQ(info.seed, 7);
+  EXPECT_EQ(info.ranks, world_size());
+  EXPECT_EQ(info.experiment, "gait-open");
+  EXPECT_EQ(info.config_hash.size(), 16u);
+  EXPECT_FALSE(info.end_time.empty());
+  EXPECT_EQ(a.generations(), (std::vector<std::int64_t>{0, 1, 2}));
+  EXPECT_EQ(a.stats().size(), 3u);
+  for (std::int64_t g : a.generations()) {
+    const GenerationRecord r = a.generation(g);
+    EXPECT_GE(r.size(), 6u);  // pop_size, plus possible excess immigrants (§8.1 step 2)
+    EXPECT_EQ(r.n_directions, 1);
+    EXPECT_EQ(r.evaluations, static_cast<std::int64_t>(r.size()));
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      EXPECT_FALSE(r.genome[i].empty());
+      EXPECT_GT(r.voxels[i], 0);
+      if (world_size() > 1) {
+        EXPECT_GE(r.worker_rank[i], 1);  // the master does not evaluate when it has workers
+      }
+    }
+  }
+  // The best individual, written as a robot file the way `softevo export --best` does and read
+  // back, re-evaluates to its archived fitness bit for bit.
+  const GenerationRecord last = a.generation(2);
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < last.size(); ++i)
+    if (last.fitness[i] > last.fitness[best]) best = i;
+  EXPECT_EQ(last.fitness[best], last.best);
+  const Config config = parse_config(a.config_text(), out + ":/config");
+  const RobotFile file = parse_robot_json(
+      robot_to_json(worker::robot_file_of(config, evo::decode_genome(last.genome[best]), "best")),
+      "exported");
+  const EvalResult again = evaluate_robot(config, file.body, file.controller, -1);
+  EXPECT_EQ(again.fitness, last.fitness[best]);
+  EXPECT_EQ(static_cast<std::uint8_t>(again.status), last.status[best]);
+  const auto cp = a.checkpoint();
+  ASSERT_TRUE(cp.has_value());
+  EXPECT_EQ(cp->generation, 3);
+  EXPECT_FALSE(cp->population.empty());
+  // No temporary file is left next to the archive.
+  for (const auto& e : fs::directory_iterator(dir.path))
+    EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
+}
+
+TEST(SoftevoMpi, IdenticalArchivesForAnyRankCount) {
+  TempDir dir;
+  for (const char* kind : {"gait", "directed"}) {
+    const std::string cfg = write_config(dir, std::string(kind) + ".toml", kTinyConfig);
+    std::vector<std::string> extra;
+    if (std::string(kind) == "directed")
+      extra = {"--set", "task.kind=directed", "--set", "task.eval_seconds=0.05", "--generations",
+               "2",     "--population",       "4"};
+    std::vector<Digests> d;
+    for (int np = 1; np <= world_size(); ++np) {
+      const std::string out = dir.file(std::string(kind) + "-np" + std::to_string(np) + ".h5");
+      std::vector<std::string> args = {"--config", cfg, "--out", out};
+      args.insert(args.end(), extra.begin(), extra.end());
+      ASSERT_EQ(run_on(np, args), 0) << kind << " np=" << np;
+      d.push_back(digests(out));
+    }
+    for (std::size_t i = 1; i < d.size(); ++i) {
+      EXPECT_EQ(d[i].fitness, d[0].fitness) << kind << ": np=" << i + 1 << " vs np=1";
+      EXPECT_EQ(d[i].content, d[0].content) << kind << ": np=" << i + 1 << " vs np=1";
+    }
+    if (world_rank() == 0 && std::string(kind) == "directed") {  // NOLINT
+      const GenerationRecord r = Archive(dir.file("directed-np1.h5")).generation(0);
+      EXPECT_EQ(r.n_directions, 5);
+      EXPECT_EQ(r.evaluations, static_cast<std::int64_t>(5 * r.size()));
+    }
+  }
+}
+
+TEST(SoftevoMpi, ResumeAfterSigkillGivesTheSameArchive) {
+  TempDir dir;
+  const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
+  const std::vector<std::string> common = {"--config", cfg, "--generations", "5"};
+  const std::string ref = dir.file("ref.h5");
+  std::vector<std::string> args = common;
+  args.insert(args.end(), {"--out", ref});
+  ASSERT_EQ(run_on(world_size(), args), 0);
+
+  const std::string killed = dir.file("killed.h5");
+  int ok = 1;
+  if (world_rank() == 0) {
+    std::vector<std::string> cargs = common;
+    cargs.insert(cargs.end(), {"--out", killed});
+    const pid_t child = spawn_child(cargs, dir.file("child.log"));
+    ok = child > 0 && wait_for_generations(killed, 2, child) ? 1 : 0;
+    if (child > 0) {
+      kill(child, SIGKILL);  // mid-generation 2 (or later): no chance to clean up
+      bool signalled = false;
+      wait_exit(child, &signalled);
+      EXPECT_TRUE(signalled) << "the child finished before it could be killed";
+    }
+    EXPECT_EQ(ok, 1) << file_bytes(dir.file("child.log"));
+    const RunInfo info = Archive(killed).info();  // still a valid archive
+    EXPECT_EQ(info.state, "running");
+    EXPECT_GE(info.generations_done, 2);
+    EXPECT_LT(info.generations_done, 5);
+  }
+  MPI_Bcast(&ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  ASSERT_EQ(ok, 1);
+  args = common;
+  args.insert(args.end(), {"--out", killed, "--resume"});
+  ASSERT_EQ(run_on(world_size(), args), 0);
+  const Digests a = digests(ref), b = digests(killed);
+  EXPECT_EQ(b.state, "complete");
+  EXPECT_EQ(b.generations_done, 5);
+  if (world_rank() == 0) {  // a copy the killed child may have been writing is cleaned up
+    for (const auto& e : fs::directory_iterator(dir.path))
+      EXPECT_EQ(e.path().filename().string().find("killed.h5.tmp."), std::string::npos);
+  }
+  EXPECT_EQ(a.fitness, b.fitness);
+  EXPECT_EQ(a.content, b.content);
+  // Resuming a complete archive is a no-op that succeeds (Slurm requeue after the end).
+  const std::string before = world_rank() == 0 ? file_bytes(killed) : "";
+  ASSERT_EQ(run_on(world_size(), args), 0);
+  if (world_rank() == 0) {
+    EXPECT_TRUE(file_bytes(killed) == before);
+  }
+}
+
+TEST(SoftevoMpi, SigtermAndSigusr1CheckpointAndExitWithRequeueCode) {
+  TempDir dir;
+  const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
+  const std::vector<std::string> common = {"--config", cfg, "--generations", "4"};
+  const std::string ref = dir.file("ref.h5");
+  std::vector<std::string> args = common;
+  args.insert(args.end(), {"--out", ref});
+  ASSERT_EQ(run_on(world_size(), args), 0);
+  for (int sig : {SIGTERM, SIGUSR1}) {
+    const std::string out = dir.file(std::string("sig") + std::to_string(sig) + ".h5");
+    int ok = 1;
+    if (world_rank() == 0) {
+      std::vector<std::string> cargs = common;
+      cargs.insert(cargs.end(), {"--out", out});
+      const pid_t child = spawn_child(cargs, dir.file("child.log"));
+      ok = child > 0 && wait_for_generations(out, 1, child) ? 1 : 0;
+      if (ok) {
+        kill(child, sig);
+        EXPECT_EQ(wait_exit(child), kExitRequeue) << file_bytes(dir.file("child.log"));
+        const RunInfo info = Archive(out).info();
+        EXPECT_EQ(info.state, "interrupted");
+        EXPECT_LT(info.generations_done, 4);
+      } else {
+        ADD_FAILURE() << file_bytes(dir.file("child.log"));
+      }
+    }
+    MPI_Bcast(&ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    ASSERT_EQ(ok, 1);
+    args = common;
+    args.insert(args.end(), {"--out", out, "--resume"});
+    ASSERT_EQ(run_on(world_size(), args), 0);
+    EXPECT_EQ(digests(out).content, digests(ref).content) << "signal " << sig;
+  }
+}
+
+TEST(SoftevoMpi, StartupErrorsFailFastAndTouchNothing) {
+  TempDir dir;
+  const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
+  const std::string out = dir.file("run.h5");
+  ASSERT_EQ(run_on(world_size(), {"--config", cfg, "--out", out, "--generations", "1"}), 0);
+  const std::string before = world_rank() == 0 ? file_bytes(out) : "";
+  const std::string broken =
+      write_config(dir, "broken.toml", std::string(kTinyConfig) + "[neat]\nno_such_key = 1\n");
+  const std::string unknown_key =
+      write_config(dir, "unknown.toml", "[run]\nseed = 1\nbogus_key = 3\n");
+  struct Case {
+    std::vector<std::string> args;
+    const char* expect;  // part of the one message printed by rank 0
+  };
+  const std::vector<Case> cases = {
+      {{"--config", dir.file("missing.toml"), "--out", out}, "missing.toml"},
+      {{"--config", unknown_key, "--out", out}, "bogus_key"},
+      {{"--config", broken, "--out", out}, "broken.toml"},
+      {{"--config", cfg, "--out", out}, "exists"},
+      {{"--config", cfg, "--out", out, "--resume", "--seed", "8"}, "config hash"},
+      {{"--config", cfg, "--out", dir.file("no/such/dir/run.h5")}, "does not exist"},
+      {{"--config", cfg, "--out", dir.path}, "directory"},
+  };
+  for (const Case& c : cases) {
+    if (world_rank() == 0) testing::internal::CaptureStderr();
+    const auto t0 = std::chrono::steady_clock::now();
+    const int rc = run_on(world_size(), c.args);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (world_rank() == 0) {
+      const std::string err = testing::internal::GetCapturedStderr();
+      EXPECT_EQ(rc, 2) << c.expect;
+      EXPECT_NE(err.find(c.expect), std::string::npos) << "stderr: " << err;
+      EXPECT_LT(seconds, 30.0) << "start-up errors must not wait for anything";
+      EXPECT_TRUE(file_bytes(out) == before) << "existing archive touched by: " << c.expect;
+    } else {
+      EXPECT_EQ(rc, 2);
+    }
+  }
+}
+
+TEST(SoftevoMpi, AWorkerThatThrowsDoesNotStopTheRun) {
+  TempDir dir;
+  const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
+  const std::string ref = dir.file("ref.h5");
+  ASSERT_EQ(run_on(world_size(), {"--config", cfg, "--out", ref, "--generations", "1"}), 0);
+  std::int64_t victim = -1;
+  if (world_rank() == 0) victim = Archive(ref).generation(0).id.at(1);
+  MPI_Bcast(&victim, 1, MPI_INT64_T, 0, MPI_COMM_WORLD);
+  setenv("SOFTEVO_TEST_FAIL_GENOME", std::to_string(victim).c_str(), 1);
+  const std::string out = dir.file("run.h5");
+  const int rc = run_on(world_size(), {"--config", cfg, "--out", out, "--generations", "1"});
+  unsetenv("SOFTEVO_TEST_FAIL_GENOME");
+  ASSERT_EQ(rc, 0);
+  if (world_rank() != 0) return;
+  const GenerationRecord a = Archive(ref).generation(0), b = Archive(out).generation(0);
+  ASSERT_EQ(a.id, b.id);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (b.id[i] == victim) {
+      EXPECT_EQ(b.status[i], static_cast<std::uint8_t>(EvalStatus::failed));
+      EXPECT_EQ(b.fitness[i], 0.0);
+      EXPECT_EQ(a.status[i], static_cast<std::uint8_t>(EvalStatus::ok));
+    } else {
+      EXPECT_EQ(b.fitness[i], a.fitness[i]);
+      EXPECT_EQ(b.status[i], a.status[i]);
+    }
+  }
+  EXPECT_EQ(Archive(out).info().state, "complete");
+}
+
+TEST(SoftevoMpi, WorkerRejectsAConfigHashMismatch) {
+  if (world_size() < 2) GTEST_SKIP() << "needs a worker rank";
+  Config config;
+  const std::uint64_t hash = config_hash(config);
+  if (world_rank() == 0) {
+    EvalRequest req;
+    req.config_hash = hash ^ 1;  // a master with another config
+    req.genome_id = 42;
+    const std::vector<std::uint8_t> bytes = encode_eval_request(req);
+    MPI_Send(bytes.data(), static_cast<int>(bytes.size()), MPI_BYTE, 1, worker::kTagRequest,
+             MPI_COMM_WORLD);
+    MPI_Status st;
+    worker::wait_for_message(MPI_COMM_WORLD, 1, MPI_ANY_TAG, st);
+    const std::vector<std::uint8_t> reply = worker::receive_bytes(MPI_COMM_WORLD, st);
+    EXPECT_EQ(st.MPI_TAG, worker::kTagError);
+    const std::string text(reply.begin(), reply.end());
+    EXPECT_NE(text.find("config hash"), std::string::npos) << text;
+    EXPECT_NE(text.find("rank 1"), std::string::npos) << text;
+    for (int r = 1; r < world_size(); ++r)
+      MPI_Send(nullptr, 0, MPI_BYTE, r, worker::kTagStop, MPI_COMM_WORLD);
+  } else {
+    EXPECT_EQ(worker::run_worker_loop(MPI_COMM_WORLD, config, hash), 0);
+  }
+  sleepy_barrier();
+}
+
+}  // namespace
+}  // namespace softevo::master

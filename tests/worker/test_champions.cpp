@@ -1,0 +1,40 @@
+// Thesis champions (../shared/reference/bestbots): a fast subset for the default suite. Three
+// champions that are not chaotic in the thesis simulator (§13) are evaluated for 2 simulated
+// seconds (gait task; directed: direction 0 only): not killed and moving forward. The full
+// 10 s evaluation of all 40 is test_champions_all (LABELS long) and `softevo champions`.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "common/config.hpp"
+#include "common/robot.hpp"
+#include "worker/evaluate_robot.hpp"
+
+namespace fs = std::filesystem;
+using namespace softevo;
+
+namespace {
+fs::path bestbots() {
+  const char* env = std::getenv("SOFTEVO_SOURCE_DIR");
+  return (env ? fs::path(env) : fs::current_path()) / ".." / "shared" / "reference" / "bestbots";
+}
+}  // namespace
+
+TEST(ChampionsFast, ThreeChampionsWalkForwardForTwoSeconds) {
+  if (!fs::exists(bestbots())) GTEST_SKIP() << "../shared not found (" << bestbots() << ")";
+  for (const char* name : {"gait-open-08", "gait-closed-03", "dir-closed-04"}) {
+    const RobotFile robot =
+        read_robot_file((bestbots() / (std::string(name) + ".robot.json")).string());
+    Config cfg;
+    cfg.run.eval_timeout_seconds = 0.0;  // results must not depend on machine load
+    cfg.task.eval_seconds = 2.0;
+    cfg.task.control = robot.controller.closed_loop ? "closed" : "open";
+    const int direction = robot.controller.directed ? 0 : -1;
+    const EvalResult r = evaluate_robot(cfg, robot.body, robot.controller, direction);
+    EXPECT_EQ(r.status, EvalStatus::ok) << name << ": " << to_string(r.status) << " " << r.message;
+    EXPECT_GT(r.fitness, 0.0) << name;
+    ASSERT_FALSE(r.components.empty());
+    EXPECT_GT(r.components[0].distance, 2.0) << name << " moved less than 2 cm in 2 s";
+  }
+}

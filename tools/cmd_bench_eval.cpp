@@ -1,0 +1,109 @@
+// `softevo bench eval [DIR] [--jobs N] [--integrator I] [--only SUBSTR] [--json]`
+//
+// Speed of one 10 s gait evaluation of the thesis gait champions (robot files of DIR whose
+// controller is not directed; default ../shared/reference/bestbots), compared with the thesis
+// simulator's CPU seconds recorded in each file (`reference.cpu_seconds`, median 33 s). Reports
+// per robot our thread CPU seconds and microseconds per voxel-step, and the median speed-up
+// (goal >= 5x, one core, pneuvox integrator). CPU time is the figure to compare: wall time
+// depends on what else the machine runs.
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tools/bench_common.hpp"
+#include "tools/champion_eval.hpp"
+#include "tools/commands.hpp"
+
+namespace softevo::cli {
+namespace {
+
+struct BenchEvalArgs {
+  std::string dir = "../shared/reference/bestbots";
+  int jobs = 1;
+  std::string integrator = "pneuvox";
+  std::string only;
+  bool json = false;
+};
+
+int run_bench_eval(const BenchEvalArgs& a) {
+  std::vector<ChampionRow> rows;
+  for (const std::string& f : robot_files(a.dir)) {
+    if (!a.only.empty() && f.find(a.only) == std::string::npos) continue;
+    ChampionRow row = load_champion(f);
+    if (!row.robot.controller.directed) rows.push_back(std::move(row));
+  }
+  if (rows.empty()) throw std::runtime_error(a.dir + ": no gait robot files selected");
+  std::fprintf(stderr, "benchmarking %zu gait evaluations on %d thread(s), integrator %s\n",
+               rows.size(), a.jobs, a.integrator.c_str());
+  evaluate_champions(rows, {}, a.integrator, true, a.jobs, [](const ChampionRow& r) {
+    std::fprintf(stderr, "  %-16s %.2f s CPU\n", r.robot.name.c_str(), r.cpu_seconds);
+  });
+  std::vector<double> ours, ref, speedup, us_per_voxel_step;
+  for (const ChampionRow& r : rows) {
+    ours.push_back(r.cpu_seconds);
+    const double vs = static_cast<double>(r.result.voxels) * static_cast<double>(r.result.steps);
+    us_per_voxel_step.push_back(vs > 0 ? 1e6 * r.cpu_seconds / vs : 0.0);
+    if (r.ref_cpu_seconds > 0.0) {
+      ref.push_back(r.ref_cpu_seconds);
+      speedup.push_back(r.ref_cpu_seconds / r.cpu_seconds);
+    }
+  }
+  const double med_ours = median(ours), med_ref = median(ref), med_speedup = median(speedup);
+  if (a.json) {
+    nlohmann::ordered_json j;
+    j["integrator"] = a.integrator;
+    j["robots"] = rows.size();
+    nlohmann::ordered_json list = nlohmann::ordered_json::array();
+    for (std::size_t i = 0; i < rows.size(); ++i)
+      list.push_back({{"name", rows[i].robot.name},
+                      {"cpu_seconds", rows[i].cpu_seconds},
+                      {"wall_seconds", rows[i].result.wall_seconds},
+                      {"reference_cpu_seconds", rows[i].ref_cpu_seconds},
+                      {"voxels", rows[i].result.voxels},
+                      {"steps", rows[i].result.steps},
+                      {"us_per_voxel_step", us_per_voxel_step[i]}});
+    j["per_robot"] = list;
+    j["median_cpu_seconds"] = med_ours;
+    j["median_reference_cpu_seconds"] = med_ref;
+    j["median_speedup"] = med_speedup;
+    j["median_us_per_voxel_step"] = median(us_per_voxel_step);
+    std::printf("%s\n", j.dump(1).c_str());
+    return kExitOk;
+  }
+  std::printf("%-16s %6s %7s %9s %9s %8s %8s %8s\n", "robot", "voxels", "steps", "cpu[s]",
+              "wall[s]", "ref[s]", "speedup", "us/v-st");
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const ChampionRow& r = rows[i];
+    std::printf("%-16s %6d %7lld %9.2f %9.2f %8.2f %7.2fx %8.3f\n", r.robot.name.c_str(),
+                r.result.voxels, static_cast<long long>(r.result.steps), r.cpu_seconds,
+                r.result.wall_seconds, r.ref_cpu_seconds,
+                r.ref_cpu_seconds > 0 ? r.ref_cpu_seconds / r.cpu_seconds : 0.0,
+                us_per_voxel_step[i]);
+  }
+  std::printf(
+      "\nmedian CPU seconds: ours %.2f, thesis simulator %.2f; median speed-up %.2fx "
+      "(goal >= 5x); median %.3f us per voxel-step (thesis 0.65)\n",
+      med_ours, med_ref, med_speedup, median(us_per_voxel_step));
+  return kExitOk;
+}
+
+}  // namespace
+
+void register_bench_eval(CLI::App& app, int& exit_code) {
+  CLI::App* bench = bench_group(app);
+  auto* cmd = bench->add_subcommand(
+      "eval", "CPU time of 10 s gait evaluations of the thesis gait champions vs the thesis");
+  auto a = std::make_shared<BenchEvalArgs>();
+  cmd->add_option("DIR", a->dir, "directory of robot files")->capture_default_str();
+  cmd->add_option("--jobs", a->jobs, "evaluation threads (1 = one core)")->check(CLI::Range(1, 64));
+  cmd->add_option("--integrator", a->integrator, "physics integrator")
+      ->check(CLI::IsMember({"pneuvox", "symplectic"}));
+  cmd->add_option("--only", a->only, "only files whose path contains this text");
+  cmd->add_flag("--json", a->json, "print one JSON object");
+  cmd->callback([&exit_code, a] { exit_code = run_bench_eval(*a); });
+}
+
+}  // namespace softevo::cli

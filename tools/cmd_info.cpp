@@ -1,0 +1,82 @@
+// `softevo info RUN.h5 [--json]`: summary of a run archive (docs/archive.md): metadata, state,
+// per-generation best/mean, the resolved config, and two digests for one-line comparisons:
+// fitness_digest (every archived generation, id, status, fitness bits) and content_digest
+// (everything deterministic, see master/archive.hpp).
+#include <cstdio>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "common/config.hpp"
+#include "master/archive.hpp"
+#include "tools/commands.hpp"
+
+namespace softevo::cli {
+
+void register_info(CLI::App& app, int& exit_code) {
+  auto* cmd = app.add_subcommand("info", "summarise a run archive (softevo.run/1)");
+  auto path = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  cmd->add_option("RUN", *path, "run archive (.h5)")->required();
+  cmd->add_flag("--json", *json, "machine-readable output");
+  cmd->callback([&exit_code, path, json] {
+    const master::Archive archive(*path);
+    const master::RunInfo info = archive.info();
+    const std::vector<master::StatsRow> stats = archive.stats();
+    const std::string fitness = hash_hex(master::fitness_digest(archive));
+    const std::string content = hash_hex(master::content_digest(archive));
+    const auto checkpoint = archive.checkpoint();
+    if (*json) {
+      nlohmann::ordered_json j;
+      j["path"] = *path;
+      j["format"] = info.format;
+      j["version"] = info.version;
+      j["git_commit"] = info.git_commit;
+      j["seed"] = info.seed;
+      j["ranks"] = info.ranks;
+      j["host"] = info.host;
+      j["start_time"] = info.start_time;
+      j["end_time"] = info.end_time;
+      j["config_hash"] = info.config_hash;
+      j["experiment"] = info.experiment;
+      j["state"] = info.state;
+      j["generations_done"] = info.generations_done;
+      j["checkpoint_generation"] =
+          checkpoint ? nlohmann::ordered_json(checkpoint->generation) : nlohmann::ordered_json();
+      j["fitness_digest"] = fitness;
+      j["content_digest"] = content;
+      auto& gens = j["generations"] = nlohmann::ordered_json::array();
+      for (const auto& s : stats)
+        gens.push_back({{"generation", static_cast<std::int64_t>(s.generation)},
+                        {"best", s.best},
+                        {"mean", s.mean},
+                        {"sd", s.sd},
+                        {"species_count", static_cast<std::int64_t>(s.species_count)},
+                        {"evaluations_per_second", s.evaluations_per_second}});
+      j["config"] = archive.config_text();
+      std::printf("%s\n", j.dump(2).c_str());
+    } else {
+      std::printf("archive          %s (%s)\n", path->c_str(), info.format.c_str());
+      std::printf("experiment       %s, seed %lld, config hash %s\n", info.experiment.c_str(),
+                  static_cast<long long>(info.seed), info.config_hash.c_str());
+      std::printf("state            %s, %lld generations done\n", info.state.c_str(),
+                  static_cast<long long>(info.generations_done));
+      std::printf("written by       softevo %s (commit %s), %d ranks on %s\n", info.version.c_str(),
+                  info.git_commit.c_str(), info.ranks, info.host.c_str());
+      std::printf("time             %s .. %s\n", info.start_time.c_str(),
+                  info.end_time.empty() ? "(running)" : info.end_time.c_str());
+      std::printf("fitness_digest   %s\n", fitness.c_str());
+      std::printf("content_digest   %s\n", content.c_str());
+      std::printf("\n%10s %12s %12s %12s %8s %10s\n", "generation", "best", "mean", "sd", "species",
+                  "eval/s");
+      for (const auto& s : stats)
+        std::printf("%10lld %12.6g %12.6g %12.6g %8lld %10.3g\n",
+                    static_cast<long long>(s.generation), s.best, s.mean, s.sd,
+                    static_cast<long long>(s.species_count), s.evaluations_per_second);
+      std::printf("\n# resolved config\n%s", archive.config_text().c_str());
+    }
+    exit_code = kExitOk;
+  });
+}
+
+}  // namespace softevo::cli
