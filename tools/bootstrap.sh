@@ -55,7 +55,15 @@ case "${1:-}" in
     build "$ROOT/build" -DCMAKE_BUILD_TYPE=Release
     cd "$ROOT"
     mkdir -p runs
-    mpirun -np "$JOBS" "$ROOT/build/bin/softevo-mpi" --config configs/quickstart.toml
+    # A new archive per call, so no earlier result is ever replaced.
+    run="runs/quickstart-$(date +%Y%m%d-%H%M%S).h5"
+    # One rank more than cores: rank 0 only schedules and sleeps while it waits (<1% CPU).
+    mpirun -np $((JOBS + 1)) "$ROOT/build/bin/softevo-mpi" --config configs/quickstart.toml \
+      --out "$run"
+    "$ROOT/build/bin/softevo" info "$run" | sed '/^# resolved config/,$d'
+    "$ROOT/build/bin/softevo" render "$run" --best --timelapse 4 --start 0.5 --span 2 \
+      -o "${run%.h5}-best.png"
+    echo "== next: build/bin/softevo replay $run --best --verify"
     ;;
   test)
     install_dependencies

@@ -17,6 +17,8 @@ void register_config(CLI::App& app, int& exit_code);
 void register_bench_physics(CLI::App& app, int& exit_code);
 void register_bench_xor(CLI::App& app, int& exit_code);
 void register_develop(CLI::App& app, int& exit_code);
+void register_render(CLI::App& app, int& exit_code);
+void register_replay(CLI::App& app, int& exit_code);
 void register_eval(CLI::App& app, int& exit_code);
 void register_champions(CLI::App& app, int& exit_code);
 void register_bench_eval(CLI::App& app, int& exit_code);

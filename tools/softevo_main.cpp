@@ -13,6 +13,8 @@ int main(int argc, char** argv) {
   softevo::cli::register_bench_physics(app, exit_code);
   softevo::cli::register_bench_xor(app, exit_code);
   softevo::cli::register_develop(app, exit_code);
+  softevo::cli::register_render(app, exit_code);
+  softevo::cli::register_replay(app, exit_code);
   softevo::cli::register_eval(app, exit_code);
   softevo::cli::register_champions(app, exit_code);
   softevo::cli::register_bench_eval(app, exit_code);

@@ -1,0 +1,274 @@
+#!/usr/bin/env python3
+"""All figures and tables of an experiment grid from a folder of softevo run archives.
+
+    python3 analysis/figures.py RUNS_DIR -o OUT_DIR [--generation G]
+
+Writes (PNG and PDF for every figure, CSV for every table):
+  fitness_gait.*, fitness_directed.*   mean and best fitness over generations per experiment,
+                                       averaged over the repetitions, shaded +-1 sd (thesis
+                                       figures 4.1 and 4.2)
+  fitness_<experiment>.csv             the numbers behind those curves
+  comparison_gait.*, comparison_directed.*
+                                       open vs closed loop: per-run population mean and best
+                                       fitness at the last generation all runs of both have
+  comparison.csv                       Welch's t-test and Mann-Whitney U for those (the thesis
+                                       reports p = 0.012 for the gait population means)
+  champions.csv, champions.*           table of run champions (best of the last generation)
+
+The experiment of each archive is its root attribute `experiment`, else derived from its
+/config text (task.kind, task.control).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import pathlib
+import sys
+import warnings
+
+import matplotlib
+
+matplotlib.use("Agg")  # headless
+import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
+import numpy as np  # noqa: E402
+from scipy import stats  # noqa: E402
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from softevo_archive import EXPERIMENTS, STATUS_NAMES, Run, find_runs  # noqa: E402
+
+TASKS = {"gait": ("gait-open", "gait-closed"), "directed": ("dir-open", "dir-closed")}
+TASK_TITLES = {"gait": "Gait learning", "directed": "Directed locomotion"}
+COLOURS = {"gait-open": "tab:blue", "gait-closed": "tab:red",
+           "dir-open": "tab:blue", "dir-closed": "tab:red"}
+
+
+def save(fig, out: pathlib.Path, stem: str, written: list[pathlib.Path]) -> None:
+    for ext in ("png", "pdf"):
+        path = out / f"{stem}.{ext}"
+        fig.savefig(path, dpi=150, bbox_inches="tight")
+        written.append(path)
+    plt.close(fig)
+
+
+def write_csv(path: pathlib.Path, header: list[str], rows: list[list], written: list[pathlib.Path]) -> None:
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(header)
+        for row in rows:
+            w.writerow([f"{v:.10g}" if isinstance(v, float) else v for v in row])
+    written.append(path)
+
+
+def aligned_curves(runs: list[Run]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Generations present in every run, and [runs x generations] arrays of population mean
+    and best fitness."""
+    curves = [r.fitness_curves() for r in runs]
+    common = set(curves[0][0].tolist())
+    for g, _, _ in curves[1:]:
+        common &= set(g.tolist())
+    gens = np.array(sorted(common), dtype=np.int64)
+    means = np.array([[m[np.searchsorted(g, x)] for x in gens] for g, m, _ in curves])
+    bests = np.array([[b[np.searchsorted(g, x)] for x in gens] for g, _, b in curves])
+    return gens, means.reshape(len(runs), len(gens)), bests.reshape(len(runs), len(gens))
+
+
+def sd(a: np.ndarray, axis=None) -> np.ndarray:
+    """Sample standard deviation (n - 1); 0 for a single run."""
+    n = a.shape[0] if axis == 0 else a.size
+    return np.std(a, axis=axis, ddof=1) if n > 1 else np.zeros_like(np.mean(a, axis=axis))
+
+
+def fitness_figure(task: str, by_exp: dict[str, list[Run]], out: pathlib.Path,
+                   written: list[pathlib.Path]) -> None:
+    fig, ax = plt.subplots(figsize=(7.0, 4.2))
+    plotted = False
+    for exp in TASKS[task]:
+        runs = by_exp.get(exp, [])
+        if not runs:
+            continue
+        gens, means, bests = aligned_curves(runs)
+        if len(gens) == 0:
+            continue
+        rows = []
+        for label, data, style in (("mean", means, "--"), ("best", bests, "-")):
+            mu, s = np.mean(data, axis=0), sd(data, axis=0)
+            ax.plot(gens, mu, style, color=COLOURS[exp], label=f"{exp} {label} (n={len(runs)})")
+            ax.fill_between(gens, mu - s, mu + s, color=COLOURS[exp], alpha=0.15, linewidth=0)
+            rows.append((mu, s))
+        write_csv(out / f"fitness_{exp}.csv",
+                  ["generation", "runs", "mean_of_population_mean", "sd_of_population_mean",
+                   "mean_of_best", "sd_of_best"],
+                  [[int(g), len(runs), float(rows[0][0][i]), float(rows[0][1][i]),
+                    float(rows[1][0][i]), float(rows[1][1][i])] for i, g in enumerate(gens)],
+                  written)
+        plotted = True
+    if not plotted:
+        plt.close(fig)
+        return
+    ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
+    ax.set_xlabel("generation")
+    ax.set_ylabel("fitness" + (" [cm / 10 s]" if task == "gait" else ""))
+    ax.set_title(f"{TASK_TITLES[task]}: mean and best fitness, averaged over runs (+-1 sd)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    save(fig, out, f"fitness_{task}", written)
+
+
+def last_common_generation(runs: list[Run]) -> int | None:
+    common = set(runs[0].generation_numbers)
+    for r in runs[1:]:
+        common &= set(r.generation_numbers)
+    return max(common) if common else None
+
+
+def value_at(run: Run, generation: int) -> tuple[float, float]:
+    fitness = run.generation(generation).fitness
+    return float(np.mean(fitness)), float(np.max(fitness))
+
+
+def test_groups(a: list[float], b: list[float]) -> tuple[float, float, float, float]:
+    """Welch's t (statistic, p) and two-sided Mann-Whitney U (statistic, p); NaN when a group
+    is too small to test."""
+    t = p_t = u = p_u = math.nan
+    if len(a) >= 2 and len(b) >= 2:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # zero variance -> NaN, reported
+            res = stats.ttest_ind(a, b, equal_var=False)
+        t, p_t = float(res.statistic), float(res.pvalue)
+    if len(a) >= 1 and len(b) >= 1:
+        res = stats.mannwhitneyu(a, b, alternative="two-sided")
+        u, p_u = float(res.statistic), float(res.pvalue)
+    return t, p_t, u, p_u
+
+
+def comparison(task: str, by_exp: dict[str, list[Run]], generation: int | None,
+               out: pathlib.Path, written: list[pathlib.Path], rows: list[list]) -> None:
+    open_exp, closed_exp = TASKS[task]
+    runs_open, runs_closed = by_exp.get(open_exp, []), by_exp.get(closed_exp, [])
+    if not runs_open or not runs_closed:
+        return
+    g = generation if generation is not None else last_common_generation(runs_open + runs_closed)
+    if g is None:
+        print(f"figures: {task}: open and closed runs share no generation, no comparison",
+              file=sys.stderr)
+        return
+    missing = [str(r.path) for r in runs_open + runs_closed if g not in r.generation_numbers]
+    if missing:
+        raise SystemExit(f"figures: generation {g} is missing in {', '.join(missing)}")
+    vals = {exp: [value_at(r, g) for r in runs] for exp, runs in
+            ((open_exp, runs_open), (closed_exp, runs_closed))}
+    fig, axes = plt.subplots(1, 2, figsize=(7.0, 3.6))
+    for k, metric in enumerate(("population mean", "best")):
+        a = [v[k] for v in vals[open_exp]]
+        b = [v[k] for v in vals[closed_exp]]
+        t, p_t, u, p_u = test_groups(a, b)
+        rows.append([task, metric, g, len(a), len(b), float(np.mean(a)), float(sd(np.array(a))),
+                     float(np.mean(b)), float(sd(np.array(b))), t, p_t, u, p_u])
+        ax = axes[k]
+        ax.boxplot([a, b], widths=0.5, showfliers=False)
+        for j, data in enumerate((a, b)):
+            jitter = np.linspace(-0.08, 0.08, len(data)) if len(data) > 1 else np.zeros(1)
+            ax.plot(np.full(len(data), j + 1) + jitter, data, "o", color=COLOURS[(open_exp, closed_exp)[j]],
+                    alpha=0.7)
+        ax.set_xticks([1, 2], [open_exp, closed_exp])
+        ax.set_title(f"{metric} fitness, gen {g}\nWelch p={p_t:.3g}, Mann-Whitney p={p_u:.3g}",
+                     fontsize=9)
+        ax.grid(True, axis="y", alpha=0.3)
+    fig.suptitle(f"{TASK_TITLES[task]}: open vs closed loop (one point per run)", fontsize=10)
+    fig.tight_layout()
+    save(fig, out, f"comparison_{task}", written)
+
+
+def champions(runs: list[Run], out: pathlib.Path, written: list[pathlib.Path]) -> None:
+    header = ["experiment", "seed", "archive", "state", "generations", "champion_generation",
+              "champion_id", "fitness", "status", "voxels", "chambers", "best_ever_fitness",
+              "best_ever_generation", "best_ever_id"]
+    rows = []
+    for r in sorted(runs, key=lambda r: (EXPERIMENTS.index(r.experiment), r.seed, str(r.path))):
+        if not r.generation_numbers:
+            continue
+        last = r.generation(r.generation_numbers[-1])
+        i = int(np.argmax(last.fitness))  # first maximum = lowest id (rows sorted by id)
+        best_ever = (-math.inf, -1, -1)
+        for gen in r.generations():
+            j = int(np.argmax(gen.fitness))
+            if gen.fitness[j] > best_ever[0]:
+                best_ever = (float(gen.fitness[j]), gen.number, int(gen.id[j]))
+        rows.append([r.experiment, r.seed, r.path.name, r.state, len(r.generation_numbers),
+                     last.number, int(last.id[i]), float(last.fitness[i]),
+                     STATUS_NAMES.get(int(last.status[i]), str(int(last.status[i]))),
+                     int(last.voxels[i]), int(last.chambers[i]), best_ever[0], best_ever[1],
+                     best_ever[2]])
+    write_csv(out / "champions.csv", header, rows, written)
+    # The same table as a figure.
+    shown = ["experiment", "seed", "champion_generation", "champion_id", "fitness", "voxels",
+             "chambers", "best_ever_fitness"]
+    idx = [header.index(c) for c in shown]
+    cells = [[f"{row[i]:.2f}" if isinstance(row[i], float) else str(row[i]) for i in idx]
+             for row in rows]
+    fig, ax = plt.subplots(figsize=(8.5, 0.6 + 0.25 * max(1, len(cells))))
+    ax.axis("off")
+    if cells:
+        labels = ["experiment", "seed", "gen", "id", "fitness", "voxels", "chambers",
+                  "best ever"]
+        table = ax.table(cellText=cells, colLabels=labels, loc="center")
+        table.auto_set_font_size(False)
+        table.set_fontsize(7)
+        table.scale(1.0, 1.2)
+    ax.set_title("Run champions (best individual of each run's last generation)", fontsize=9)
+    save(fig, out, "champions", written)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("runs_dir", help="folder with run archives (*.h5, searched recursively)")
+    ap.add_argument("-o", "--out", required=True, help="output folder (created)")
+    ap.add_argument("--generation", type=int, default=None,
+                    help="generation of the open/closed comparison (default: last common)")
+    args = ap.parse_args(argv)
+
+    runs, skipped = find_runs(args.runs_dir)
+    for msg in skipped:
+        print(f"figures: skipped {msg}", file=sys.stderr)
+    if not runs:
+        print(f"figures: no run archive (format softevo.run/1) under {args.runs_dir}",
+              file=sys.stderr)
+        return 2
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    by_exp: dict[str, list[Run]] = {}
+    for r in runs:
+        if r.generation_numbers:
+            by_exp.setdefault(r.experiment, []).append(r)
+        else:
+            print(f"figures: {r.path} has no generation yet, left out", file=sys.stderr)
+    print("runs: " + ", ".join(f"{e} x{len(by_exp[e])}" for e in EXPERIMENTS if e in by_exp))
+
+    written: list[pathlib.Path] = []
+    for task in TASKS:
+        fitness_figure(task, by_exp, out, written)
+    comparison_rows: list[list] = []
+    for task in TASKS:
+        comparison(task, by_exp, args.generation, out, written, comparison_rows)
+    write_csv(out / "comparison.csv",
+              ["task", "metric", "generation", "n_open", "n_closed", "mean_open", "sd_open",
+               "mean_closed", "sd_closed", "welch_t", "welch_p", "mannwhitney_u",
+               "mannwhitney_p"], comparison_rows, written)
+    for row in comparison_rows:
+        print(f"{row[0]:8s} {row[1]:15s} gen {row[2]}: open {row[5]:.4g} +- {row[6]:.3g} (n={row[3]})"
+              f" vs closed {row[7]:.4g} +- {row[8]:.3g} (n={row[4]}); Welch p = {row[10]:.3g},"
+              f" Mann-Whitney p = {row[12]:.3g}")
+    champions([r for rs in by_exp.values() for r in rs], out, written)
+    for r in runs:
+        r.close()
+    print("wrote:")
+    for p in written:
+        print(f"  {p}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,125 @@
+#!/usr/bin/env python3
+"""Ancestry of an individual of a softevo run archive.
+
+    python3 analysis/lineage.py RUN.h5 [--generation G] [--id ID | --best] [--csv]
+
+Starts at the individual (default: the best of the last generation) and follows parent1 (the
+first parent: the fitter one in a crossover, or the only one after mutation) back to the initial
+population, one line per ancestor with its generation, fitness, status, voxel and chamber
+counts, species and both parent ids. An ancestor is shown in the latest generation before its
+child in which it was evaluated (elites are evaluated again in later generations under the
+same id). The chamber count along the line shows when the body plan changed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import sys
+
+import numpy as np
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from softevo_archive import STATUS_NAMES, ArchiveError, Run  # noqa: E402
+
+
+def lineage(run: Run, generation: int, individual: int) -> list[dict]:
+    """The line of ancestors, newest first."""
+    # id -> generations where it was evaluated, ascending.
+    where: dict[int, list[int]] = {}
+    tables = {}
+    for gen in run.generations():
+        tables[gen.number] = gen
+        for i in gen.id.tolist():
+            where.setdefault(int(i), []).append(gen.number)
+    line = []
+    g, ind = generation, individual
+    seen = set()
+    while True:
+        table = tables[g]
+        row = table.row_of(ind)
+        if row is None:
+            raise ArchiveError(f"{run.path}: id {ind} is not in generation {g}")
+        if (g, ind) in seen:  # cannot happen in a well-formed archive; never loop forever
+            break
+        seen.add((g, ind))
+        entry = {
+            "generation": g,
+            "id": ind,
+            "fitness": float(table.fitness[row]),
+            "status": STATUS_NAMES.get(int(table.status[row]), str(int(table.status[row]))),
+            "voxels": int(table.voxels[row]),
+            "chambers": int(table.chambers[row]),
+            "species": int(table.species[row]),
+            "parent1": int(table.parent1[row]),
+            "parent2": int(table.parent2[row]),
+        }
+        first = where[ind][0]
+        if first < g:
+            entry["note"] = f"same id evaluated since generation {first} (carried over as an elite)"
+        line.append(entry)
+        parent = entry["parent1"]
+        if parent < 0:
+            break  # initial population
+        earlier = [x for x in where.get(parent, []) if x < g]
+        if not earlier:
+            entry["note"] = f"parent {parent} not archived before generation {g}"
+            break
+        g, ind = earlier[-1], parent
+    return line
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("archive")
+    ap.add_argument("--generation", type=int, default=None, help="default: the last")
+    sel = ap.add_mutually_exclusive_group()
+    sel.add_argument("--id", type=int, default=None)
+    sel.add_argument("--best", action="store_true", help="the generation's best (default)")
+    ap.add_argument("--csv", action="store_true", help="comma-separated output")
+    args = ap.parse_args(argv)
+    try:
+        with Run(args.archive) as run:
+            if not run.generation_numbers:
+                print(f"lineage: {args.archive} has no generation yet", file=sys.stderr)
+                return 2
+            g = args.generation if args.generation is not None else run.generation_numbers[-1]
+            if g not in run.generation_numbers:
+                print(f"lineage: {args.archive} has no generation {g}", file=sys.stderr)
+                return 2
+            table = run.generation(g)
+            if args.id is None:
+                ind = int(table.id[int(np.argmax(table.fitness))])
+            else:
+                ind = args.id
+            line = lineage(run, g, ind)
+            experiment = run.experiment
+    except ArchiveError as e:
+        print(f"lineage: {e}", file=sys.stderr)
+        return 2
+    cols = ["generation", "id", "fitness", "status", "voxels", "chambers", "species", "parent1",
+            "parent2"]
+    if args.csv:
+        print(",".join(cols))
+        for e in line:
+            print(",".join(f"{e[c]:.10g}" if isinstance(e[c], float) else str(e[c]) for c in cols))
+    else:
+        print(f"lineage of id {ind} (generation {g}) in {args.archive} [{experiment}]: "
+              f"{len(line)} ancestors incl. itself")
+        print(f"{'gen':>6} {'id':>8} {'fitness':>12} {'status':<17} {'voxels':>6} {'chambers':>8}"
+              f" {'species':>7} {'parents':>15}")
+        prev_chambers = None
+        for e in line:
+            change = "" if prev_chambers is None or e["chambers"] == prev_chambers else \
+                f"  <- chambers {e['chambers']} -> {prev_chambers}"
+            parents = f"{e['parent1']},{e['parent2']}"
+            print(f"{e['generation']:>6} {e['id']:>8} {e['fitness']:>12.4f} {e['status']:<17}"
+                  f" {e['voxels']:>6} {e['chambers']:>8} {e['species']:>7} {parents:>15}{change}")
+            if "note" in e:
+                print(f"       ({e['note']})")
+            prev_chambers = e["chambers"]
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,245 @@
+// `softevo render` end to end: runs the built CLI on a robot file, a synthetic trace and (by
+// re-simulation) a moving robot, and checks the PNG it writes: expected size and pixels that
+// show the robot (stiffness colours), not a blank floor.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <H5Cpp.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "common/robot.hpp"
+#include "tools/render.hpp"
+
+namespace softevo {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The build tree: SOFTEVO_BINARY_DIR, else the parent of this test executable's folder
+// (tests are built into <build>/tests).
+std::string build_dir() {
+  if (const char* dir = std::getenv("SOFTEVO_BINARY_DIR"); dir != nullptr && *dir != '\0')
+    return dir;
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? std::string("build") : self.parent_path().parent_path().string();
+}
+
+std::string softevo_binary() {
+  return build_dir() + "/bin/softevo";
+}
+
+// Runs a shell command, returns its exit status.
+int run(const std::string& command) {
+  const int status = std::system((command + " > /dev/null 2>&1").c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+class CmdRender : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!fs::exists(softevo_binary())) GTEST_SKIP() << "softevo binary not built";
+    dir_ = fs::temp_directory_path() /
+           ("softevo_test_cmd_render_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    if (!dir_.empty()) fs::remove_all(dir_, ec);
+  }
+  // A 4x3x3 robot: soft red front half (material 1), stiff blue back half (material 10), one
+  // chamber cell inside; open-loop controller with a strong inlet drive.
+  std::string write_robot() {
+    RobotFile robot;
+    robot.name = "test-bot";
+    robot.body.lattice = {4, 3, 3};
+    robot.body.cells.assign(36, 0);
+    for (int x = 0; x < 4; ++x)
+      for (int y = 0; y < 3; ++y)
+        for (int z = 0; z < 3; ++z)
+          robot.body.cells[robot.body.cell_index(x, y, z)] = x < 2 ? 10 : 1;
+    robot.body.cells[robot.body.cell_index(1, 1, 1)] = kFirstChamberCell;
+    for (int k = 1; k <= 10; ++k) robot.body.materials.push_back({1.0e4 * k, 1000.0});
+    ControllerSpec& c = robot.controller;
+    const int h = c.hidden, n_out = c.outputs, n_in = c.input_count();
+    c.vectors.weights_hidden.assign(static_cast<std::size_t>(n_in * h), 0.0);
+    c.vectors.weights_hidden[0] = 3.0;  // sin -> hidden 0
+    c.vectors.bias_hidden.assign(h, 0.0);
+    c.vectors.weights_out.assign(static_cast<std::size_t>(h * n_out), 0.0);
+    c.vectors.weights_out[0] = 3.0;   // hidden 0 -> inlet valve of chamber 0
+    c.vectors.weights_out[1] = -3.0;  // hidden 0 -> outlet valve of chamber 0
+    c.vectors.bias_out.assign(n_out, 0.0);
+    c.vectors.weights_recurrent.assign(static_cast<std::size_t>(h * h), 0.0);
+    c.vectors.weights_recurrent_self.assign(h, 0.0);
+    c.vectors.weights_context.assign(h, 0.0);
+    c.vectors.bias_context.assign(h, 0.0);
+    c.vectors.freq = {2.0};
+    const std::string path = (dir_ / "robot.json").string();
+    write_robot_file(robot, path);
+    return path;
+  }
+  // Trace of the same body shape without chamber: 3 frames moving 1 cm per frame along x.
+  std::string write_trace() {
+    const std::string path = (dir_ / "trace.h5").string();
+    H5::H5File file(path, H5F_ACC_TRUNC);
+    std::vector<int> cells;
+    std::vector<int> material;
+    for (int x = 0; x < 4; ++x)
+      for (int y = 0; y < 3; ++y)
+        for (int z = 0; z < 3; ++z) {
+          cells.insert(cells.end(), {x, y, z});
+          material.push_back(x < 2 ? 10 : 1);
+        }
+    const hsize_t v = material.size(), frames = 3;
+    std::vector<double> pos, ori;
+    for (hsize_t f = 0; f < frames; ++f)
+      for (hsize_t i = 0; i < v; ++i) {
+        pos.insert(pos.end(), {cells[3 * i] * 0.01 + 0.01 * f, cells[3 * i + 1] * 0.01,
+                               cells[3 * i + 2] * 0.01});
+        ori.insert(ori.end(), {1.0, 0.0, 0.0, 0.0});
+      }
+    const hsize_t pdims[3] = {frames, v, 3}, odims[3] = {frames, v, 4}, cdims[2] = {v, 3};
+    file.createDataSet("positions", H5::PredType::NATIVE_DOUBLE, H5::DataSpace(3, pdims))
+        .write(pos.data(), H5::PredType::NATIVE_DOUBLE);
+    file.createDataSet("orientations", H5::PredType::NATIVE_DOUBLE, H5::DataSpace(3, odims))
+        .write(ori.data(), H5::PredType::NATIVE_DOUBLE);
+    file.createDataSet("voxel_cells", H5::PredType::NATIVE_INT32, H5::DataSpace(2, cdims))
+        .write(cells.data(), H5::PredType::NATIVE_INT32);
+    file.createDataSet("voxel_material", H5::PredType::NATIVE_INT32, H5::DataSpace(1, &v))
+        .write(material.data(), H5::PredType::NATIVE_INT32);
+    const double size = 0.01;
+    file.createAttribute("voxel_size", H5::PredType::NATIVE_DOUBLE, H5::DataSpace())
+        .write(H5::PredType::NATIVE_DOUBLE, &size);
+    return path;
+  }
+  fs::path dir_;
+};
+
+// Pixels clearly red (soft material) and clearly blue (stiff material).
+void count_material_pixels(const render::Image& img, long& red, long& blue) {
+  red = blue = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const auto p = img.pixel(x, y);
+      if (p[0] > p[2] + 40 && p[0] > p[1] + 40) ++red;
+      if (p[2] > p[0] + 40 && p[2] > p[1] + 40) ++blue;
+    }
+}
+
+TEST_F(CmdRender, RobotFileGivesAPngOfTheRequestedSizeShowingTheRobot) {
+  const std::string robot = write_robot();
+  for (const char* view : {"side", "top", "iso"}) {
+    const std::string out = (dir_ / (std::string(view) + ".png")).string();
+    ASSERT_EQ(run(softevo_binary() + " render " + robot + " -o " + out +
+                  " --width 320 --height 240 --view " + view),
+              0)
+        << view;
+    const render::Image img = render::read_png(out);
+    EXPECT_EQ(img.width, 320);
+    EXPECT_EQ(img.height, 240);
+    long red = 0, blue = 0;
+    count_material_pixels(img, red, blue);
+    // Both halves are visible and the robot fills a fair part of the frame.
+    EXPECT_GT(red, 320 * 240 / 50) << view;
+    EXPECT_GT(blue, 320 * 240 / 50) << view;
+    EXPECT_GT(render::count_pixels_unlike(img, img.pixel(0, 0)), 320 * 240 / 10) << view;
+  }
+}
+
+TEST_F(CmdRender, TraceTimelapseStripHasOnePanelPerSnapshot) {
+  const std::string trace = write_trace();
+  const std::string out = (dir_ / "strip.png").string();
+  ASSERT_EQ(run(softevo_binary() + " render " + trace + " -o " + out +
+                " --timelapse 3 --start 0 --span 0.0333334 --width 200 --height 150"),
+            0);
+  const render::Image img = render::read_png(out);
+  EXPECT_EQ(img.width, 3 * 200 + 2 * 4);  // panels + 4-pixel gaps
+  EXPECT_EQ(img.height, 150);
+  // The robot moves right from panel to panel: the first blue column advances.
+  int first_blue[3];
+  for (int panel = 0; panel < 3; ++panel) {
+    first_blue[panel] = -1;
+    for (int x = 0; x < 200 && first_blue[panel] < 0; ++x)
+      for (int y = 0; y < 150; ++y) {
+        const auto p = img.pixel(panel * 204 + x, y);
+        if (p[2] > p[0] + 40 && p[2] > p[1] + 40) {
+          first_blue[panel] = x;
+          break;
+        }
+      }
+    ASSERT_GE(first_blue[panel], 0) << "panel " << panel << " shows no robot";
+  }
+  EXPECT_GT(first_blue[1], first_blue[0]);
+  EXPECT_GT(first_blue[2], first_blue[1]);
+}
+
+TEST_F(CmdRender, BadInputsFailWithUsageExitCode) {
+  const std::string robot = write_robot();
+  EXPECT_EQ(run(softevo_binary() + " render " + robot + " -o " + (dir_ / "x.gif").string()), 2);
+  EXPECT_EQ(run(softevo_binary() + " render " + (dir_ / "missing.json").string() + " -o " +
+                (dir_ / "x.png").string()),
+            2);
+  EXPECT_EQ(run(softevo_binary() + " render " + robot + " -o " + (dir_ / "x.png").string() +
+                " --view front"),
+            2);
+}
+
+TEST_F(CmdRender, VideoWithoutFfmpegIsAClearFailure) {
+  const std::string robot = write_robot();
+  // PATH without ffmpeg.
+  const fs::path empty_bin = dir_ / "empty-bin";
+  fs::create_directories(empty_bin);
+  EXPECT_EQ(run("PATH=" + empty_bin.string() + " " + softevo_binary() + " render " + robot +
+                " -o " + (dir_ / "x.mp4").string() + " --seconds 0.2"),
+            3);
+}
+
+TEST_F(CmdRender, VideoFramesArePipedToFfmpeg) {
+  // A stand-in ffmpeg that stores its raw input as the output file: frames x W x H x 3 bytes.
+  const std::string robot = write_robot();
+  const fs::path bin = dir_ / "bin";
+  fs::create_directories(bin);
+  {
+    std::ofstream script(bin / "ffmpeg");
+    script << "#!/bin/sh\nfor last; do :; done\ncat > \"$last\"\n";
+  }
+  fs::permissions(bin / "ffmpeg", fs::perms::owner_all);
+  const std::string out = (dir_ / "movie.mp4").string();
+  ASSERT_EQ(run("PATH=" + bin.string() + ":/usr/bin:/bin " + softevo_binary() + " render " + robot +
+                " -o " + out + " --seconds 0.2 --fps 10 --width 64 --height 48"),
+            0);
+  // About 0.2 s at 10 fps: 2 or 3 whole frames (the simulated frame time is a whole number of
+  // physics steps, a little under 1/60 s).
+  const auto size = fs::file_size(out);
+  const std::uintmax_t frame = 64u * 48 * 3;
+  EXPECT_EQ(size % frame, 0u);
+  EXPECT_GE(size / frame, 2u);
+  EXPECT_LE(size / frame, 3u);
+}
+
+TEST_F(CmdRender, ResimulatedTimelapseShowsTheRobotInEveryPanel) {
+  const std::string robot = write_robot();
+  const std::string out = (dir_ / "sim.png").string();
+  ASSERT_EQ(run(softevo_binary() + " render " + robot + " -o " + out +
+                " --seconds 0.5 --timelapse 2 --start 0 --span 0.5 --width 160 --height 120"),
+            0);
+  const render::Image img = render::read_png(out);
+  EXPECT_EQ(img.width, 2 * 160 + 4);
+  for (int panel = 0; panel < 2; ++panel) {
+    long blue = 0;
+    for (int y = 0; y < 120; ++y)
+      for (int x = 0; x < 160; ++x) {
+        const auto p = img.pixel(panel * 164 + x, y);
+        if (p[2] > p[0] + 40 && p[2] > p[1] + 40) ++blue;
+      }
+    EXPECT_GT(blue, 160 * 120 / 50) << "panel " << panel;
+  }
+}
+
+}  // namespace
+}  // namespace softevo

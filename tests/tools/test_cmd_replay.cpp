@@ -1,0 +1,160 @@
+// `softevo replay --verify` end to end: a fresh tiny run of the real `softevo-mpi` (one rank)
+// is replayed bit for bit; the same archive with one fitness value nudged by one ulp, or with
+// a foreign config hash, must fail.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <H5Cpp.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace softevo {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The build tree: SOFTEVO_BINARY_DIR, else the parent of this test executable's folder
+// (tests are built into <build>/tests).
+std::string build_dir() {
+  if (const char* dir = std::getenv("SOFTEVO_BINARY_DIR"); dir != nullptr && *dir != '\0')
+    return dir;
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? std::string("build") : self.parent_path().parent_path().string();
+}
+
+std::string binary(const std::string& name) {
+  return build_dir() + "/bin/" + name;
+}
+
+struct Result {
+  int code = -1;
+  std::string output;
+};
+
+Result run(const std::string& command) {
+  Result r;
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (pipe == nullptr) return r;
+  std::array<char, 4096> buf{};
+  while (std::fgets(buf.data(), buf.size(), pipe) != nullptr) r.output += buf.data();
+  const int status = ::pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+class CmdReplay : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    if (!fs::exists(binary("softevo")) || !fs::exists(binary("softevo-mpi"))) return;
+    if (!fs::exists("configs/quickstart.toml")) return;
+    dir_ = fs::temp_directory_path() / ("softevo_test_cmd_replay_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    archive_ = (dir_ / "run.h5").string();
+    // Tiny but real: 6 genomes of up to 4x4x4 voxels, 2 generations, 1 s of simulated time.
+    run_result_ = run(binary("softevo-mpi") +
+                      " --config configs/quickstart.toml --seed 3 --generations 2 --population 6 "
+                      "--set body.lattice=[4,4,4] "
+                      "--set task.eval_seconds=1.0 --out " +
+                      archive_);
+  }
+  static void TearDownTestSuite() {
+    std::error_code ec;
+    if (!dir_.empty()) fs::remove_all(dir_, ec);
+  }
+  void SetUp() override {
+    if (archive_.empty()) {
+      GTEST_SKIP() << "softevo, softevo-mpi or configs/quickstart.toml missing (build both)";
+    }
+    ASSERT_EQ(run_result_.code, 0) << run_result_.output;
+  }
+  // A copy of the archive with one change made through `edit`.
+  static std::string tampered_copy(const std::string& name,
+                                   const std::function<void(H5::H5File&)>& edit) {
+    const std::string path = (dir_ / name).string();
+    fs::copy_file(archive_, path, fs::copy_options::overwrite_existing);
+    H5::H5File file(path, H5F_ACC_RDWR);
+    edit(file);
+    return path;
+  }
+  static fs::path dir_;
+  static std::string archive_;
+  static Result run_result_;
+};
+
+fs::path CmdReplay::dir_;
+std::string CmdReplay::archive_;
+Result CmdReplay::run_result_;
+
+TEST_F(CmdReplay, VerifyAllPassesOnAFreshRun) {
+  for (const char* gen : {"0", "1"}) {
+    const Result r =
+        run(binary("softevo") + " replay " + archive_ + " --all --verify --generation " + gen);
+    EXPECT_EQ(r.code, 0) << r.output;
+    EXPECT_NE(r.output.find("0 mismatched"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("MISMATCH"), std::string::npos) << r.output;
+  }
+  const Result best = run(binary("softevo") + " replay " + archive_ + " --best --verify");
+  EXPECT_EQ(best.code, 0) << best.output;
+  EXPECT_NE(best.output.find("IDENTICAL"), std::string::npos) << best.output;
+}
+
+TEST_F(CmdReplay, OneUlpOfTamperedFitnessIsAMismatch) {
+  const std::string path = tampered_copy("fitness.h5", [](H5::H5File& file) {
+    H5::DataSet ds = file.openDataSet("generations/000001/fitness");
+    const auto n = static_cast<std::size_t>(ds.getSpace().getSimpleExtentNpoints());
+    std::vector<double> f(n);
+    ds.read(f.data(), H5::PredType::NATIVE_DOUBLE);
+    f[n - 1] = std::nextafter(f[n - 1], INFINITY);  // smallest possible change
+    ds.write(f.data(), H5::PredType::NATIVE_DOUBLE);
+  });
+  const Result r = run(binary("softevo") + " replay " + path + " --all --verify --generation 1");
+  EXPECT_EQ(r.code, 1) << r.output;
+  EXPECT_NE(r.output.find("MISMATCH"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("1 mismatched"), std::string::npos) << r.output;
+  // Without --verify the replay itself still works and reports the fitness.
+  EXPECT_EQ(run(binary("softevo") + " replay " + path + " --generation 1").code, 0);
+}
+
+TEST_F(CmdReplay, TamperedStatusIsAMismatch) {
+  const std::string path = tampered_copy("status.h5", [](H5::H5File& file) {
+    H5::DataSet ds = file.openDataSet("generations/000000/status");
+    const auto n = static_cast<std::size_t>(ds.getSpace().getSimpleExtentNpoints());
+    std::vector<std::uint8_t> s(n);
+    ds.read(s.data(), H5::PredType::NATIVE_UINT8);
+    s[0] = s[0] == 1 ? 2 : 1;  // a killed status the robot did not have
+    ds.write(s.data(), H5::PredType::NATIVE_UINT8);
+  });
+  const Result r = run(binary("softevo") + " replay " + path + " --all --verify --generation 0");
+  EXPECT_EQ(r.code, 1) << r.output;
+}
+
+TEST_F(CmdReplay, ForeignConfigHashIsRefused) {
+  const std::string path = tampered_copy("hash.h5", [](H5::H5File& file) {
+    file.removeAttr("config_hash");
+    H5::StrType type(H5::PredType::C_S1, H5T_VARIABLE);
+    const std::string foreign = "0000000000000000";
+    file.createAttribute("config_hash", type, H5::DataSpace()).write(type, foreign);
+  });
+  const Result r = run(binary("softevo") + " replay " + path + " --verify");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("config_hash"), std::string::npos) << r.output;
+}
+
+TEST_F(CmdReplay, UnknownIdOrGenerationIsAUsageError) {
+  Result r = run(binary("softevo") + " replay " + archive_ + " --id 999999");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("999999"), std::string::npos) << r.output;
+  r = run(binary("softevo") + " replay " + archive_ + " --generation 7");
+  EXPECT_EQ(r.code, 2) << r.output;
+}
+
+}  // namespace
+}  // namespace softevo

@@ -1,0 +1,260 @@
+// Unit tests of the software renderer (tools/render.hpp): colours, PNG I/O, projection,
+// orientation, chamber placement and the target line, on small hand-made bodies whose
+// projection is known.
+#include "tools/render.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+namespace softevo::render {
+namespace {
+
+constexpr double kS = 0.01;  // voxel size [m]
+
+// A bar of `n` voxels along x, material k, optionally with a chamber cell in the middle of a
+// 3x3x3 block instead.
+BodyPlan bar(int n, int material) {
+  BodyPlan plan;
+  plan.lattice = {n, 1, 1};
+  plan.cells.assign(static_cast<std::size_t>(n), material);
+  plan.voxel_size = kS;
+  return plan;
+}
+
+BodyPlan block_with_chamber(bool chamber) {
+  BodyPlan plan;
+  plan.lattice = {3, 3, 3};
+  plan.cells.assign(27, 10);
+  if (chamber) plan.cells[plan.cell_index(1, 1, 1)] = kFirstChamberCell;
+  plan.voxel_size = kS;
+  return plan;
+}
+
+struct Bounds {
+  int x0 = 1 << 30, y0 = 1 << 30, x1 = -1, y1 = -1;
+  long count = 0;
+};
+
+// Bounding box of pixels where blue clearly dominates red and green (stiff material).
+Bounds blue_bounds(const Image& img) {
+  Bounds b;
+  for (int y = 0; y < img.height; ++y) {
+    for (int x = 0; x < img.width; ++x) {
+      const auto p = img.pixel(x, y);
+      if (p[2] > p[0] + 40 && p[2] > p[1] + 40) {
+        b.x0 = std::min(b.x0, x);
+        b.x1 = std::max(b.x1, x);
+        b.y0 = std::min(b.y0, y);
+        b.y1 = std::max(b.y1, y);
+        ++b.count;
+      }
+    }
+  }
+  return b;
+}
+
+long red_line_pixels(const Image& img, int x_from, int x_to) {
+  long n = 0;
+  for (int y = 0; y < img.height; ++y) {
+    for (int x = x_from; x < x_to; ++x) {
+      const auto p = img.pixel(x, y);
+      if (p[0] > 150 && p[1] < 90 && p[2] < 90) ++n;
+    }
+  }
+  return n;
+}
+
+TEST(RenderColour, ThesisScaleRedSoftestToBlueStiffest) {
+  // 255 - 255 (k-1)/9 red, 255 (k-1)/9 blue (thesis figure 3.1 colour map).
+  EXPECT_EQ(material_colour(1, 10), (std::array<std::uint8_t, 3>{255, 0, 0}));
+  EXPECT_EQ(material_colour(10, 10), (std::array<std::uint8_t, 3>{0, 0, 255}));
+  EXPECT_EQ(material_colour(4, 10), (std::array<std::uint8_t, 3>{170, 0, 85}));
+}
+
+TEST(RenderPng, RoundTripKeepsSizeAndPixels) {
+  Image img(7, 5, {10, 20, 30});
+  img.set(3, 2, {200, 100, 50});
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "softevo_test_render_roundtrip.png").string();
+  write_png(img, path);
+  const Image back = read_png(path);
+  std::filesystem::remove(path);
+  EXPECT_EQ(back.width, 7);
+  EXPECT_EQ(back.height, 5);
+  EXPECT_EQ(back.pixel(3, 2), (std::array<std::uint8_t, 3>{200, 100, 50}));
+  EXPECT_EQ(back.pixel(0, 0), (std::array<std::uint8_t, 3>{10, 20, 30}));
+}
+
+TEST(RenderPng, UnwritablePathIsAnErrorNamingIt) {
+  Image img(2, 2, {0, 0, 0});
+  try {
+    write_png(img, "/nonexistent-dir/x.png");
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent-dir/x.png"), std::string::npos);
+  }
+}
+
+TEST(RenderBody, SimulatorVoxelOrderAndChambers) {
+  const Body body = body_from_plan(block_with_chamber(true));
+  ASSERT_EQ(body.voxel_cells.size(), 26u);
+  EXPECT_EQ(body.voxel_cells[0], Eigen::Vector3i(0, 0, 0));
+  EXPECT_EQ(body.voxel_cells[1], Eigen::Vector3i(0, 0, 1));  // z inner
+  ASSERT_EQ(body.chamber_cells.size(), 1u);
+  EXPECT_EQ(body.chamber_cells[0], Eigen::Vector3i(1, 1, 1));
+  EXPECT_EQ(body.chamber_count, 1);
+  BodyPlan empty = bar(3, 0);
+  EXPECT_THROW(body_from_plan(empty), std::invalid_argument);
+}
+
+TEST(RenderImage, TopViewShowsTheBodyWhereTheCameraPutsIt) {
+  const Body body = body_from_plan(bar(5, 10));
+  const Pose pose = rest_pose(body);
+  // Top view, 2000 pixel/m, centred on the bar's middle voxel: the bar is 5 cm = 100 px long
+  // and 1 cm = 20 px wide, centred in a 300 x 200 image.
+  Camera cam = view_camera(View::top, 300, 200);
+  cam.scale = 2000.0;
+  cam.center = Eigen::Vector3d(2 * kS, 0.0, 0.0);
+  SceneOptions opt;
+  opt.supersample = 1;
+  const Image img = render_poses(body, {pose}, cam, opt);
+  ASSERT_EQ(img.width, 300);
+  ASSERT_EQ(img.height, 200);
+  const Bounds b = blue_bounds(img);
+  EXPECT_NEAR(b.x1 - b.x0 + 1, 100, 3);
+  EXPECT_NEAR(b.y1 - b.y0 + 1, 20, 3);
+  EXPECT_NEAR(0.5 * (b.x0 + b.x1), 150, 2);
+  EXPECT_NEAR(0.5 * (b.y0 + b.y1), 100, 2);
+}
+
+TEST(RenderImage, OrientationTurnsTheCubes) {
+  // One voxel seen from above: turning it 45 degrees about z makes its footprint wider
+  // (diagonal sqrt(2) s instead of s).
+  const Body body = body_from_plan(bar(1, 10));
+  Pose pose = rest_pose(body);
+  Camera cam = view_camera(View::top, 200, 200);
+  cam.scale = 5000.0;
+  cam.center = Eigen::Vector3d::Zero();
+  SceneOptions opt;
+  opt.supersample = 1;
+  const Bounds straight = blue_bounds(render_poses(body, {pose}, cam, opt));
+  pose.orientation[0] = Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 4, Eigen::Vector3d::UnitZ()));
+  const Bounds turned = blue_bounds(render_poses(body, {pose}, cam, opt));
+  EXPECT_NEAR(straight.x1 - straight.x0 + 1, 50, 2);
+  EXPECT_NEAR(turned.x1 - turned.x0 + 1, 50 * std::sqrt(2.0), 3);
+  // Same area up to the outline (rotation preserves area).
+  EXPECT_NEAR(static_cast<double>(turned.count) / straight.count, 1.0, 0.1);
+}
+
+TEST(RenderImage, MovingThePoseMovesTheImage) {
+  const Body body = body_from_plan(bar(2, 10));
+  Pose pose = rest_pose(body);
+  Camera cam = view_camera(View::side, 400, 200);
+  cam.scale = 2000.0;
+  cam.center = Eigen::Vector3d(0.005, 0.0, 0.0);
+  SceneOptions opt;
+  opt.supersample = 1;
+  opt.floor = false;
+  const Bounds before = blue_bounds(render_poses(body, {pose}, cam, opt));
+  for (auto& p : pose.position) p.x() += 0.03;  // 3 cm forward = 60 px to the right
+  const Bounds after = blue_bounds(render_poses(body, {pose}, cam, opt));
+  EXPECT_NEAR(after.x0 - before.x0, 60, 1);
+  EXPECT_NEAR(after.y0 - before.y0, 0, 1);
+}
+
+TEST(RenderImage, ChamberShowsDarkThroughTheBody) {
+  Camera cam = view_camera(View::top, 120, 120);
+  cam.scale = 3000.0;
+  cam.center = Eigen::Vector3d(kS, kS, kS);
+  SceneOptions opt;
+  opt.supersample = 1;
+  auto centre_brightness = [&](bool chamber) {
+    const Body body = body_from_plan(block_with_chamber(chamber));
+    const auto p = render_poses(body, {rest_pose(body)}, cam, opt).pixel(60, 60);
+    return p[0] + p[1] + p[2];
+  };
+  EXPECT_LT(centre_brightness(true) + 60, centre_brightness(false));
+}
+
+TEST(RenderImage, ChamberCellsFollowTheirWalls) {
+  // The whole block moved by 2 cm: the dark centre moves with it (chamber cells are placed
+  // from their wall voxels, they have no position of their own).
+  const Body body = body_from_plan(block_with_chamber(true));
+  Pose pose = rest_pose(body);
+  for (auto& p : pose.position) p.x() += 0.02;
+  Camera cam = view_camera(View::top, 200, 120);
+  cam.scale = 3000.0;
+  cam.center = Eigen::Vector3d(kS + 0.01, kS, kS);
+  SceneOptions opt;
+  opt.supersample = 1;
+  const Image img = render_poses(body, {pose}, cam, opt);
+  const auto at_chamber = img.pixel(100 + 30, 60);    // block centre (x = 3 cm) is at 130 px
+  const auto at_wall = img.pixel(100 + 30 + 36, 60);  // 1.2 cm further: wall, no chamber
+  EXPECT_LT(at_chamber[0] + at_chamber[1] + at_chamber[2] + 60,
+            at_wall[0] + at_wall[1] + at_wall[2]);
+}
+
+TEST(RenderImage, TargetLineGoesTheRequestedWay) {
+  const Body body = body_from_plan(bar(1, 10));
+  const Pose pose = rest_pose(body);
+  Camera cam = view_camera(View::top, 200, 100);
+  cam.scale = 1000.0;
+  cam.center = Eigen::Vector3d::Zero();
+  SceneOptions opt;
+  opt.supersample = 1;
+  opt.target_direction_deg = 0.0;
+  const Image ahead = render_poses(body, {pose}, cam, opt);
+  EXPECT_GT(red_line_pixels(ahead, 120, 200), 40);
+  EXPECT_EQ(red_line_pixels(ahead, 0, 80), 0);
+  opt.target_direction_deg = 180.0;
+  const Image behind = render_poses(body, {pose}, cam, opt);
+  EXPECT_EQ(red_line_pixels(behind, 120, 200), 0);
+  EXPECT_GT(red_line_pixels(behind, 0, 80), 40);
+}
+
+TEST(RenderImage, FitCameraKeepsEverythingInside) {
+  const Body body = body_from_plan(block_with_chamber(true));
+  const Pose pose = rest_pose(body);
+  for (View v : {View::side, View::top, View::iso}) {
+    const Camera cam = fit_camera(v, pose_bounds(body, pose), 160, 120);
+    SceneOptions opt;
+    opt.floor = false;
+    opt.supersample = 1;
+    const Bounds b = blue_bounds(render_poses(body, {pose}, cam, opt));
+    ASSERT_GT(b.count, 0);
+    EXPECT_GT(b.x0, 0);
+    EXPECT_GT(b.y0, 0);
+    EXPECT_LT(b.x1, 159);
+    EXPECT_LT(b.y1, 119);
+    // ... and fills a good part of it.
+    EXPECT_GT(b.count, 160 * 120 / 10);
+  }
+}
+
+TEST(RenderImage, MismatchedPoseIsAnError) {
+  const Body body = body_from_plan(bar(3, 5));
+  Pose pose = rest_pose(body);
+  pose.position.pop_back();
+  EXPECT_THROW(render_poses(body, {pose}, view_camera(View::top, 10, 10), {}),
+               std::invalid_argument);
+  EXPECT_THROW(parse_view("front"), std::invalid_argument);
+}
+
+TEST(RenderImage, HstackLaysPanelsSideBySide) {
+  const Image a(10, 6, {255, 0, 0});
+  const Image b(5, 6, {0, 255, 0});
+  const Image s = hstack({a, b}, 2, {0, 0, 0});
+  EXPECT_EQ(s.width, 17);
+  EXPECT_EQ(s.height, 6);
+  EXPECT_EQ(s.pixel(9, 3), (std::array<std::uint8_t, 3>{255, 0, 0}));
+  EXPECT_EQ(s.pixel(11, 3), (std::array<std::uint8_t, 3>{0, 0, 0}));
+  EXPECT_EQ(s.pixel(12, 3), (std::array<std::uint8_t, 3>{0, 255, 0}));
+  EXPECT_EQ(count_pixels_unlike(s, {0, 0, 0}), 15 * 6);
+}
+
+}  // namespace
+}  // namespace softevo::render

@@ -1,0 +1,690 @@
+// Software rasteriser for `softevo render` (see render.hpp for the approach).
+#include "tools/render.hpp"
+
+#include <png.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <unordered_map>
+
+namespace softevo::render {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+using Rgb = std::array<std::uint8_t, 3>;
+
+struct Colour {
+  float r = 0.0F;
+  float g = 0.0F;
+  float b = 0.0F;
+};
+
+Colour to_colour(Rgb c) {
+  return {c[0] / 255.0F, c[1] / 255.0F, c[2] / 255.0F};
+}
+
+std::uint8_t to_byte(float v) {
+  return static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0F, 1.0F) * 255.0F));
+}
+
+// One transparent sample of a face at a pixel, linked into that pixel's list.
+struct Fragment {
+  float depth;  // [m] along the camera's forward axis
+  Colour colour;
+  float alpha;
+  std::int32_t next;  // index of the next fragment of the same pixel, -1 = end
+};
+
+// Lattice lookup of a body: which item sits in a cell. Items 0..V-1 are structural voxels,
+// V..V+C-1 chamber cells; -1 = empty (or outside the lattice).
+class CellIndex {
+ public:
+  explicit CellIndex(const Body& body) {
+    Eigen::Vector3i hi(0, 0, 0);
+    for (const auto& c : body.voxel_cells) hi = hi.cwiseMax(c);
+    for (const auto& c : body.chamber_cells) hi = hi.cwiseMax(c);
+    dims_ = hi + Eigen::Vector3i::Ones();
+    items_.assign(static_cast<std::size_t>(dims_.prod()), -1);
+    const int v = static_cast<int>(body.voxel_cells.size());
+    for (int i = 0; i < v; ++i) items_[index(body.voxel_cells[i])] = i;
+    for (int j = 0; j < static_cast<int>(body.chamber_cells.size()); ++j) {
+      items_[index(body.chamber_cells[j])] = v + j;
+    }
+  }
+  int at(const Eigen::Vector3i& c) const {
+    if ((c.array() < 0).any() || (c.array() >= dims_.array()).any()) return -1;
+    return items_[index(c)];
+  }
+
+ private:
+  std::size_t index(const Eigen::Vector3i& c) const {
+    return (static_cast<std::size_t>(c.x()) * dims_.y() + c.y()) * dims_.z() + c.z();
+  }
+  Eigen::Vector3i dims_;
+  std::vector<int> items_;
+};
+
+// Face directions in the link order of pneuvox-model.md §2.1: X+, X-, Y+, Y-, Z+, Z-.
+const std::array<Eigen::Vector3i, 6> kFaceSteps = {
+    Eigen::Vector3i(1, 0, 0),  Eigen::Vector3i(-1, 0, 0), Eigen::Vector3i(0, 1, 0),
+    Eigen::Vector3i(0, -1, 0), Eigen::Vector3i(0, 0, 1),  Eigen::Vector3i(0, 0, -1)};
+
+// Chamber cells have no voxel in the simulation: place each one where its face neighbours
+// (wall voxels, then already placed chamber cells, pass by pass) say it should be:
+// p = mean over neighbours n of (p_n + R_n (c - c_n) s). The orientation is taken from the first
+// neighbour in face order. Deterministic: each pass only uses cells placed before it.
+void place_chambers(const Body& body, const CellIndex& cells, const Pose& pose,
+                    std::vector<Eigen::Vector3d>& position,
+                    std::vector<Eigen::Quaterniond>& orientation) {
+  const int v = static_cast<int>(body.voxel_cells.size());
+  const int c = static_cast<int>(body.chamber_cells.size());
+  position.assign(static_cast<std::size_t>(c), Eigen::Vector3d::Zero());
+  orientation.assign(static_cast<std::size_t>(c), Eigen::Quaterniond::Identity());
+  std::vector<char> known(static_cast<std::size_t>(c), 0);
+  auto cell_of = [&](int item) {
+    return item < v ? body.voxel_cells[item] : body.chamber_cells[item - v];
+  };
+  bool progress = true;
+  while (progress) {
+    progress = false;
+    const std::vector<char> known_before = known;
+    for (int j = 0; j < c; ++j) {
+      if (known[j]) continue;
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      int count = 0;
+      for (const auto& step : kFaceSteps) {
+        const int item = cells.at(body.chamber_cells[j] + step);
+        if (item < 0) continue;
+        Eigen::Vector3d p;
+        Eigen::Quaterniond q;
+        if (item < v) {
+          p = pose.position[item];
+          q = pose.orientation[item];
+        } else if (known_before[item - v]) {
+          p = position[item - v];
+          q = orientation[item - v];
+        } else {
+          continue;
+        }
+        const Eigen::Vector3d offset = (body.chamber_cells[j] - cell_of(item)).cast<double>();
+        sum += p + q * (offset * body.voxel_size);
+        if (count == 0) orientation[j] = q;
+        ++count;
+      }
+      if (count > 0) {
+        position[j] = sum / count;
+        known[j] = 1;
+        progress = true;
+      }
+    }
+  }
+  // A chamber cell with no path to a wall (cannot happen for developed bodies) follows the
+  // centroid at its rest offset.
+  const Eigen::Vector3d shift = centroid(pose) - centroid(rest_pose(body));
+  for (int j = 0; j < c; ++j) {
+    if (!known[j]) position[j] = body.chamber_cells[j].cast<double>() * body.voxel_size + shift;
+  }
+}
+
+struct Raster {
+  int width;
+  int height;
+  double scale;    // [pixel/m] at raster resolution
+  double outline;  // width of the dark cube edges [raster pixel]
+  const Camera* camera;
+  std::vector<float> opaque_depth;  // [m] floor depth per pixel (+inf = none)
+  std::vector<std::int32_t> heads;  // first fragment per pixel, -1 = none
+  std::vector<Fragment> fragments;
+
+  // Screen position and depth of a world point.
+  Eigen::Vector3d project(const Eigen::Vector3d& p) const {
+    const Eigen::Vector3d d = p - camera->center;
+    return {d.dot(camera->right) * scale + 0.5 * width, 0.5 * height - d.dot(camera->up) * scale,
+            d.dot(camera->forward)};
+  }
+  Eigen::Vector3d project_vector(const Eigen::Vector3d& v) const {
+    return {v.dot(camera->right) * scale, -v.dot(camera->up) * scale, v.dot(camera->forward)};
+  }
+};
+
+// Light from the front-left above (direction towards the light), plus ambient.
+const Eigen::Vector3d kLight = Eigen::Vector3d(-0.35, -0.55, 1.0).normalized();
+constexpr double kAmbient = 0.5;
+constexpr double kDiffuse = 0.5;
+
+// Rasterises one cube face: a parallelogram under orthographic projection. Pixel centre p
+// lies in it iff p = O + a A + b B with a, b in [0, 1]; depth is affine in (a, b) as well.
+void raster_face(Raster& r, const Eigen::Vector3d& centre, const Eigen::Matrix3d& rot, int face,
+                 double half, Colour base, float alpha) {
+  const int axis = face / 2;
+  const double sign = (face % 2 == 0) ? 1.0 : -1.0;
+  const Eigen::Vector3d normal = sign * rot.col(axis);
+  const Eigen::Vector3d edge_a = rot.col((axis + 1) % 3) * (2.0 * half);
+  const Eigen::Vector3d edge_b = rot.col((axis + 2) % 3) * (2.0 * half);
+  const Eigen::Vector3d origin = centre + normal * half - 0.5 * edge_a - 0.5 * edge_b;
+  const Eigen::Vector3d o = r.project(origin);
+  const Eigen::Vector3d a = r.project_vector(edge_a);
+  const Eigen::Vector3d b = r.project_vector(edge_b);
+  const double det = a.x() * b.y() - a.y() * b.x();
+  if (std::abs(det) < 1e-6) return;  // seen edge-on: covers no pixel centre
+
+  // Two-sided lighting: a face turned away from the camera is seen from inside the body.
+  Eigen::Vector3d n = normal;
+  if (n.dot(r.camera->forward) > 0.0) n = -n;
+  const float shade = static_cast<float>(kAmbient + kDiffuse * std::max(0.0, n.dot(kLight)));
+
+  const double len_a = std::hypot(a.x(), a.y());
+  const double len_b = std::hypot(b.x(), b.y());
+  // Distance of a pixel from the parallelogram's edges [pixel], for dark cube outlines.
+  const double height_over_a = std::abs(det) / std::max(len_b, 1e-12);  // per unit of a
+  const double height_over_b = std::abs(det) / std::max(len_a, 1e-12);  // per unit of b
+  const double outline = r.outline;
+
+  double min_x = o.x(), max_x = o.x(), min_y = o.y(), max_y = o.y();
+  for (const Eigen::Vector3d& corner :
+       {Eigen::Vector3d(o + a), Eigen::Vector3d(o + b), Eigen::Vector3d(o + a + b)}) {
+    min_x = std::min(min_x, corner.x());
+    max_x = std::max(max_x, corner.x());
+    min_y = std::min(min_y, corner.y());
+    max_y = std::max(max_y, corner.y());
+  }
+  const int x0 = std::max(0, static_cast<int>(std::floor(min_x)));
+  const int x1 = std::min(r.width - 1, static_cast<int>(std::ceil(max_x)));
+  const int y0 = std::max(0, static_cast<int>(std::floor(min_y)));
+  const int y1 = std::min(r.height - 1, static_cast<int>(std::ceil(max_y)));
+  for (int py = y0; py <= y1; ++py) {
+    for (int px = x0; px <= x1; ++px) {
+      const double dx = px + 0.5 - o.x();
+      const double dy = py + 0.5 - o.y();
+      const double u = (dx * b.y() - dy * b.x()) / det;
+      const double w = (a.x() * dy - a.y() * dx) / det;
+      if (u < 0.0 || u > 1.0 || w < 0.0 || w > 1.0) continue;
+      const std::size_t idx = static_cast<std::size_t>(py) * r.width + px;
+      const float depth = static_cast<float>(o.z() + u * a.z() + w * b.z());
+      if (depth >= r.opaque_depth[idx]) continue;
+      const double edge =
+          std::min(std::min(u, 1.0 - u) * height_over_a, std::min(w, 1.0 - w) * height_over_b);
+      const float factor = shade * (edge < outline ? 0.55F : 1.0F);
+      const float edge_alpha = edge < outline ? std::min(1.0F, alpha + 0.25F) : alpha;
+      r.fragments.push_back(Fragment{depth,
+                                     Colour{base.r * factor, base.g * factor, base.b * factor},
+                                     edge_alpha, r.heads[idx]});
+      r.heads[idx] = static_cast<std::int32_t>(r.fragments.size() - 1);
+    }
+  }
+}
+
+// Grid spacing [m] for the floor: the finest of 1, 5, 10, 50 cm that is at least 8 output
+// pixels wide.
+double grid_spacing(double output_scale) {
+  for (double g : {0.01, 0.05, 0.1, 0.5, 1.0}) {
+    if (g * output_scale >= 8.0) return g;
+  }
+  return 1.0;
+}
+
+bool near_grid_line(double coordinate, double spacing, double half_width) {
+  const double m = coordinate - spacing * std::floor(coordinate / spacing);
+  return m < half_width || spacing - m < half_width;
+}
+
+// Floor and background of every raster pixel: colour and depth of the floor plane.
+void draw_floor(Raster& r, std::vector<Colour>& base, const SceneOptions& options,
+                const Eigen::AlignedBox3d& scene, int supersample) {
+  const Camera& cam = *r.camera;
+  const Colour sky_top{0.97F, 0.97F, 0.99F};
+  const Colour sky_bottom{0.90F, 0.91F, 0.94F};
+  const Colour floor_colour{0.84F, 0.84F, 0.82F};
+  const Colour minor_line{0.74F, 0.74F, 0.72F};
+  const Colour major_line{0.58F, 0.58F, 0.56F};
+  const Colour target_colour{0.86F, 0.08F, 0.08F};
+  const double output_scale = r.scale / supersample;
+  const double spacing = grid_spacing(output_scale);
+  const double line_half = 0.6 * supersample / r.scale;  // [m] ~1.2 output pixels wide
+  // A floor seen from the side is a stage a little deeper than the robot's path (y range);
+  // from above it is unbounded.
+  const bool bounded = std::abs(cam.forward.z()) < 0.35;
+  const double y_lo = scene.min().y() - 0.04;
+  const double y_hi = scene.max().y() + 0.04;
+  Eigen::Vector2d target_dir(0.0, 0.0);
+  if (options.target_direction_deg) {
+    const double beta = *options.target_direction_deg * kPi / 180.0;
+    target_dir = Eigen::Vector2d(std::cos(beta), std::sin(beta));
+  }
+  for (int py = 0; py < r.height; ++py) {
+    const float t_sky = static_cast<float>(py) / std::max(1, r.height - 1);
+    const Colour sky{sky_top.r + (sky_bottom.r - sky_top.r) * t_sky,
+                     sky_top.g + (sky_bottom.g - sky_top.g) * t_sky,
+                     sky_top.b + (sky_bottom.b - sky_top.b) * t_sky};
+    for (int px = 0; px < r.width; ++px) {
+      const std::size_t idx = static_cast<std::size_t>(py) * r.width + px;
+      base[idx] = sky;
+      r.opaque_depth[idx] = std::numeric_limits<float>::infinity();
+      if (!options.floor || cam.forward.z() > -1e-9) continue;
+      const Eigen::Vector3d p = cam.center + cam.right * ((px + 0.5 - 0.5 * r.width) / r.scale) +
+                                cam.up * ((0.5 * r.height - (py + 0.5)) / r.scale);
+      const double t = (options.floor_z - p.z()) / cam.forward.z();
+      const Eigen::Vector3d q = p + t * cam.forward;
+      if (bounded && (q.y() < y_lo || q.y() > y_hi)) continue;
+      Colour c = floor_colour;
+      if (near_grid_line(q.x(), spacing * 10.0, line_half) ||
+          near_grid_line(q.y(), spacing * 10.0, line_half)) {
+        c = major_line;
+      } else if (near_grid_line(q.x(), spacing, line_half * 0.7) ||
+                 near_grid_line(q.y(), spacing, line_half * 0.7)) {
+        c = minor_line;
+      }
+      if (options.target_direction_deg) {
+        const Eigen::Vector2d rel(q.x() - options.target_origin.x(),
+                                  q.y() - options.target_origin.y());
+        const double along = rel.dot(target_dir);
+        const double across = std::abs(rel.x() * target_dir.y() - rel.y() * target_dir.x());
+        if ((along >= 0.0 && across < 2.0 * line_half) || rel.norm() < 4.0 * line_half) {
+          c = target_colour;
+        }
+      }
+      base[idx] = c;
+      r.opaque_depth[idx] = static_cast<float>(t);
+    }
+  }
+}
+
+}  // namespace
+
+Image::Image(int w, int h, std::array<std::uint8_t, 3> fill) : width(w), height(h) {
+  if (w <= 0 || h <= 0) throw std::invalid_argument("image size must be positive");
+  rgb.resize(static_cast<std::size_t>(w) * h * 3);
+  for (std::size_t i = 0; i < rgb.size(); i += 3) std::memcpy(&rgb[i], fill.data(), 3);
+}
+
+std::array<std::uint8_t, 3> Image::pixel(int x, int y) const {
+  const std::size_t i = (static_cast<std::size_t>(y) * width + x) * 3;
+  return {rgb[i], rgb[i + 1], rgb[i + 2]};
+}
+
+void Image::set(int x, int y, std::array<std::uint8_t, 3> c) {
+  if (x < 0 || y < 0 || x >= width || y >= height) return;
+  const std::size_t i = (static_cast<std::size_t>(y) * width + x) * 3;
+  std::memcpy(&rgb[i], c.data(), 3);
+}
+
+void write_png(const Image& image, const std::string& path) {
+  if (image.width <= 0 || image.height <= 0 ||
+      image.rgb.size() != static_cast<std::size_t>(image.width) * image.height * 3) {
+    throw std::invalid_argument("write_png " + path + ": image has no pixels");
+  }
+  png_image out;
+  std::memset(&out, 0, sizeof(out));
+  out.version = PNG_IMAGE_VERSION;
+  out.width = static_cast<png_uint_32>(image.width);
+  out.height = static_cast<png_uint_32>(image.height);
+  out.format = PNG_FORMAT_RGB;
+  if (png_image_write_to_file(&out, path.c_str(), 0, image.rgb.data(), 0, nullptr) == 0) {
+    const std::string reason = out.message;
+    png_image_free(&out);
+    throw std::runtime_error("cannot write PNG " + path + ": " + reason);
+  }
+}
+
+Image read_png(const std::string& path) {
+  png_image in;
+  std::memset(&in, 0, sizeof(in));
+  in.version = PNG_IMAGE_VERSION;
+  if (png_image_begin_read_from_file(&in, path.c_str()) == 0) {
+    throw std::runtime_error("cannot read PNG " + path + ": " + in.message);
+  }
+  in.format = PNG_FORMAT_RGB;
+  Image image(static_cast<int>(in.width), static_cast<int>(in.height), {0, 0, 0});
+  if (png_image_finish_read(&in, nullptr, image.rgb.data(), 0, nullptr) == 0) {
+    const std::string reason = in.message;
+    png_image_free(&in);
+    throw std::runtime_error("cannot read PNG " + path + ": " + reason);
+  }
+  return image;
+}
+
+Body body_from_plan(const BodyPlan& plan, int material_count) {
+  const auto& d = plan.lattice;
+  if (d[0] <= 0 || d[1] <= 0 || d[2] <= 0 ||
+      plan.cells.size() != static_cast<std::size_t>(d[0]) * d[1] * d[2]) {
+    throw std::invalid_argument("body plan: lattice and cell count do not match");
+  }
+  Body body;
+  body.voxel_size = plan.voxel_size;
+  body.material_count = std::max(material_count, static_cast<int>(plan.materials.size()));
+  // Simulator order: x outer, y middle, z inner (§2.1), which is also the cell index order.
+  for (int x = 0; x < d[0]; ++x) {
+    for (int y = 0; y < d[1]; ++y) {
+      for (int z = 0; z < d[2]; ++z) {
+        const int value = plan.cell(x, y, z);
+        if (BodyPlan::is_structural(value)) {
+          body.voxel_cells.emplace_back(x, y, z);
+          body.voxel_material.push_back(value);
+        } else if (BodyPlan::is_chamber(value)) {
+          body.chamber_cells.emplace_back(x, y, z);
+          body.chamber_index.push_back(value - kFirstChamberCell);
+          body.chamber_count = std::max(body.chamber_count, value - kFirstChamberCell + 1);
+        } else if (value != kEmptyCell) {
+          throw std::invalid_argument("body plan: cell value " + std::to_string(value) +
+                                      " is neither empty, material nor chamber");
+        }
+      }
+    }
+  }
+  if (body.voxel_cells.empty()) throw std::invalid_argument("body plan has no structural voxel");
+  return body;
+}
+
+Pose rest_pose(const Body& body) {
+  Pose pose;
+  pose.position.reserve(body.voxel_cells.size());
+  for (const auto& c : body.voxel_cells)
+    pose.position.push_back(c.cast<double>() * body.voxel_size);
+  pose.orientation.assign(body.voxel_cells.size(), Eigen::Quaterniond::Identity());
+  return pose;
+}
+
+Eigen::Vector3d centroid(const Pose& pose) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const auto& p : pose.position) sum += p;
+  return pose.position.empty() ? sum : Eigen::Vector3d(sum / pose.position.size());
+}
+
+View parse_view(const std::string& name) {
+  if (name == "side") return View::side;
+  if (name == "top") return View::top;
+  if (name == "iso") return View::iso;
+  throw std::invalid_argument("unknown view '" + name + "' (expected side, top or iso)");
+}
+
+Camera view_camera(View view, int width, int height) {
+  Camera cam;
+  cam.width = width;
+  cam.height = height;
+  if (view == View::top) {
+    cam.forward = -Eigen::Vector3d::UnitZ();
+    cam.up = Eigen::Vector3d::UnitY();
+    cam.right = Eigen::Vector3d::UnitX();
+    return cam;
+  }
+  // Looking along azimuth `az` (from +x, counter-clockwise), `elevation` below the horizon.
+  const double az = (view == View::side ? 90.0 : 45.0) * kPi / 180.0;
+  const double el = (view == View::side ? 12.0 : 30.0) * kPi / 180.0;
+  cam.forward =
+      Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), -std::sin(el));
+  cam.right = cam.forward.cross(Eigen::Vector3d::UnitZ()).normalized();
+  cam.up = cam.right.cross(cam.forward).normalized();
+  return cam;
+}
+
+Camera fit_camera(View view, const Eigen::AlignedBox3d& box, int width, int height, double margin) {
+  Camera cam = view_camera(view, width, height);
+  double lo_r = std::numeric_limits<double>::infinity(), hi_r = -lo_r;
+  double lo_u = lo_r, hi_u = -lo_r;
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d corner = box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(i));
+    lo_r = std::min(lo_r, corner.dot(cam.right));
+    hi_r = std::max(hi_r, corner.dot(cam.right));
+    lo_u = std::min(lo_u, corner.dot(cam.up));
+    hi_u = std::max(hi_u, corner.dot(cam.up));
+  }
+  const double extent_r = std::max(hi_r - lo_r, 1e-6);
+  const double extent_u = std::max(hi_u - lo_u, 1e-6);
+  const double usable = std::max(0.05, 1.0 - 2.0 * margin);
+  cam.scale = std::min(width * usable / extent_r, height * usable / extent_u);
+  cam.center = box.center();
+  return cam;
+}
+
+Eigen::AlignedBox3d pose_bounds(const Body& body, const Pose& pose) {
+  Eigen::AlignedBox3d box;
+  // A turned cube reaches at most half its space diagonal from its centre.
+  const double reach = 0.5 * std::sqrt(3.0) * body.voxel_size;
+  const Eigen::Vector3d r(reach, reach, reach);
+  for (const auto& p : pose.position) {
+    box.extend(p - r);
+    box.extend(p + r);
+  }
+  return box;
+}
+
+std::array<std::uint8_t, 3> material_colour(int material, int material_count) {
+  const double f =
+      material_count > 1
+          ? std::clamp(static_cast<double>(material - 1) / (material_count - 1), 0.0, 1.0)
+          : 1.0;
+  return {static_cast<std::uint8_t>(std::lround(255.0 - 255.0 * f)), 0,
+          static_cast<std::uint8_t>(std::lround(255.0 * f))};
+}
+
+Image render_poses(const Body& body, const std::vector<Pose>& poses, const Camera& camera,
+                   const SceneOptions& options) {
+  if (poses.empty()) throw std::invalid_argument("render: no pose to draw");
+  for (const Pose& pose : poses) {
+    if (pose.position.size() != body.voxel_cells.size() ||
+        pose.orientation.size() != body.voxel_cells.size()) {
+      throw std::invalid_argument("render: pose has " + std::to_string(pose.position.size()) +
+                                  " voxels, body has " + std::to_string(body.voxel_cells.size()));
+    }
+  }
+  const int ss = std::clamp(options.supersample, 1, 4);
+  Raster r{camera.width * ss, camera.height * ss, camera.scale * ss, 0.7 * ss, &camera, {}, {}, {}};
+  const std::size_t pixels = static_cast<std::size_t>(r.width) * r.height;
+  r.opaque_depth.assign(pixels, std::numeric_limits<float>::infinity());
+  r.heads.assign(pixels, -1);
+  std::vector<Colour> base(pixels);
+
+  Eigen::AlignedBox3d scene;
+  for (const Pose& pose : poses) scene.extend(pose_bounds(body, pose));
+  draw_floor(r, base, options, scene, ss);
+
+  const CellIndex cells(body);
+  const double half = 0.5 * body.voxel_size * options.voxel_scale;
+  std::vector<Eigen::Vector3d> chamber_pos;
+  std::vector<Eigen::Quaterniond> chamber_rot;
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    const Pose& pose = poses[k];
+    const float fade =
+        k < options.pose_fade.size() ? static_cast<float>(options.pose_fade[k]) : 1.0F;
+    // Only the outer skin of the body (chambers count as filled) is transparent material;
+    // inner faces would add up to an opaque block.
+    for (std::size_t i = 0; i < body.voxel_cells.size(); ++i) {
+      const Eigen::Matrix3d rot = pose.orientation[i].normalized().toRotationMatrix();
+      const Colour colour = to_colour(material_colour(body.voxel_material[i], body.material_count));
+      for (int f = 0; f < 6; ++f) {
+        if (cells.at(body.voxel_cells[i] + kFaceSteps[f]) >= 0) continue;
+        raster_face(r, pose.position[i], rot, f, half, colour,
+                    static_cast<float>(options.body_alpha) * fade);
+      }
+    }
+    if (body.chamber_cells.empty()) continue;
+    place_chambers(body, cells, pose, chamber_pos, chamber_rot);
+    const int v = static_cast<int>(body.voxel_cells.size());
+    for (std::size_t j = 0; j < body.chamber_cells.size(); ++j) {
+      // Dark, darker the more the chamber is inflated (1.0 -> 1.2 bar, §3.5).
+      double inflation = 0.0;
+      const int q = body.chamber_index[j];
+      if (q >= 0 && static_cast<std::size_t>(q) < pose.chamber_pressure.size()) {
+        inflation = std::clamp((pose.chamber_pressure[q] - 1.0e5) / 0.2e5, 0.0, 1.0);
+      }
+      const float g = static_cast<float>(0.26 - 0.16 * inflation);
+      const Colour colour{g, g, g * 1.1F};
+      const Eigen::Matrix3d rot = chamber_rot[j].normalized().toRotationMatrix();
+      for (int f = 0; f < 6; ++f) {
+        if (cells.at(body.chamber_cells[j] + kFaceSteps[f]) >= v) continue;  // same blob
+        // Slightly smaller than a cell so it sits inside the walls' faces, not on them.
+        raster_face(r, chamber_pos[j], rot, f, 0.97 * half, colour,
+                    static_cast<float>(options.chamber_alpha) * fade);
+      }
+    }
+  }
+
+  // Resolve: blend each pixel's fragments back to front over the floor.
+  std::vector<const Fragment*> list;
+  std::vector<Colour> resolved(pixels);
+  for (std::size_t idx = 0; idx < pixels; ++idx) {
+    list.clear();
+    for (std::int32_t f = r.heads[idx]; f >= 0; f = r.fragments[f].next) {
+      list.push_back(&r.fragments[f]);
+    }
+    std::sort(list.begin(), list.end(),
+              [](const Fragment* a, const Fragment* b) { return a->depth > b->depth; });
+    Colour c = base[idx];
+    for (const Fragment* f : list) {
+      c.r = f->alpha * f->colour.r + (1.0F - f->alpha) * c.r;
+      c.g = f->alpha * f->colour.g + (1.0F - f->alpha) * c.g;
+      c.b = f->alpha * f->colour.b + (1.0F - f->alpha) * c.b;
+    }
+    resolved[idx] = c;
+  }
+
+  // Box-filter the supersamples down to the output size.
+  Image image(camera.width, camera.height, {0, 0, 0});
+  const float norm = 1.0F / static_cast<float>(ss * ss);
+  for (int y = 0; y < camera.height; ++y) {
+    for (int x = 0; x < camera.width; ++x) {
+      Colour sum;
+      for (int sy = 0; sy < ss; ++sy) {
+        for (int sx = 0; sx < ss; ++sx) {
+          const Colour& s = resolved[static_cast<std::size_t>(y * ss + sy) * r.width + x * ss + sx];
+          sum.r += s.r;
+          sum.g += s.g;
+          sum.b += s.b;
+        }
+      }
+      image.set(x, y, {to_byte(sum.r * norm), to_byte(sum.g * norm), to_byte(sum.b * norm)});
+    }
+  }
+  if (!options.label.empty()) {
+    const int size = std::max(1, (camera.height + 100) / 200);
+    draw_text(image, 6 * size, 6 * size, options.label, {40, 40, 48}, size);
+  }
+  return image;
+}
+
+Image hstack(const std::vector<Image>& panels, int gap, std::array<std::uint8_t, 3> gap_colour) {
+  if (panels.empty()) throw std::invalid_argument("hstack: no panel");
+  int width = 0;
+  const int height = panels.front().height;
+  for (const Image& p : panels) {
+    if (p.height != height) throw std::invalid_argument("hstack: panels differ in height");
+    width += p.width;
+  }
+  width += gap * static_cast<int>(panels.size() - 1);
+  Image out(width, height, gap_colour);
+  int x0 = 0;
+  for (const Image& p : panels) {
+    for (int y = 0; y < height; ++y) {
+      std::memcpy(&out.rgb[(static_cast<std::size_t>(y) * width + x0) * 3],
+                  &p.rgb[static_cast<std::size_t>(y) * p.width * 3],
+                  static_cast<std::size_t>(p.width) * 3);
+    }
+    x0 += p.width + gap;
+  }
+  return out;
+}
+
+long count_pixels_unlike(const Image& image, std::array<std::uint8_t, 3> background,
+                         int tolerance) {
+  long count = 0;
+  for (std::size_t i = 0; i + 2 < image.rgb.size(); i += 3) {
+    for (int ch = 0; ch < 3; ++ch) {
+      if (std::abs(static_cast<int>(image.rgb[i + ch]) - background[ch]) > tolerance) {
+        ++count;
+        break;
+      }
+    }
+  }
+  return count;
+}
+
+namespace {
+// 5x7 glyphs, 7 rows of 5 columns, '#' = ink. Lower case is drawn with the upper-case glyphs.
+struct Glyph {
+  char c;
+  std::array<const char*, 7> rows;
+};
+constexpr Glyph kFont[] = {
+    {'0', {".###.", "#...#", "#..##", "#.#.#", "##..#", "#...#", ".###."}},
+    {'1', {"..#..", ".##..", "..#..", "..#..", "..#..", "..#..", ".###."}},
+    {'2', {".###.", "#...#", "....#", "...#.", "..#..", ".#...", "#####"}},
+    {'3', {"#####", "...#.", "..#..", "...#.", "....#", "#...#", ".###."}},
+    {'4', {"...#.", "..##.", ".#.#.", "#..#.", "#####", "...#.", "...#."}},
+    {'5', {"#####", "#....", "####.", "....#", "....#", "#...#", ".###."}},
+    {'6', {"..##.", ".#...", "#....", "####.", "#...#", "#...#", ".###."}},
+    {'7', {"#####", "....#", "...#.", "..#..", ".#...", ".#...", ".#..."}},
+    {'8', {".###.", "#...#", "#...#", ".###.", "#...#", "#...#", ".###."}},
+    {'9', {".###.", "#...#", "#...#", ".####", "....#", "...#.", ".##.."}},
+    {'A', {".###.", "#...#", "#...#", "#####", "#...#", "#...#", "#...#"}},
+    {'B', {"####.", "#...#", "#...#", "####.", "#...#", "#...#", "####."}},
+    {'C', {".###.", "#...#", "#....", "#....", "#....", "#...#", ".###."}},
+    {'D', {"####.", "#...#", "#...#", "#...#", "#...#", "#...#", "####."}},
+    {'E', {"#####", "#....", "#....", "####.", "#....", "#....", "#####"}},
+    {'F', {"#####", "#....", "#....", "####.", "#....", "#....", "#...."}},
+    {'G', {".###.", "#...#", "#....", "#.###", "#...#", "#...#", ".####"}},
+    {'H', {"#...#", "#...#", "#...#", "#####", "#...#", "#...#", "#...#"}},
+    {'I', {".###.", "..#..", "..#..", "..#..", "..#..", "..#..", ".###."}},
+    {'J', {"..###", "...#.", "...#.", "...#.", "...#.", "#..#.", ".##.."}},
+    {'K', {"#...#", "#..#.", "#.#..", "##...", "#.#..", "#..#.", "#...#"}},
+    {'L', {"#....", "#....", "#....", "#....", "#....", "#....", "#####"}},
+    {'M', {"#...#", "##.##", "#.#.#", "#.#.#", "#...#", "#...#", "#...#"}},
+    {'N', {"#...#", "#...#", "##..#", "#.#.#", "#..##", "#...#", "#...#"}},
+    {'O', {".###.", "#...#", "#...#", "#...#", "#...#", "#...#", ".###."}},
+    {'P', {"####.", "#...#", "#...#", "####.", "#....", "#....", "#...."}},
+    {'Q', {".###.", "#...#", "#...#", "#...#", "#.#.#", "#..#.", ".##.#"}},
+    {'R', {"####.", "#...#", "#...#", "####.", "#.#..", "#..#.", "#...#"}},
+    {'S', {".####", "#....", "#....", ".###.", "....#", "....#", "####."}},
+    {'T', {"#####", "..#..", "..#..", "..#..", "..#..", "..#..", "..#.."}},
+    {'U', {"#...#", "#...#", "#...#", "#...#", "#...#", "#...#", ".###."}},
+    {'V', {"#...#", "#...#", "#...#", "#...#", "#...#", ".#.#.", "..#.."}},
+    {'W', {"#...#", "#...#", "#...#", "#.#.#", "#.#.#", "#.#.#", ".#.#."}},
+    {'X', {"#...#", "#...#", ".#.#.", "..#..", ".#.#.", "#...#", "#...#"}},
+    {'Y', {"#...#", "#...#", ".#.#.", "..#..", "..#..", "..#..", "..#.."}},
+    {'Z', {"#####", "....#", "...#.", "..#..", ".#...", "#....", "#####"}},
+    {'.', {".....", ".....", ".....", ".....", ".....", ".##..", ".##.."}},
+    {',', {".....", ".....", ".....", ".....", ".##..", "..#..", ".#..."}},
+    {'-', {".....", ".....", ".....", "#####", ".....", ".....", "....."}},
+    {'+', {".....", "..#..", "..#..", "#####", "..#..", "..#..", "....."}},
+    {'=', {".....", ".....", "#####", ".....", "#####", ".....", "....."}},
+    {':', {".....", ".##..", ".##..", ".....", ".##..", ".##..", "....."}},
+    {'/', {"....#", "...#.", "...#.", "..#..", ".#...", ".#...", "#...."}},
+    {'(', {"...#.", "..#..", ".#...", ".#...", ".#...", "..#..", "...#."}},
+    {')', {".#...", "..#..", "...#.", "...#.", "...#.", "..#..", ".#..."}},
+    {'#', {".#.#.", ".#.#.", "#####", ".#.#.", "#####", ".#.#.", ".#.#."}},
+    {'%', {"##..#", "##..#", "...#.", "..#..", ".#...", "#..##", "#..##"}},
+    {'_', {".....", ".....", ".....", ".....", ".....", ".....", "#####"}},
+    {'|', {"..#..", "..#..", "..#..", "..#..", "..#..", "..#..", "..#.."}},
+};
+}  // namespace
+
+void draw_text(Image& image, int x, int y, const std::string& text,
+               std::array<std::uint8_t, 3> colour, int size) {
+  int pen = x;
+  for (char ch : text) {
+    const char up = (ch >= 'a' && ch <= 'z') ? static_cast<char>(ch - 'a' + 'A') : ch;
+    const Glyph* glyph = nullptr;
+    for (const Glyph& g : kFont) {
+      if (g.c == up) glyph = &g;
+    }
+    if (glyph != nullptr) {
+      for (int row = 0; row < 7; ++row) {
+        for (int col = 0; col < 5; ++col) {
+          if (glyph->rows[row][col] != '#') continue;
+          for (int dy = 0; dy < size; ++dy) {
+            for (int dx = 0; dx < size; ++dx) {
+              image.set(pen + col * size + dx, y + row * size + dy, colour);
+            }
+          }
+        }
+      }
+    }
+    pen += 6 * size;
+  }
+}
+
+}  // namespace softevo::render

@@ -1,0 +1,135 @@
+// Headless software renderer for voxel robots: no GPU, no display. Used by `softevo render`.
+//
+// Every voxel is drawn as a cube of edge `voxel_size`, centred on its simulated position and
+// turned by its orientation quaternion (rigid cubes: link deformation is not drawn). Structural
+// material is semi-transparent and coloured by stiffness like the thesis (figure 3.1: blue =
+// stiffest, red = softest); chamber cells, which have no voxel of their own in the simulation,
+// are placed between their wall voxels and drawn dark, so they show through the body. The
+// projection is orthographic; every cube face is then an exact parallelogram on screen, which
+// keeps the rasteriser small. Transparency is exact per pixel: all fragments are kept in
+// per-pixel lists, sorted by depth and blended back to front over the floor.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "common/body_plan.hpp"
+
+namespace softevo::render {
+
+// 8-bit RGB image, rows top to bottom, 3 bytes per pixel.
+struct Image {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint8_t> rgb;
+
+  Image() = default;
+  Image(int w, int h, std::array<std::uint8_t, 3> fill);
+  std::array<std::uint8_t, 3> pixel(int x, int y) const;
+  void set(int x, int y, std::array<std::uint8_t, 3> c);
+};
+
+// libpng; throws std::runtime_error naming the path and the reason.
+void write_png(const Image& image, const std::string& path);
+Image read_png(const std::string& path);
+
+// What is drawn of a robot: its cells, independent of where they are.
+struct Body {
+  double voxel_size = 0.01;  // [m]
+  int material_count = 10;   // structural materials 1..material_count (colour scale)
+  // Structural voxels in simulator order (x outer, y, z inner; pneuvox-model.md §2.1).
+  std::vector<Eigen::Vector3i> voxel_cells;
+  std::vector<int> voxel_material;  // 1..material_count (voxels)
+  // Chamber cells (no voxel in the simulation) and their chamber index q = value - 11.
+  std::vector<Eigen::Vector3i> chamber_cells;
+  std::vector<int> chamber_index;  // (chamber cells)
+  int chamber_count = 0;
+};
+// Throws std::invalid_argument when the plan has no structural voxel or a cell out of range.
+Body body_from_plan(const BodyPlan& plan, int material_count = 10);
+
+// Where the voxels are at one instant.
+struct Pose {
+  double time = 0.0;                            // [s]
+  std::vector<Eigen::Vector3d> position;        // [m] voxel centres (voxels)
+  std::vector<Eigen::Quaterniond> orientation;  // unit quaternions (voxels)
+  std::vector<double> chamber_pressure;         // [Pa] absolute (chambers); may be empty
+};
+// The lattice at rest: centre = s * (i, j, k), identity orientation (pneuvox-model.md §2.1).
+Pose rest_pose(const Body& body);
+// Mean voxel position [m] (the centroid of §5, but absolute rather than a displacement).
+Eigen::Vector3d centroid(const Pose& pose);
+
+enum class View { side, top, iso };
+// "side" | "top" | "iso"; throws std::invalid_argument otherwise.
+View parse_view(const std::string& name);
+
+// Orthographic camera: a pixel (u, v) looks along `forward` from
+// center + right * (u - width/2) / scale + up * (height/2 - v) / scale.
+struct Camera {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();  // [m]
+  Eigen::Vector3d right = Eigen::Vector3d::UnitX();
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d forward = Eigen::Vector3d::UnitY();
+  double scale = 1000.0;  // [pixel/m]
+  int width = 640;        // [pixel]
+  int height = 480;       // [pixel]
+};
+// Camera axes of a view. Side: from -y, slightly from above, +x to the right. Top: from +z,
+// +x to the right, +y up. Iso: from the front-left, 30 degrees above the floor.
+Camera view_camera(View view, int width, int height);
+// Same axes, centre and scale chosen so that `box` fills the image with `margin` (fraction of
+// the image) left free on each side.
+Camera fit_camera(View view, const Eigen::AlignedBox3d& box, int width, int height,
+                  double margin = 0.06);
+// Bounding box of every cube of a pose, chamber cells included.
+Eigen::AlignedBox3d pose_bounds(const Body& body, const Pose& pose);
+
+struct SceneOptions {
+  double body_alpha = 0.5;     // opacity of one structural face [-]
+  double chamber_alpha = 0.9;  // opacity of one chamber face [-]
+  int supersample = 2;         // anti-aliasing: render at n x n samples per pixel
+  // Drawn cube edge / voxel size. Rigid cubes of a deformed body leave cracks between them;
+  // a little over 1 hides them.
+  double voxel_scale = 1.0;
+  bool floor = true;
+  // Visual floor height [m]: a voxel touches the floor when its centre is at z = 0 (§2.8), so
+  // the cube's lower face is half a voxel below it.
+  double floor_z = -0.005;
+  // Red target line on the floor (thesis figure 4.4): from `target_origin` [m] in direction
+  // `target_direction_deg` (counter-clockwise from +x, §7.2).
+  std::optional<double> target_direction_deg;
+  Eigen::Vector3d target_origin = Eigen::Vector3d::Zero();
+  // Opacity factor per pose when several poses are overlaid (time-lapse); empty = all 1.
+  std::vector<double> pose_fade;
+  std::string label;  // drawn in the top-left corner, "" = none
+};
+
+// Renders one or more poses of the same body into a single image (several poses = overlaid
+// time-lapse). Throws std::invalid_argument when a pose does not match the body.
+Image render_poses(const Body& body, const std::vector<Pose>& poses, const Camera& camera,
+                   const SceneOptions& options);
+
+// Panels side by side (same height), separated by `gap` pixels of colour `gap_colour`.
+Image hstack(const std::vector<Image>& panels, int gap,
+             std::array<std::uint8_t, 3> gap_colour = {255, 255, 255});
+// Number of pixels that differ from `background` by more than `tolerance` in any channel.
+long count_pixels_unlike(const Image& image, std::array<std::uint8_t, 3> background,
+                         int tolerance = 8);
+
+// Stiffness colour of the thesis: material k of n goes from red (k = 1, softest) to blue
+// (k = n, stiffest): red = 255 - 255 (k-1)/(n-1), blue = 255 (k-1)/(n-1).
+std::array<std::uint8_t, 3> material_colour(int material, int material_count);
+
+// Small built-in bitmap font (5x7 cells, printable ASCII subset; unknown characters are
+// blanks). Draws at pixel (x, y) = top-left, each font pixel `size` x `size` image pixels.
+void draw_text(Image& image, int x, int y, const std::string& text,
+               std::array<std::uint8_t, 3> colour, int size = 2);
+
+}  // namespace softevo::render

@@ -1,0 +1,340 @@
+#include "tools/robot_source.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+
+#include "common/eval_types.hpp"
+#include "evo/genome.hpp"
+#include "master/archive.hpp"
+#include "tools/h5_read.hpp"
+#include "worker/evaluate_robot.hpp"
+#include "worker/evaluate_unit.hpp"
+
+namespace softevo::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+bool is_json(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".json";
+}
+
+// Index of `deg` in the configured directions; appends it when it is not one of them, so any
+// direction can be shown (the fitness then belongs to that direction alone).
+int direction_index(Config& config, double deg) {
+  auto& dirs = config.task.directions;
+  for (std::size_t i = 0; i < dirs.size(); ++i) {
+    if (dirs[i] == deg) return static_cast<int>(i);
+  }
+  dirs.push_back(deg);
+  return static_cast<int>(dirs.size() - 1);
+}
+
+// Re-simulates and records every control frame (60 Hz) as a pose.
+Motion simulate_motion(Config config, const BodyPlan& plan, const ControllerSpec& controller,
+                       const MotionRequest& request, const std::string& name) {
+  Motion motion;
+  motion.body = render::body_from_plan(plan, static_cast<int>(config.physics.material_count));
+  motion.name = name;
+  if (request.seconds) {
+    if (!(*request.seconds > 0.0)) throw std::invalid_argument("--seconds must be positive");
+    config.task.eval_seconds = *request.seconds;
+  }
+  int dir = -1;
+  if (controller.directed) {
+    const double deg = request.direction_deg
+                           ? *request.direction_deg
+                           : (config.task.directions.empty() ? 0.0 : config.task.directions[0]);
+    dir = direction_index(config, deg);
+    motion.direction_deg = deg;
+  }
+  EvalOptions options;
+  options.on_frame = [&motion](const worker::TraceFrame& frame) {
+    render::Pose pose;
+    pose.time = frame.time;
+    pose.position.assign(frame.positions.begin(), frame.positions.end());
+    pose.orientation.reserve(frame.orientations.size());
+    for (const auto& q : frame.orientations) pose.orientation.emplace_back(q.w, q.x, q.y, q.z);
+    pose.chamber_pressure.assign(frame.pressures.begin(), frame.pressures.end());
+    motion.poses.push_back(std::move(pose));
+  };
+  const EvalResult result = evaluate_robot(config, plan, controller, dir, options);
+  if (motion.poses.empty()) {
+    throw std::runtime_error("simulation of " + name + " recorded no frame: " +
+                             (result.message.empty() ? to_string(result.status) : result.message));
+  }
+  char line[160];
+  std::snprintf(line, sizeof line, "%s fitness %.17g, status %s, %.2f s simulated",
+                dir >= 0 ? "directed" : "gait", result.fitness, to_string(result.status),
+                result.sim_seconds);
+  motion.summary = line;
+  return motion;
+}
+
+Motion static_motion(const BodyPlan& plan, int material_count, const std::string& name) {
+  Motion motion;
+  motion.body = render::body_from_plan(plan, material_count);
+  motion.poses.push_back(render::rest_pose(motion.body));
+  motion.name = name;
+  return motion;
+}
+
+// Body of a trace: voxels from the trace, chamber cells from a robot file when known.
+render::Body trace_body(const H5::H5File& file, const std::string& path,
+                        const std::string& robot_file) {
+  std::vector<hsize_t> dims;
+  const std::vector<std::int64_t> cells = h5read::ints(file, "voxel_cells", dims, path);
+  if (dims.size() != 2 || dims[1] != 3) {
+    throw std::runtime_error(path + ": dataset 'voxel_cells' must have shape [voxels, 3]");
+  }
+  std::vector<hsize_t> mdims;
+  const std::vector<std::int64_t> material = h5read::ints(file, "voxel_material", mdims, path);
+  if (material.size() != dims[0]) {
+    throw std::runtime_error(path + ": 'voxel_material' and 'voxel_cells' differ in length");
+  }
+  const double voxel_size = h5read::has_attribute(file, "voxel_size")
+                                ? h5read::double_attribute(file, "voxel_size", path)
+                                : 0.01;
+  std::optional<RobotFile> robot;
+  if (!robot_file.empty()) {
+    robot = read_robot_file(robot_file);
+  } else if (h5read::has_link(file, "robot_json")) {
+    robot =
+        parse_robot_json(h5read::string_dataset(file, "robot_json", path), path + ":robot_json");
+  } else if (h5read::has_attribute(file, "robot_json")) {
+    robot =
+        parse_robot_json(h5read::string_attribute(file, "robot_json", path), path + ":robot_json");
+  }
+  render::Body body;
+  if (robot) {
+    body = render::body_from_plan(robot->body);
+    bool same = body.voxel_cells.size() == dims[0];
+    for (std::size_t i = 0; same && i < dims[0]; ++i) {
+      same = body.voxel_cells[i] == Eigen::Vector3i(static_cast<int>(cells[3 * i]),
+                                                    static_cast<int>(cells[3 * i + 1]),
+                                                    static_cast<int>(cells[3 * i + 2]));
+    }
+    if (!same) {
+      throw std::runtime_error(path + ": the robot's voxels do not match the trace's voxel_cells");
+    }
+    body.voxel_size = voxel_size;
+    return body;
+  }
+  body.voxel_size = voxel_size;
+  for (std::size_t i = 0; i < dims[0]; ++i) {
+    body.voxel_cells.emplace_back(static_cast<int>(cells[3 * i]),
+                                  static_cast<int>(cells[3 * i + 1]),
+                                  static_cast<int>(cells[3 * i + 2]));
+    body.voxel_material.push_back(static_cast<int>(material[i]));
+    body.material_count = std::max(body.material_count, static_cast<int>(material[i]));
+  }
+  if ((body.voxel_cells.size() > 0) &&
+      std::any_of(cells.begin(), cells.end(), [](std::int64_t c) { return c < 0; })) {
+    throw std::runtime_error(path + ": negative voxel cell index");
+  }
+  return body;
+}
+
+Motion load_trace(const std::string& path, const MotionRequest& request) {
+  const H5::H5File file = h5read::open_file(path);
+  Motion motion;
+  motion.body = trace_body(file, path, request.robot_file);
+  motion.name = fs::path(path).stem().string();
+  const std::size_t voxels = motion.body.voxel_cells.size();
+  std::vector<hsize_t> pdims, odims, prdims;
+  const std::vector<double> pos = h5read::doubles(file, "positions", pdims, path);
+  const std::vector<double> ori = h5read::doubles(file, "orientations", odims, path);
+  if (pdims.size() != 3 || pdims[1] != voxels || pdims[2] != 3) {
+    throw std::runtime_error(path + ": 'positions' must have shape [frames, " +
+                             std::to_string(voxels) + ", 3]");
+  }
+  if (odims.size() != 3 || odims[0] != pdims[0] || odims[1] != voxels || odims[2] != 4) {
+    throw std::runtime_error(path + ": 'orientations' must have shape [" +
+                             std::to_string(pdims[0]) + ", " + std::to_string(voxels) + ", 4]");
+  }
+  std::vector<double> pressure;
+  std::size_t chambers = 0;
+  if (h5read::has_link(file, "pressures")) {
+    pressure = h5read::doubles(file, "pressures", prdims, path);
+    if (prdims.size() == 2 && prdims[0] == pdims[0]) chambers = prdims[1];
+  }
+  std::vector<double> times;
+  if (h5read::has_link(file, "time")) {
+    std::vector<hsize_t> tdims;
+    times = h5read::doubles(file, "time", tdims, path);
+    if (times.size() != pdims[0]) throw std::runtime_error(path + ": 'time' length != frames");
+  }
+  const double rate = h5read::has_attribute(file, "frame_rate")
+                          ? h5read::double_attribute(file, "frame_rate", path)
+                          : 60.0;  // §5: one record per 60 Hz control frame
+  if (h5read::has_attribute(file, "direction_deg")) {
+    motion.direction_deg = h5read::double_attribute(file, "direction_deg", path);
+  }
+  for (std::size_t f = 0; f < pdims[0]; ++f) {
+    render::Pose pose;
+    pose.time = times.empty() ? static_cast<double>(f) / rate : times[f];
+    pose.position.resize(voxels);
+    pose.orientation.resize(voxels);
+    for (std::size_t v = 0; v < voxels; ++v) {
+      const double* p = &pos[(f * voxels + v) * 3];
+      const double* q = &ori[(f * voxels + v) * 4];
+      pose.position[v] = Eigen::Vector3d(p[0], p[1], p[2]);
+      pose.orientation[v] = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
+    }
+    if (chambers > 0) {
+      pose.chamber_pressure.assign(
+          pressure.begin() + static_cast<std::ptrdiff_t>(f * chambers),
+          pressure.begin() + static_cast<std::ptrdiff_t>((f + 1) * chambers));
+    }
+    motion.poses.push_back(std::move(pose));
+  }
+  if (motion.poses.empty()) throw std::runtime_error(path + ": trace has no frame");
+  if (h5read::has_attribute(file, "fitness") && h5read::has_attribute(file, "status")) {
+    char line[160];
+    std::snprintf(line, sizeof line, "traced fitness %.17g, status %s",
+                  h5read::double_attribute(file, "fitness", path),
+                  h5read::string_attribute(file, "status", path).c_str());
+    motion.summary = line;
+  }
+  if (motion.body.chamber_cells.empty()) {
+    motion.summary += std::string(motion.summary.empty() ? "" : "; ") +
+                      "trace has no chamber cells (pass --robot ROBOT.json to draw them)";
+  }
+  return motion;
+}
+
+ArchivedIndividual individual_at(const master::GenerationRecord& record, std::size_t row,
+                                 const std::string& path, const std::string& config_text,
+                                 const Config& config, const std::string& experiment) {
+  ArchivedIndividual ind;
+  ind.archive_path = path;
+  ind.config_text = config_text;
+  ind.config = config;
+  ind.experiment = experiment;
+  ind.generation = record.generation;
+  ind.id = record.id[row];
+  ind.row = row;
+  ind.status = record.status[row];
+  ind.fitness = record.fitness[row];
+  ind.voxels = record.voxels[row];
+  ind.chambers = record.chambers[row];
+  ind.genome = record.genome[row];
+  ind.n_directions = record.n_directions;
+  const std::size_t per_row =
+      static_cast<std::size_t>(record.n_directions) * master::kComponentCount;
+  if (record.components.size() == per_row * record.size()) {
+    ind.components.assign(
+        record.components.begin() + static_cast<std::ptrdiff_t>(row * per_row),
+        record.components.begin() + static_cast<std::ptrdiff_t>((row + 1) * per_row));
+  }
+  return ind;
+}
+
+}  // namespace
+
+std::vector<std::int64_t> archived_generations(const std::string& archive_path) {
+  const master::Archive archive(archive_path);
+  return archive.generations();
+}
+
+std::vector<ArchivedIndividual> archived_generation(const std::string& archive_path,
+                                                    std::optional<std::int64_t> generation) {
+  const master::Archive archive(archive_path);
+  const std::vector<std::int64_t> gens = archive.generations();
+  if (gens.empty()) throw std::runtime_error(archive_path + ": archive has no generation yet");
+  const std::int64_t g = generation ? *generation : gens.back();
+  if (!std::binary_search(gens.begin(), gens.end(), g)) {
+    throw std::runtime_error(archive_path + ": no generation " + std::to_string(g) +
+                             " (archive has " + std::to_string(gens.front()) + ".." +
+                             std::to_string(gens.back()) + ")");
+  }
+  const std::string config_text = archive.config_text();
+  const Config config = parse_config(config_text, archive_path + ":/config");
+  const std::string experiment = archive.info().experiment;
+  const master::GenerationRecord record = archive.generation(g);
+  record.check();
+  std::vector<ArchivedIndividual> out;
+  for (std::size_t row = 0; row < record.size(); ++row) {
+    out.push_back(individual_at(record, row, archive_path, config_text, config, experiment));
+  }
+  return out;
+}
+
+ArchivedIndividual archived_individual(const std::string& archive_path,
+                                       std::optional<std::int64_t> generation,
+                                       std::optional<std::int64_t> id) {
+  std::vector<ArchivedIndividual> all = archived_generation(archive_path, generation);
+  if (all.empty()) throw std::runtime_error(archive_path + ": generation has no individual");
+  if (id) {
+    for (auto& ind : all) {
+      if (ind.id == *id) return std::move(ind);
+    }
+    throw std::runtime_error(archive_path + ": generation " + std::to_string(all[0].generation) +
+                             " has no individual with id " + std::to_string(*id));
+  }
+  // Best: highest fitness, the lowest id on ties (rows are in id order).
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < all.size(); ++i) {
+    if (all[i].fitness > all[best].fitness) best = i;
+  }
+  return std::move(all[best]);
+}
+
+RobotFile robot_of(const ArchivedIndividual& individual) {
+  const evo::Genome genome = evo::decode_genome(individual.genome);
+  const std::string name = individual.experiment + " gen " + std::to_string(individual.generation) +
+                           " id " + std::to_string(individual.id);
+  const worker::BuiltRobot built = worker::build_robot(individual.config, genome);
+  if (!built.valid || !built.actuatable) {
+    throw std::runtime_error(individual.archive_path + ": individual " +
+                             std::to_string(individual.id) + " of generation " +
+                             std::to_string(individual.generation) + " has an invalid body (" +
+                             (built.valid ? "no chamber" : "no structural voxel") + ")");
+  }
+  return worker::robot_file_of(individual.config, genome, name);
+}
+
+Motion load_motion(const std::string& input, const MotionRequest& request) {
+  if (!fs::exists(input)) throw std::runtime_error(input + ": no such file");
+  if (is_json(input)) {
+    const RobotFile robot = read_robot_file(input);
+    const std::string name = robot.name.empty() ? fs::path(input).stem().string() : robot.name;
+    Config config = request.config_file.empty()
+                        ? parse_config("", "(defaults)", request.overrides)
+                        : load_config(request.config_file, request.overrides);
+    if (!request.needs_motion || request.static_pose) {
+      return static_motion(robot.body, static_cast<int>(config.physics.material_count), name);
+    }
+    // The robot file decides the task: its controller's inputs say directed or not.
+    config.task.kind = robot.controller.directed ? "directed" : "gait";
+    config.task.control = robot.controller.closed_loop ? "closed" : "open";
+    return simulate_motion(config, robot.body, robot.controller, request, name);
+  }
+  const H5::H5File file = h5read::open_file(input);
+  if (h5read::has_attribute(file, "format") &&
+      h5read::string_attribute(file, "format", input) == master::kArchiveFormat) {
+    const ArchivedIndividual ind = archived_individual(input, request.generation, request.id);
+    const RobotFile robot = robot_of(ind);
+    if (!request.needs_motion || request.static_pose) {
+      return static_motion(robot.body, static_cast<int>(ind.config.physics.material_count),
+                           robot.name);
+    }
+    Motion motion = simulate_motion(ind.config, robot.body, robot.controller, request, robot.name);
+    char archived[96];
+    std::snprintf(archived, sizeof archived, "; archived fitness %.17g", ind.fitness);
+    motion.summary += archived;
+    return motion;
+  }
+  if (h5read::has_link(file, "positions")) return load_trace(input, request);
+  throw std::runtime_error(input +
+                           ": neither a run archive (format softevo.run/1) nor a trace "
+                           "(/positions); robot files must end in .json");
+}
+
+}  // namespace softevo::cli

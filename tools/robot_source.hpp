@@ -1,0 +1,82 @@
+// Where the CLI tools get a robot and its motion from: a robot file, an `eval --trace` HDF5
+// file, or one individual of a run archive (its genome developed and re-simulated with the
+// archived config, exactly as the run evaluated it). Shared by `render` and `replay`.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/config.hpp"
+#include "common/robot.hpp"
+#include "tools/render.hpp"
+
+namespace softevo::cli {
+
+// A body and its poses over time (one pose = static).
+struct Motion {
+  render::Body body;
+  std::vector<render::Pose> poses;      // ascending in time
+  std::string name;                     // label for pictures
+  std::optional<double> direction_deg;  // target direction the motion was simulated towards
+  std::string summary;                  // one line: fitness and status when simulated, "" otherwise
+};
+
+struct MotionRequest {
+  bool needs_motion = false;  // robot file / archive: simulate (else the rest pose is drawn)
+  bool static_pose = false;   // never simulate
+  std::optional<double> direction_deg;  // directed task: target direction [deg]
+  std::optional<double> seconds;        // simulated time [s] (default task.eval_seconds)
+  // Archive selection.
+  std::optional<std::int64_t> generation;  // default: the last generation
+  std::optional<std::int64_t> id;          // default: the best
+  bool best = false;
+  // Robot files: config to simulate with (default: thesis defaults of common/config.hpp).
+  std::string config_file;
+  std::vector<std::string> overrides;
+  // Traces: robot file that gives the chamber cells.
+  std::string robot_file;
+};
+
+// Dispatches on the input: *.json = robot file; HDF5 with root attribute format
+// "softevo.run/1" = run archive; HDF5 with a /positions dataset = trace. Throws
+// std::runtime_error / std::invalid_argument naming the file and the problem.
+Motion load_motion(const std::string& input, const MotionRequest& request);
+
+// One individual of a run archive, with everything needed to evaluate it again.
+struct ArchivedIndividual {
+  std::string archive_path;
+  std::string config_text;  // /config, verbatim
+  Config config;            // parsed from config_text
+  std::string experiment;   // root attribute
+  std::int64_t generation = 0;
+  std::int64_t id = 0;
+  std::size_t row = 0;      // row in the generation's table
+  std::uint8_t status = 0;  // archived EvalStatus
+  double fitness = 0.0;     // archived fitness
+  std::int32_t voxels = 0;
+  std::int32_t chambers = 0;
+  std::vector<std::uint8_t> genome;  // encoded genome
+  int n_directions = 1;              // rows of `components` (gait: 1)
+  // Archived fitness components [n_directions][6]: fitness, distance, path_length,
+  // angle_error, perpendicular_penalty, status (docs/archive.md).
+  std::vector<double> components;
+};
+
+// The generation numbers stored in an archive (ascending). Throws naming the file.
+std::vector<std::int64_t> archived_generations(const std::string& archive_path);
+// Every individual of one generation (default: the last), rows in id order.
+std::vector<ArchivedIndividual> archived_generation(const std::string& archive_path,
+                                                    std::optional<std::int64_t> generation);
+// One individual: `id`, or (no id) the best of the generation (highest fitness, lowest id on
+// ties). Throws when the generation or id is not in the archive.
+ArchivedIndividual archived_individual(const std::string& archive_path,
+                                       std::optional<std::int64_t> generation,
+                                       std::optional<std::int64_t> id);
+
+// Robot (body plan with materials and voxel size from the config, controller) of an archived
+// genome, developed exactly as the worker does. Throws std::runtime_error for an invalid body.
+RobotFile robot_of(const ArchivedIndividual& individual);
+
+}  // namespace softevo::cli
