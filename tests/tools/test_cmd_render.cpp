@@ -241,5 +241,28 @@ TEST_F(CmdRender, ResimulatedTimelapseShowsTheRobotInEveryPanel) {
   }
 }
 
+// The archive path: a tiny real run, then its best individual re-developed and re-simulated.
+// (Run archives store strings as UTF-8; reading them as ASCII once failed here.)
+TEST_F(CmdRender, BestOfARunArchiveIsDrawn) {
+  const std::string mpi = build_dir() + "/bin/softevo-mpi";
+  if (!fs::exists(mpi) || !fs::exists("configs/quickstart.toml"))
+    GTEST_SKIP() << "softevo-mpi or configs/quickstart.toml missing";
+  const std::string archive = (dir_ / "run.h5").string();
+  ASSERT_EQ(run(mpi +
+                " --config configs/quickstart.toml --seed 5 --generations 1 --population 4 "
+                "--set body.lattice=[4,4,4] --set task.eval_seconds=0.5 --out " +
+                archive),
+            0);
+  const std::string out = (dir_ / "best.png").string();
+  ASSERT_EQ(run(softevo_binary() + " render " + archive +
+                " --best --at 0.25 --width 200 --height 150 -o " + out),
+            0);
+  const render::Image img = render::read_png(out);
+  EXPECT_EQ(img.width, 200);
+  EXPECT_EQ(img.height, 150);
+  // Something besides floor and sky: the robot covers a fair part of the frame.
+  EXPECT_GT(render::count_pixels_unlike(img, img.pixel(0, 0)), 200 * 150 / 20);
+}
+
 }  // namespace
 }  // namespace softevo
