@@ -229,6 +229,13 @@ Model build_model(const BodyPlan& plan, const PhysicsConfig& cfg, const BuildOpt
       dir_link[v][2 * a + 1] = id;  // - direction of P
     }
   }
+  m.links_by_axis.clear();
+  for (int a = 0; a < 3; ++a) {
+    m.axis_link_begin[a] = static_cast<int>(m.links_by_axis.size());
+    for (int l = 0; l < m.link_count; ++l)
+      if (m.link_axis[l] == static_cast<Axis>(a)) m.links_by_axis.push_back(l);
+  }
+  m.axis_link_begin[3] = static_cast<int>(m.links_by_axis.size());
   m.voxel_link_begin.assign(nv + 1, 0);
   m.voxel_surface.assign(nv, 0);
   for (int v = 0; v < nv; ++v) {

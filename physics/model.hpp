@@ -91,6 +91,12 @@ struct Model {
   std::vector<int> link_pos;  // positive-end voxel P
   std::vector<Axis> link_axis;
   std::vector<LinkConst> link_const;
+  // Link ids grouped by axis (x, then y, then z; ascending within an axis): the link pass
+  // handles one axis at a time with the §2.2 permutation fixed at compile time. Links are
+  // independent within a pass (each writes only its own state and end loads), so this order
+  // gives the same results as creation order.
+  std::vector<int> links_by_axis;                  // (links)
+  std::array<int, 4> axis_link_begin{0, 0, 0, 0};  // axis a: [begin[a], begin[a+1])
   double rest_length = 0.0;  // L = s for every link [m] (double, as Voxelyze's baseSize)
 
   // ---- voxel -> links CSR, direction order X+, X-, Y+, Y-, Z+, Z- (§2.1) ---------------------

@@ -50,35 +50,25 @@ Scratch make_scratch(const Model& model) {
 namespace {
 
 // ---- §2.2 axis permutation ("as if the link pointed along +X") --------------------------------
-inline Vec3 to_x(Axis a, double x, double y, double z) {
-  switch (a) {
-    case Axis::x:
-      return {x, y, z};
-    case Axis::y:
-      return {y, -x, z};
-    default:
-      return {z, y, -x};
-  }
+// The axis is a template parameter: the link pass runs one axis at a time (Model::links_by_axis),
+// so the permutations are free register moves instead of a data-dependent switch per link end.
+template <Axis A>
+inline Vec3 to_x(double x, double y, double z) {
+  if constexpr (A == Axis::x) return {x, y, z};
+  if constexpr (A == Axis::y) return {y, -x, z};
+  if constexpr (A == Axis::z) return {z, y, -x};
 }
-inline Quat to_x(Axis a, const Quat& q) {
-  switch (a) {
-    case Axis::x:
-      return q;
-    case Axis::y:
-      return {q.w, q.y, -q.x, q.z};
-    default:
-      return {q.w, q.z, q.y, -q.x};
-  }
+template <Axis A>
+inline Quat to_x(const Quat& q) {
+  if constexpr (A == Axis::x) return q;
+  if constexpr (A == Axis::y) return {q.w, q.y, -q.x, q.z};
+  if constexpr (A == Axis::z) return {q.w, q.z, q.y, -q.x};
 }
-inline Vec3 from_x(Axis a, const Vec3& v) {
-  switch (a) {
-    case Axis::x:
-      return v;
-    case Axis::y:
-      return {-v.y(), v.x(), v.z()};
-    default:
-      return {-v.z(), v.y(), v.x()};
-  }
+template <Axis A>
+inline Vec3 from_x(const Vec3& v) {
+  if constexpr (A == Axis::x) return v;
+  if constexpr (A == Axis::y) return {-v.y(), v.x(), v.z()};
+  if constexpr (A == Axis::z) return {-v.z(), v.y(), v.x()};
 }
 
 // §2.3 small-angle hysteresis thresholds (float, as the reference's static float constants).
@@ -101,15 +91,16 @@ struct LinkKinematics {
 
 // §2.3 "orient link": pos2, angle1v, angle2v and the small-angle flag with hysteresis. Reads
 // voxel state and the link's current mode only; the caller stores the result.
-inline void orient_link(const Model& m, const State& st, int i, Axis axis, LinkKinematics& k) {
+template <Axis A>
+inline void orient_link(const Model& m, const State& st, int i, LinkKinematics& k) {
   const int n = m.link_neg[i], p = m.link_pos[i];
   const Vec3& pn = st.pos[n];
   const Vec3& pp = st.pos[p];
-  const Vec3 d0 = to_x(axis, pp.x() - pn.x(), pp.y() - pn.y(), pp.z() - pn.z());
-  const Quat r = conj(to_x(axis, st.orient[n]));  // total rotation so far = conj(q1)
+  const Vec3 d0 = to_x<A>(pp.x() - pn.x(), pp.y() - pn.y(), pp.z() - pn.z());
+  const Quat r = conj(to_x<A>(st.orient[n]));  // total rotation so far = conj(q1)
   const Vec3 d = rotate(r, d0);
   k.q1 = Quat{};
-  k.q2 = mul(r, to_x(axis, st.orient[p]));
+  k.q2 = mul(r, to_x<A>(st.orient[p]));
   const double l = m.rest_length;
   // §2.3 step 3: small-angle test in float with floating-point abs.
   const float turn = static_cast<float>((std::fabs(d.z()) + std::fabs(d.y())) / d.x());
@@ -135,14 +126,18 @@ inline void orient_link(const Model& m, const State& st, int i, Axis axis, LinkK
   k.a2v = rotvec(k.q2);
 }
 
-// Full link pass (§2.3-2.6) for every link in list order. Returns true if any strain > 100.
-bool link_pass_forces(const Model& m, State& st, Scratch& sc) {
+// Full link pass (§2.3-2.6) for the links of axis A. Returns true if any strain > 100.
+template <Axis A>
+bool link_pass_forces_axis(const Model& m, State& st, Scratch& sc) {
   bool diverged = false;
   const float prev_dt = st.previous_dt;
-  for (int i = 0; i < m.link_count; ++i) {
-    const Axis axis = m.link_axis[i];
+  const int* ids = m.links_by_axis.data();
+  const int begin = m.axis_link_begin[static_cast<int>(A)];
+  const int end = m.axis_link_begin[static_cast<int>(A) + 1];
+  for (int j = begin; j < end; ++j) {
+    const int i = ids[j];
     LinkKinematics k;
-    orient_link(m, st, i, axis, k);
+    orient_link<A>(m, st, i, k);
     const Vec3& pos2 = k.pos2;
     const Vec3& a1 = k.a1v;
     const Vec3& a2 = k.a2v;
@@ -204,20 +199,33 @@ bool link_pass_forces(const Model& m, State& st, Scratch& sc) {
     fp = rotate_inv(k.q2, fp);
     mp = rotate_inv(k.q2, mp);
     Scratch::EndLoad* out = &sc.link_end_load[2 * static_cast<std::size_t>(i)];
-    out[0].force = from_x(axis, fn);
-    out[0].moment = from_x(axis, mn);
-    out[1].force = from_x(axis, fp);
-    out[1].moment = from_x(axis, mp);
+    out[0].force = from_x<A>(fn);
+    out[0].moment = from_x<A>(mn);
+    out[1].force = from_x<A>(fp);
+    out[1].moment = from_x<A>(mp);
   }
   return diverged;
 }
 
+// Full link pass (§2.3-2.6) over all links. Returns true if any strain > 100.
+bool link_pass_forces(const Model& m, State& st, Scratch& sc) {
+  const bool dx = link_pass_forces_axis<Axis::x>(m, st, sc);
+  const bool dy = link_pass_forces_axis<Axis::y>(m, st, sc);
+  const bool dz = link_pass_forces_axis<Axis::z>(m, st, sc);
+  return dx || dy || dz;
+}
+
 // Mid-step link pass of the fork (§2.9 item 6): same kinematics and state update, forces
 // discarded (so they are not computed). The local-velocity flag ends up set, as after any update.
-void link_pass_state_only(const Model& m, State& st) {
-  for (int i = 0; i < m.link_count; ++i) {
+template <Axis A>
+void link_pass_state_only_axis(const Model& m, State& st) {
+  const int* ids = m.links_by_axis.data();
+  const int begin = m.axis_link_begin[static_cast<int>(A)];
+  const int end = m.axis_link_begin[static_cast<int>(A) + 1];
+  for (int j = begin; j < end; ++j) {
+    const int i = ids[j];
     LinkKinematics k;
-    orient_link(m, st, i, m.link_axis[i], k);
+    orient_link<A>(m, st, i, k);
     st.link_strain[i] = static_cast<float>(k.pos2.x() / m.rest_length);
     st.link_vel_valid[i] = 1;
     st.link_small_angle[i] = k.small;
@@ -225,6 +233,12 @@ void link_pass_state_only(const Model& m, State& st) {
     st.link_angle1v[i] = k.a1v;
     st.link_angle2v[i] = k.a2v;
   }
+}
+
+void link_pass_state_only(const Model& m, State& st) {
+  link_pass_state_only_axis<Axis::x>(m, st);
+  link_pass_state_only_axis<Axis::y>(m, st);
+  link_pass_state_only_axis<Axis::z>(m, st);
 }
 
 // Sum of the link forces and moments acting on voxel v (local frame), direction order 0..5.
