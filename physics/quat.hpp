@@ -32,22 +32,39 @@ inline Quat conj(const Quat& q) {
   return {q.w, -q.x, -q.y, -q.z};
 }
 
+// The formulas below are written once, generic over the scalar type T (double, or a pair of
+// doubles for the two-link SIMD link pass of step.cpp), so every caller performs exactly the
+// same operations in the same order (bit-identical results, -ffp-contract=off).
+
 // §2.11: Hamilton product a ⊗ b. "Rotate by A then by B" = B ⊗ A.
+template <class T>
+inline void mul_c(T aw, T ax, T ay, T az, T bw, T bx, T by, T bz, T& w, T& x, T& y, T& z) {
+  w = aw * bw - ax * bx - ay * by - az * bz;
+  x = aw * bx + ax * bw + ay * bz - az * by;
+  y = aw * by - ax * bz + ay * bw + az * bx;
+  z = aw * bz + ax * by - ay * bx + az * bw;
+}
 inline Quat mul(const Quat& a, const Quat& b) {
-  return {
-      a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z, a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
-      a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x, a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
+  Quat r;
+  mul_c(a.w, a.x, a.y, a.z, b.w, b.x, b.y, b.z, r.w, r.x, r.y, r.z);
+  return r;
 }
 
 // §2.11: v' = q v q*, expanded: t = (0,v) ⊗ q*, then v' = vector part of q ⊗ t.
+template <class T>
+inline void rotate_c(T qw, T qx, T qy, T qz, T fx, T fy, T fz, T& ox, T& oy, T& oz) {
+  const T tw = fx * qx + fy * qy + fz * qz;
+  const T tx = fx * qw - fy * qz + fz * qy;
+  const T ty = fx * qz + fy * qw - fz * qx;
+  const T tz = -fx * qy + fy * qx + fz * qw;
+  ox = qw * tx + qx * tw + qy * tz - qz * ty;
+  oy = qw * ty - qx * tz + qy * tw + qz * tx;
+  oz = qw * tz + qx * ty - qy * tx + qz * tw;
+}
 inline Vec3 rotate(const Quat& q, const Vec3& f) {
-  const double fx = f.x(), fy = f.y(), fz = f.z();
-  const double tw = fx * q.x + fy * q.y + fz * q.z;
-  const double tx = fx * q.w - fy * q.z + fz * q.y;
-  const double ty = fx * q.z + fy * q.w - fz * q.x;
-  const double tz = -fx * q.y + fy * q.x + fz * q.w;
-  return {q.w * tx + q.x * tw + q.y * tz - q.z * ty, q.w * ty - q.x * tz + q.y * tw + q.z * tx,
-          q.w * tz + q.x * ty - q.y * tx + q.z * tw};
+  Vec3 r;
+  rotate_c(q.w, q.x, q.y, q.z, f.x(), f.y(), f.z(), r.x(), r.y(), r.z());
+  return r;
 }
 
 // §2.11: inverse rotation = rotation by the conjugate.

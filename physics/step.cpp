@@ -6,6 +6,8 @@
 // -ffp-contract=off, so the written operation order is the executed one.
 #include "physics/step.hpp"
 
+#include <emmintrin.h>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -126,119 +128,326 @@ inline void orient_link(const Model& m, const State& st, int i, LinkKinematics& 
   k.a2v = rotvec(k.q2);
 }
 
-// Full link pass (§2.3-2.6) for the links of axis A. Returns true if any strain > 100.
+// Full link update (§2.3-2.6) of link i of axis A, any mode: the reference path. Returns true
+// if its strain > 100.
 template <Axis A>
-bool link_pass_forces_axis(const Model& m, State& st, Scratch& sc) {
+bool link_scalar(const Model& m, State& st, Scratch& sc, int i, float prev_dt) {
+  LinkKinematics k;
+  orient_link<A>(m, st, i, k);
+  const Vec3& pos2 = k.pos2;
+  const Vec3& a1 = k.a1v;
+  const Vec3& a2 = k.a2v;
+  const LinkConst& c = m.link_const[i];
+
+  // §2.4: strain = pos2.x / L (float), sigma = E_L strain (linear material, float)
+  const float strain = static_cast<float>(pos2.x() / m.rest_length);
+  const bool diverged = strain > kStrainDiverged;
+  const float stress = c.e_area * strain;
+  const float b1 = c.b1, b2 = c.b2, b3 = c.b3, a2c = c.a2;
+  // §2.4 F_N = (sigma A, b1 y - b2 (t1z + t2z), b1 z + b2 (t1y + t2y)), F_P = -F_N
+  Vec3 fn(static_cast<double>(stress * c.area), b1 * pos2.y() - b2 * (a1.z() + a2.z()),
+          b1 * pos2.z() + b2 * (a1.y() + a2.y()));
+  Vec3 fp(-fn.x(), -fn.y(), -fn.z());
+  Vec3 mn(a2c * (a2.x() - a1.x()), -b2 * pos2.z() - b3 * (2 * a1.y() + a2.y()),
+          b2 * pos2.y() - b3 * (2 * a1.z() + a2.z()));
+  Vec3 mp(a2c * (a1.x() - a2.x()), -b2 * pos2.z() - b3 * (a1.y() + 2 * a2.y()),
+          b2 * pos2.y() - b3 * (a1.z() + 2 * a2.z()));
+
+  // §2.5 internal damping from the change since the previous link update; skipped (and the
+  // flag set) after a mode switch or at the first update
+  if (st.link_vel_valid[i] && !k.switched) {
+    const Vec3& old_pos2 = st.link_pos2[i];
+    const Vec3& old_a1 = st.link_angle1v[i];
+    const Vec3& old_a2 = st.link_angle2v[i];
+    const double dpx = 0.5 * (pos2.x() - old_pos2.x()), dpy = 0.5 * (pos2.y() - old_pos2.y()),
+                 dpz = 0.5 * (pos2.z() - old_pos2.z());
+    const double d1x = 0.5 * (a1.x() - old_a1.x()), d1y = 0.5 * (a1.y() - old_a1.y()),
+                 d1z = 0.5 * (a1.z() - old_a1.z());
+    const double d2x = 0.5 * (a2.x() - old_a2.x()), d2y = 0.5 * (a2.y() - old_a2.y()),
+                 d2z = 0.5 * (a2.z() - old_a2.z());
+    const float sq_a1 = c.sq_a1, sq_a2 = c.sq_a2xip, sq_b1 = c.sq_b1, sq_b2 = c.sq_b2xfmp,
+                sq_b3 = c.sq_b3xip;
+    const double vx = sq_a1 * dpx, vy = sq_b1 * dpy - sq_b2 * (d1z + d2z),
+                 vz = sq_b1 * dpz + sq_b2 * (d1y + d2y);
+    // c_V = 2 sqrt(m_V) zeta_int / previousDt_V (float)
+    const float cn = m.voxel_const[m.link_neg[i]].damp_base / prev_dt;
+    const float cp = m.voxel_const[m.link_pos[i]].damp_base / prev_dt;
+    fn += Vec3(cn * vx, cn * vy, cn * vz);
+    fp -= Vec3(cp * vx, cp * vy, cp * vz);
+    const double hn = 0.5 * cn, hp = 0.5 * cp;
+    mn -= Vec3(hn * (-sq_a2 * (d2x - d1x)), hn * (sq_b2 * dpz + sq_b3 * (2 * d1y + d2y)),
+               hn * (-sq_b2 * dpy + sq_b3 * (2 * d1z + d2z)));
+    mp -= Vec3(hp * (sq_a2 * (d2x - d1x)), hp * (sq_b2 * dpz + sq_b3 * (d1y + 2 * d2y)),
+               hp * (-sq_b2 * dpy + sq_b3 * (d1z + 2 * d2z)));
+  }
+  st.link_vel_valid[i] = 1;
+  st.link_small_angle[i] = k.small;
+  st.link_strain[i] = strain;
+  st.link_pos2[i] = pos2;
+  st.link_angle1v[i] = a1;
+  st.link_angle2v[i] = a2;
+
+  // §2.6 back to the end voxels' local frames
+  if (!k.small) {
+    fn = rotate_inv(k.q1, fn);
+    mn = rotate_inv(k.q1, mn);
+  }
+  fp = rotate_inv(k.q2, fp);
+  mp = rotate_inv(k.q2, mp);
+  Scratch::EndLoad* out = &sc.link_end_load[2 * static_cast<std::size_t>(i)];
+  out[0].force = from_x<A>(fn);
+  out[0].moment = from_x<A>(mn);
+  out[1].force = from_x<A>(fp);
+  out[1].moment = from_x<A>(mp);
+  return diverged;
+}
+
+// Mid-step link update of the fork (§2.9 item 6): same kinematics and state update, forces
+// discarded (so they are not computed). The local-velocity flag ends up set, as after any update.
+template <Axis A>
+void link_scalar_state_only(const Model& m, State& st, int i) {
+  LinkKinematics k;
+  orient_link<A>(m, st, i, k);
+  st.link_strain[i] = static_cast<float>(k.pos2.x() / m.rest_length);
+  st.link_vel_valid[i] = 1;
+  st.link_small_angle[i] = k.small;
+  st.link_pos2[i] = k.pos2;
+  st.link_angle1v[i] = k.a1v;
+  st.link_angle2v[i] = k.a2v;
+}
+
+// ---- two links at a time (SSE2) ----------------------------------------------------------------
+// Links in small-angle mode (the common case) go through the link pass in pairs, one link per
+// lane of a 2 x double SSE2 vector. Every lane performs exactly the scalar path's IEEE
+// operations in the same order (the quaternion formulas are the shared templates of quat.hpp;
+// float roundings are a float conversion of the same double; float x float products and
+// float / float quotients are formed in double and rounded to float, which gives the float
+// result exactly since 53 >= 2 x 24 + 2), so results are bit-identical to link_scalar. Lanes that
+// need the large-angle path (§2.3) send the pair through link_scalar.
+using D2 = double __attribute__((vector_size(16)));
+using M2 = long long __attribute__((vector_size(16)));  // comparison result: all ones = true
+
+inline D2 splat(double x) {
+  return D2{x, x};
+}
+inline D2 round_to_float(D2 x) {
+  return _mm_cvtps_pd(_mm_cvtpd_ps(x));
+}
+inline D2 abs2(D2 x) {
+  return _mm_andnot_pd(_mm_set1_pd(-0.0), x);
+}
+inline D2 select(M2 mask, D2 a, D2 b) {  // mask ? a : b, bitwise
+  const __m128d mk = reinterpret_cast<__m128d>(mask);
+  return _mm_or_pd(_mm_and_pd(mk, a), _mm_andnot_pd(mk, b));
+}
+inline int lanes(M2 mask) {  // bit k = lane k true
+  return _mm_movemask_pd(reinterpret_cast<__m128d>(mask));
+}
+
+struct V2 {  // two Vec3
+  D2 x, y, z;
+};
+struct Q2 {  // two Quat
+  D2 w, x, y, z;
+};
+inline V2 load2(const Vec3& a, const Vec3& b) {
+  return {D2{a.x(), b.x()}, D2{a.y(), b.y()}, D2{a.z(), b.z()}};
+}
+inline void store2(const V2& v, Vec3& a, Vec3& b) {
+  a = Vec3(v.x[0], v.y[0], v.z[0]);
+  b = Vec3(v.x[1], v.y[1], v.z[1]);
+}
+inline Q2 load2(const Quat& a, const Quat& b) {
+  return {D2{a.w, b.w}, D2{a.x, b.x}, D2{a.y, b.y}, D2{a.z, b.z}};
+}
+// §2.2 permutations on lane pairs (same signs and order as the scalar to_x / from_x)
+template <Axis A>
+inline V2 to_x2(D2 x, D2 y, D2 z) {
+  if constexpr (A == Axis::x) return {x, y, z};
+  if constexpr (A == Axis::y) return {y, -x, z};
+  if constexpr (A == Axis::z) return {z, y, -x};
+}
+template <Axis A>
+inline Q2 to_x2(const Q2& q) {
+  if constexpr (A == Axis::x) return q;
+  if constexpr (A == Axis::y) return {q.w, q.y, -q.x, q.z};
+  if constexpr (A == Axis::z) return {q.w, q.z, q.y, -q.x};
+}
+template <Axis A>
+inline V2 from_x2(const V2& v) {
+  if constexpr (A == Axis::x) return v;
+  if constexpr (A == Axis::y) return {-v.y, v.x, v.z};
+  if constexpr (A == Axis::z) return {-v.z, v.y, v.x};
+}
+inline D2 float_pair(float a, float b) {
+  return D2{static_cast<double>(a), static_cast<double>(b)};
+}
+
+// Links i0, i1 of axis A, both ending in small-angle mode. Returns false (and changes nothing)
+// if a lane needs the large-angle path; otherwise updates both links like link_scalar (or
+// link_scalar_state_only if !kForces) and ORs their strain > 100 into `diverged`.
+template <Axis A, bool kForces>
+inline bool link_pair(const Model& m, State& st, Scratch& sc, int i0, int i1, float prev_dt,
+                      bool& diverged) {
+  const int n0 = m.link_neg[i0], p0 = m.link_pos[i0], n1 = m.link_neg[i1], p1 = m.link_pos[i1];
+  // §2.3 orient link (see orient_link)
+  const V2 pn = load2(st.pos[n0], st.pos[n1]);
+  const V2 pp = load2(st.pos[p0], st.pos[p1]);
+  const V2 d0 = to_x2<A>(pp.x - pn.x, pp.y - pn.y, pp.z - pn.z);
+  const Q2 qn = to_x2<A>(load2(st.orient[n0], st.orient[n1]));
+  const Q2 r{qn.w, -qn.x, -qn.y, -qn.z};  // conj
+  V2 d;
+  rotate_c(r.w, r.x, r.y, r.z, d0.x, d0.y, d0.z, d.x, d.y, d.z);
+  const Q2 qp = to_x2<A>(load2(st.orient[p0], st.orient[p1]));
+  Q2 q2;
+  mul_c(r.w, r.x, r.y, r.z, qp.w, qp.x, qp.y, qp.z, q2.w, q2.x, q2.y, q2.z);
+  const D2 l = splat(m.rest_length);
+  const D2 turn = round_to_float((abs2(d.z) + abs2(d.y)) / d.x);
+  const D2 ext = round_to_float(abs2(1.0 - d.x / l));
+  const int enter = lanes((turn < splat(kSmallBend)) & (ext < splat(kSmallExt)));
+  const int leave =
+      lanes((turn > splat(kHysteresis * kSmallBend)) | (ext > splat(kHysteresis * kSmallExt)));
+  const int was = (st.link_small_angle[i0] != 0 ? 1 : 0) | (st.link_small_angle[i1] != 0 ? 2 : 0);
+  const int small = (was & ~leave) | (~was & enter);
+  if ((small & 3) != 3) return false;
+  const int switched = ~was & 3;  // entered small-angle mode on this update
+
+  const V2 pos2{d.x - l, d.y, d.z};
+  const D2 zero = splat(0.0);
+  const V2 a1{zero, zero, zero};  // rotvec(identity)
+  // a2 = rotvec(q2) (§2.11), branches as lane masks; the acos branch is done per lane
+  V2 a2;
+  {
+    const M2 unit = (q2.w >= 1.0) | (q2.w <= -1.0);
+    const D2 t = 1.0 - q2.w * q2.w;
+    const D2 k = _mm_sqrt_pd((2.0 - 2.0 * q2.w) / t);
+    a2 = {select(unit, zero, q2.x * 2.0 * k), select(unit, zero, q2.y * 2.0 * k),
+          select(unit, zero, q2.z * 2.0 * k)};
+    const int wide = ~lanes(unit) & ~lanes(t < 2.4e-3) & 3;
+    for (int lane = 0; lane < 2; ++lane) {
+      if (!(wide >> lane & 1)) continue;
+      const Vec3 v = rotvec(Quat{q2.w[lane], q2.x[lane], q2.y[lane], q2.z[lane]});
+      a2.x[lane] = v.x();
+      a2.y[lane] = v.y();
+      a2.z[lane] = v.z();
+    }
+  }
+  const D2 strain = round_to_float(pos2.x / l);
+
+  if constexpr (kForces) {
+    const LinkConst& c0 = m.link_const[i0];
+    const LinkConst& c1 = m.link_const[i1];
+    if (lanes(strain > splat(kStrainDiverged))) diverged = true;
+    // §2.4 (see link_scalar)
+    const D2 stress = round_to_float(float_pair(c0.e_area, c1.e_area) * strain);
+    const D2 b1 = float_pair(c0.b1, c1.b1), b2 = float_pair(c0.b2, c1.b2),
+             b3 = float_pair(c0.b3, c1.b3), a2c = float_pair(c0.a2, c1.a2);
+    V2 fn{round_to_float(stress * float_pair(c0.area, c1.area)), b1 * pos2.y - b2 * (a1.z + a2.z),
+          b1 * pos2.z + b2 * (a1.y + a2.y)};
+    V2 fp{-fn.x, -fn.y, -fn.z};
+    V2 mn{a2c * (a2.x - a1.x), -b2 * pos2.z - b3 * (2.0 * a1.y + a2.y),
+          b2 * pos2.y - b3 * (2.0 * a1.z + a2.z)};
+    V2 mp{a2c * (a1.x - a2.x), -b2 * pos2.z - b3 * (a1.y + 2.0 * a2.y),
+          b2 * pos2.y - b3 * (a1.z + 2.0 * a2.z)};
+
+    // §2.5 damping in the lanes with a valid local velocity that did not switch mode
+    const int damp =
+        ((st.link_vel_valid[i0] != 0 ? 1 : 0) | (st.link_vel_valid[i1] != 0 ? 2 : 0)) & ~switched;
+    if (damp) {
+      const M2 on = M2{(damp & 1) ? -1LL : 0LL, (damp & 2) ? -1LL : 0LL};
+      const V2 old_pos2 = load2(st.link_pos2[i0], st.link_pos2[i1]);
+      const V2 old_a1 = load2(st.link_angle1v[i0], st.link_angle1v[i1]);
+      const V2 old_a2 = load2(st.link_angle2v[i0], st.link_angle2v[i1]);
+      const D2 dpx = 0.5 * (pos2.x - old_pos2.x), dpy = 0.5 * (pos2.y - old_pos2.y),
+               dpz = 0.5 * (pos2.z - old_pos2.z);
+      const D2 d1x = 0.5 * (a1.x - old_a1.x), d1y = 0.5 * (a1.y - old_a1.y),
+               d1z = 0.5 * (a1.z - old_a1.z);
+      const D2 d2x = 0.5 * (a2.x - old_a2.x), d2y = 0.5 * (a2.y - old_a2.y),
+               d2z = 0.5 * (a2.z - old_a2.z);
+      const D2 sq_a1 = float_pair(c0.sq_a1, c1.sq_a1), sq_a2 = float_pair(c0.sq_a2xip, c1.sq_a2xip),
+               sq_b1 = float_pair(c0.sq_b1, c1.sq_b1),
+               sq_b2 = float_pair(c0.sq_b2xfmp, c1.sq_b2xfmp),
+               sq_b3 = float_pair(c0.sq_b3xip, c1.sq_b3xip);
+      const D2 vx = sq_a1 * dpx, vy = sq_b1 * dpy - sq_b2 * (d1z + d2z),
+               vz = sq_b1 * dpz + sq_b2 * (d1y + d2y);
+      const D2 cn =
+          float_pair(m.voxel_const[n0].damp_base / prev_dt, m.voxel_const[n1].damp_base / prev_dt);
+      const D2 cp =
+          float_pair(m.voxel_const[p0].damp_base / prev_dt, m.voxel_const[p1].damp_base / prev_dt);
+      const D2 hn = 0.5 * cn, hp = 0.5 * cp;
+      fn = {select(on, fn.x + cn * vx, fn.x), select(on, fn.y + cn * vy, fn.y),
+            select(on, fn.z + cn * vz, fn.z)};
+      fp = {select(on, fp.x - cp * vx, fp.x), select(on, fp.y - cp * vy, fp.y),
+            select(on, fp.z - cp * vz, fp.z)};
+      mn = {select(on, mn.x - hn * (-sq_a2 * (d2x - d1x)), mn.x),
+            select(on, mn.y - hn * (sq_b2 * dpz + sq_b3 * (2.0 * d1y + d2y)), mn.y),
+            select(on, mn.z - hn * (-sq_b2 * dpy + sq_b3 * (2.0 * d1z + d2z)), mn.z)};
+      mp = {select(on, mp.x - hp * (sq_a2 * (d2x - d1x)), mp.x),
+            select(on, mp.y - hp * (sq_b2 * dpz + sq_b3 * (d1y + 2.0 * d2y)), mp.y),
+            select(on, mp.z - hp * (-sq_b2 * dpy + sq_b3 * (d1z + 2.0 * d2z)), mp.z)};
+    }
+    // §2.6: small-angle mode, so F_N and M_N are already in N's frame; F_P, M_P rotate by q2*
+    V2 fpl, mpl;
+    rotate_c(q2.w, -q2.x, -q2.y, -q2.z, fp.x, fp.y, fp.z, fpl.x, fpl.y, fpl.z);
+    rotate_c(q2.w, -q2.x, -q2.y, -q2.z, mp.x, mp.y, mp.z, mpl.x, mpl.y, mpl.z);
+    Scratch::EndLoad* out0 = &sc.link_end_load[2 * static_cast<std::size_t>(i0)];
+    Scratch::EndLoad* out1 = &sc.link_end_load[2 * static_cast<std::size_t>(i1)];
+    store2(from_x2<A>(fn), out0[0].force, out1[0].force);
+    store2(from_x2<A>(mn), out0[0].moment, out1[0].moment);
+    store2(from_x2<A>(fpl), out0[1].force, out1[1].force);
+    store2(from_x2<A>(mpl), out0[1].moment, out1[1].moment);
+  }
+  st.link_vel_valid[i0] = st.link_vel_valid[i1] = 1;
+  st.link_small_angle[i0] = st.link_small_angle[i1] = 1;
+  st.link_strain[i0] = static_cast<float>(strain[0]);
+  st.link_strain[i1] = static_cast<float>(strain[1]);
+  store2(pos2, st.link_pos2[i0], st.link_pos2[i1]);
+  store2(a1, st.link_angle1v[i0], st.link_angle1v[i1]);
+  store2(a2, st.link_angle2v[i0], st.link_angle2v[i1]);
+  return true;
+}
+
+// Link pass (§2.3-2.6) over the links of axis A, in pairs where possible. With kForces the end
+// loads are computed and the return value is true if any strain > 100; without, the state-only
+// mid-step pass of the fork (§2.9 item 6).
+template <Axis A, bool kForces>
+bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
   bool diverged = false;
   const float prev_dt = st.previous_dt;
   const int* ids = m.links_by_axis.data();
   const int begin = m.axis_link_begin[static_cast<int>(A)];
   const int end = m.axis_link_begin[static_cast<int>(A) + 1];
-  for (int j = begin; j < end; ++j) {
-    const int i = ids[j];
-    LinkKinematics k;
-    orient_link<A>(m, st, i, k);
-    const Vec3& pos2 = k.pos2;
-    const Vec3& a1 = k.a1v;
-    const Vec3& a2 = k.a2v;
-    const LinkConst& c = m.link_const[i];
-
-    // §2.4: strain = pos2.x / L (float), sigma = E_L strain (linear material, float)
-    const float strain = static_cast<float>(pos2.x() / m.rest_length);
-    if (strain > kStrainDiverged) diverged = true;
-    const float stress = c.e_area * strain;
-    const float b1 = c.b1, b2 = c.b2, b3 = c.b3, a2c = c.a2;
-    // §2.4 F_N = (sigma A, b1 y - b2 (t1z + t2z), b1 z + b2 (t1y + t2y)), F_P = -F_N
-    Vec3 fn(static_cast<double>(stress * c.area), b1 * pos2.y() - b2 * (a1.z() + a2.z()),
-            b1 * pos2.z() + b2 * (a1.y() + a2.y()));
-    Vec3 fp(-fn.x(), -fn.y(), -fn.z());
-    Vec3 mn(a2c * (a2.x() - a1.x()), -b2 * pos2.z() - b3 * (2 * a1.y() + a2.y()),
-            b2 * pos2.y() - b3 * (2 * a1.z() + a2.z()));
-    Vec3 mp(a2c * (a1.x() - a2.x()), -b2 * pos2.z() - b3 * (a1.y() + 2 * a2.y()),
-            b2 * pos2.y() - b3 * (a1.z() + 2 * a2.z()));
-
-    // §2.5 internal damping from the change since the previous link update; skipped (and the
-    // flag set) after a mode switch or at the first update
-    if (st.link_vel_valid[i] && !k.switched) {
-      const Vec3& old_pos2 = st.link_pos2[i];
-      const Vec3& old_a1 = st.link_angle1v[i];
-      const Vec3& old_a2 = st.link_angle2v[i];
-      const double dpx = 0.5 * (pos2.x() - old_pos2.x()), dpy = 0.5 * (pos2.y() - old_pos2.y()),
-                   dpz = 0.5 * (pos2.z() - old_pos2.z());
-      const double d1x = 0.5 * (a1.x() - old_a1.x()), d1y = 0.5 * (a1.y() - old_a1.y()),
-                   d1z = 0.5 * (a1.z() - old_a1.z());
-      const double d2x = 0.5 * (a2.x() - old_a2.x()), d2y = 0.5 * (a2.y() - old_a2.y()),
-                   d2z = 0.5 * (a2.z() - old_a2.z());
-      const float sq_a1 = c.sq_a1, sq_a2 = c.sq_a2xip, sq_b1 = c.sq_b1, sq_b2 = c.sq_b2xfmp,
-                  sq_b3 = c.sq_b3xip;
-      const double vx = sq_a1 * dpx, vy = sq_b1 * dpy - sq_b2 * (d1z + d2z),
-                   vz = sq_b1 * dpz + sq_b2 * (d1y + d2y);
-      // c_V = 2 sqrt(m_V) zeta_int / previousDt_V (float)
-      const float cn = m.voxel_const[m.link_neg[i]].damp_base / prev_dt;
-      const float cp = m.voxel_const[m.link_pos[i]].damp_base / prev_dt;
-      fn += Vec3(cn * vx, cn * vy, cn * vz);
-      fp -= Vec3(cp * vx, cp * vy, cp * vz);
-      const double hn = 0.5 * cn, hp = 0.5 * cp;
-      mn -= Vec3(hn * (-sq_a2 * (d2x - d1x)), hn * (sq_b2 * dpz + sq_b3 * (2 * d1y + d2y)),
-                 hn * (-sq_b2 * dpy + sq_b3 * (2 * d1z + d2z)));
-      mp -= Vec3(hp * (sq_a2 * (d2x - d1x)), hp * (sq_b2 * dpz + sq_b3 * (d1y + 2 * d2y)),
-                 hp * (-sq_b2 * dpy + sq_b3 * (d1z + 2 * d2z)));
+  auto one = [&](int i) {
+    if constexpr (kForces) {
+      if (link_scalar<A>(m, st, sc, i, prev_dt)) diverged = true;
+    } else {
+      link_scalar_state_only<A>(m, st, i);
     }
-    st.link_vel_valid[i] = 1;
-    st.link_small_angle[i] = k.small;
-    st.link_strain[i] = strain;
-    st.link_pos2[i] = pos2;
-    st.link_angle1v[i] = a1;
-    st.link_angle2v[i] = a2;
-
-    // §2.6 back to the end voxels' local frames
-    if (!k.small) {
-      fn = rotate_inv(k.q1, fn);
-      mn = rotate_inv(k.q1, mn);
+  };
+  int j = begin;
+  for (; j + 1 < end; j += 2) {
+    if (!link_pair<A, kForces>(m, st, sc, ids[j], ids[j + 1], prev_dt, diverged)) {
+      one(ids[j]);
+      one(ids[j + 1]);
     }
-    fp = rotate_inv(k.q2, fp);
-    mp = rotate_inv(k.q2, mp);
-    Scratch::EndLoad* out = &sc.link_end_load[2 * static_cast<std::size_t>(i)];
-    out[0].force = from_x<A>(fn);
-    out[0].moment = from_x<A>(mn);
-    out[1].force = from_x<A>(fp);
-    out[1].moment = from_x<A>(mp);
   }
+  if (j < end) one(ids[j]);
   return diverged;
 }
 
 // Full link pass (§2.3-2.6) over all links. Returns true if any strain > 100.
 bool link_pass_forces(const Model& m, State& st, Scratch& sc) {
-  const bool dx = link_pass_forces_axis<Axis::x>(m, st, sc);
-  const bool dy = link_pass_forces_axis<Axis::y>(m, st, sc);
-  const bool dz = link_pass_forces_axis<Axis::z>(m, st, sc);
+  const bool dx = link_pass_axis<Axis::x, true>(m, st, sc);
+  const bool dy = link_pass_axis<Axis::y, true>(m, st, sc);
+  const bool dz = link_pass_axis<Axis::z, true>(m, st, sc);
   return dx || dy || dz;
 }
 
-// Mid-step link pass of the fork (§2.9 item 6): same kinematics and state update, forces
-// discarded (so they are not computed). The local-velocity flag ends up set, as after any update.
-template <Axis A>
-void link_pass_state_only_axis(const Model& m, State& st) {
-  const int* ids = m.links_by_axis.data();
-  const int begin = m.axis_link_begin[static_cast<int>(A)];
-  const int end = m.axis_link_begin[static_cast<int>(A) + 1];
-  for (int j = begin; j < end; ++j) {
-    const int i = ids[j];
-    LinkKinematics k;
-    orient_link<A>(m, st, i, k);
-    st.link_strain[i] = static_cast<float>(k.pos2.x() / m.rest_length);
-    st.link_vel_valid[i] = 1;
-    st.link_small_angle[i] = k.small;
-    st.link_pos2[i] = k.pos2;
-    st.link_angle1v[i] = k.a1v;
-    st.link_angle2v[i] = k.a2v;
-  }
-}
-
-void link_pass_state_only(const Model& m, State& st) {
-  link_pass_state_only_axis<Axis::x>(m, st);
-  link_pass_state_only_axis<Axis::y>(m, st);
-  link_pass_state_only_axis<Axis::z>(m, st);
+// Mid-step link pass of the fork (§2.9 item 6), state only.
+void link_pass_state_only(const Model& m, State& st, Scratch& sc) {
+  link_pass_axis<Axis::x, false>(m, st, sc);
+  link_pass_axis<Axis::y, false>(m, st, sc);
+  link_pass_axis<Axis::z, false>(m, st, sc);
 }
 
 // Sum of the link forces and moments acting on voxel v (local frame), direction order 0..5.
@@ -479,7 +688,7 @@ bool fork_voxel_passes(const Model& m, State& st, Scratch& sc, std::span<const V
   }
 
   // 6. mid-step link update (state only)
-  link_pass_state_only(m, st);
+  link_pass_state_only(m, st, sc);
 
   // 7. correction moment -dL / dt / N_all (float), same for every non-fixed voxel
   const Vec3 dl = lb - la;
