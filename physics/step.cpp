@@ -31,6 +31,7 @@ Scratch make_scratch(const Model& model) {
   Scratch sc;
   const std::size_t nl = model.link_count, nv = model.voxel_count;
   sc.link_end_load.assign(2 * nl, Scratch::EndLoad{Vec3::Zero(), Vec3::Zero()});
+  sc.link_damping.assign(nv, 0.0f);
   sc.collision_force.assign(nv, Vec3::Zero());
   sc.part2_force.assign(nv, Vec3::Zero());
   sc.fric.assign(nv, Vec3::Zero());
@@ -131,7 +132,7 @@ inline void orient_link(const Model& m, const State& st, int i, LinkKinematics& 
 // Full link update (§2.3-2.6) of link i of axis A, any mode: the reference path. Returns true
 // if its strain > 100.
 template <Axis A>
-bool link_scalar(const Model& m, State& st, Scratch& sc, int i, float prev_dt) {
+bool link_scalar(const Model& m, State& st, Scratch& sc, int i) {
   LinkKinematics k;
   orient_link<A>(m, st, i, k);
   const Vec3& pos2 = k.pos2;
@@ -170,8 +171,8 @@ bool link_scalar(const Model& m, State& st, Scratch& sc, int i, float prev_dt) {
     const double vx = sq_a1 * dpx, vy = sq_b1 * dpy - sq_b2 * (d1z + d2z),
                  vz = sq_b1 * dpz + sq_b2 * (d1y + d2y);
     // c_V = 2 sqrt(m_V) zeta_int / previousDt_V (float)
-    const float cn = m.voxel_const[m.link_neg[i]].damp_base / prev_dt;
-    const float cp = m.voxel_const[m.link_pos[i]].damp_base / prev_dt;
+    const float cn = sc.link_damping[m.link_neg[i]];
+    const float cp = sc.link_damping[m.link_pos[i]];
     fn += Vec3(cn * vx, cn * vy, cn * vz);
     fp -= Vec3(cp * vx, cp * vy, cp * vz);
     const double hn = 0.5 * cn, hp = 0.5 * cp;
@@ -253,7 +254,7 @@ struct Q2 {  // two Quat
 inline V2 load2(const Vec3& a, const Vec3& b) {
   return {D2{a.x(), b.x()}, D2{a.y(), b.y()}, D2{a.z(), b.z()}};
 }
-inline void store2(const V2& v, Vec3& a, Vec3& b) {
+inline void store2(const V2& v, Vec3& a, Vec3& b) {  // lane 0 -> a, lane 1 -> b
   a = Vec3(v.x[0], v.y[0], v.z[0]);
   b = Vec3(v.x[1], v.y[1], v.z[1]);
 }
@@ -287,8 +288,7 @@ inline D2 float_pair(float a, float b) {
 // if a lane needs the large-angle path; otherwise updates both links like link_scalar (or
 // link_scalar_state_only if !kForces) and ORs their strain > 100 into `diverged`.
 template <Axis A, bool kForces>
-inline bool link_pair(const Model& m, State& st, Scratch& sc, int i0, int i1, float prev_dt,
-                      bool& diverged) {
+inline bool link_pair(const Model& m, State& st, Scratch& sc, int i0, int i1, bool& diverged) {
   const int n0 = m.link_neg[i0], p0 = m.link_pos[i0], n1 = m.link_neg[i1], p1 = m.link_pos[i1];
   // §2.3 orient link (see orient_link)
   const V2 pn = load2(st.pos[n0], st.pos[n1]);
@@ -370,10 +370,8 @@ inline bool link_pair(const Model& m, State& st, Scratch& sc, int i0, int i1, fl
                sq_b3 = float_pair(c0.sq_b3xip, c1.sq_b3xip);
       const D2 vx = sq_a1 * dpx, vy = sq_b1 * dpy - sq_b2 * (d1z + d2z),
                vz = sq_b1 * dpz + sq_b2 * (d1y + d2y);
-      const D2 cn =
-          float_pair(m.voxel_const[n0].damp_base / prev_dt, m.voxel_const[n1].damp_base / prev_dt);
-      const D2 cp =
-          float_pair(m.voxel_const[p0].damp_base / prev_dt, m.voxel_const[p1].damp_base / prev_dt);
+      const D2 cn = float_pair(sc.link_damping[n0], sc.link_damping[n1]);
+      const D2 cp = float_pair(sc.link_damping[p0], sc.link_damping[p1]);
       const D2 hn = 0.5 * cn, hp = 0.5 * cp;
       fn = {select(on, fn.x + cn * vx, fn.x), select(on, fn.y + cn * vy, fn.y),
             select(on, fn.z + cn * vz, fn.z)};
@@ -413,20 +411,19 @@ inline bool link_pair(const Model& m, State& st, Scratch& sc, int i0, int i1, fl
 template <Axis A, bool kForces>
 bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
   bool diverged = false;
-  const float prev_dt = st.previous_dt;
   const int* ids = m.links_by_axis.data();
   const int begin = m.axis_link_begin[static_cast<int>(A)];
   const int end = m.axis_link_begin[static_cast<int>(A) + 1];
   auto one = [&](int i) {
     if constexpr (kForces) {
-      if (link_scalar<A>(m, st, sc, i, prev_dt)) diverged = true;
+      if (link_scalar<A>(m, st, sc, i)) diverged = true;
     } else {
       link_scalar_state_only<A>(m, st, i);
     }
   };
   int j = begin;
   for (; j + 1 < end; j += 2) {
-    if (!link_pair<A, kForces>(m, st, sc, ids[j], ids[j + 1], prev_dt, diverged)) {
+    if (!link_pair<A, kForces>(m, st, sc, ids[j], ids[j + 1], diverged)) {
       one(ids[j]);
       one(ids[j + 1]);
     }
@@ -435,8 +432,13 @@ bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
   return diverged;
 }
 
-// Full link pass (§2.3-2.6) over all links. Returns true if any strain > 100.
-bool link_pass_forces(const Model& m, State& st, Scratch& sc) {
+// Full link pass (§2.3-2.6) over all links. Returns true if any strain > 100. (The passes are
+// kept out of line, once per step, so that profiles attribute their cost.)
+[[gnu::noinline]] bool link_pass_forces(const Model& m, State& st, Scratch& sc) {
+  // c_V = 2 sqrt(m_V) zeta_int / previousDt_V (float, §2.5); only read by links with a valid
+  // local velocity, i.e. after a step has set previous_dt
+  const float prev_dt = st.previous_dt;
+  for (int v = 0; v < m.voxel_count; ++v) sc.link_damping[v] = m.voxel_const[v].damp_base / prev_dt;
   const bool dx = link_pass_axis<Axis::x, true>(m, st, sc);
   const bool dy = link_pass_axis<Axis::y, true>(m, st, sc);
   const bool dz = link_pass_axis<Axis::z, true>(m, st, sc);
@@ -444,7 +446,7 @@ bool link_pass_forces(const Model& m, State& st, Scratch& sc) {
 }
 
 // Mid-step link pass of the fork (§2.9 item 6), state only.
-void link_pass_state_only(const Model& m, State& st, Scratch& sc) {
+[[gnu::noinline]] void link_pass_state_only(const Model& m, State& st, Scratch& sc) {
   link_pass_axis<Axis::x, false>(m, st, sc);
   link_pass_axis<Axis::y, false>(m, st, sc);
   link_pass_axis<Axis::z, false>(m, st, sc);
@@ -551,7 +553,7 @@ void rebuild_pairs(const Model& m, State& st, Scratch& sc) {
 }
 
 // §2.10: staleness check, rebuild if stale, pair forces -> collision_force (collisionF of §2.7).
-void update_collisions(const Model& m, State& st, Scratch& sc) {
+[[gnu::noinline]] void update_collisions(const Model& m, State& st, Scratch& sc) {
   if (!st.collisions_stale) {
     const float rd = static_cast<float>(m.collision_recalc_distance);
     const float rd_sq = rd * rd;
@@ -628,7 +630,8 @@ inline Vec3 floor_force(const VoxelConst& c, const Vec3& pos, const Vec3& vel, c
 }
 
 // §2.12 steps 3-9 (after the link pass and the collisions): the fork's two-part step.
-bool fork_voxel_passes(const Model& m, State& st, Scratch& sc, std::span<const Vec3> ext) {
+[[gnu::noinline]] bool fork_voxel_passes(const Model& m, State& st, Scratch& sc,
+                                         std::span<const Vec3> ext) {
   const float dt = m.dt_f;
   const int nv = m.voxel_count;
   // 4. CoG = mean position of the non-fixed voxels
@@ -749,7 +752,8 @@ bool fork_voxel_passes(const Model& m, State& st, Scratch& sc, std::span<const V
 }
 
 // §2.9 upstream single-pass symplectic Euler with the same forces.
-bool symplectic_voxel_pass(const Model& m, State& st, Scratch& sc, std::span<const Vec3> ext) {
+[[gnu::noinline]] bool symplectic_voxel_pass(const Model& m, State& st, Scratch& sc,
+                                             std::span<const Vec3> ext) {
   const float dt = m.dt_f;
   const int nv = m.voxel_count;
   st.previous_dt = dt;

@@ -36,6 +36,9 @@ struct Scratch {
     Vec3 moment;  // [N m]
   };
   std::vector<EndLoad> link_end_load;  // (2 x links)
+  // §2.5 link damping multiplier c_V = damp_base_V / previous_dt (float) per voxel, refreshed at
+  // the start of each force link pass (one division per voxel instead of two per link)
+  std::vector<float> link_damping;  // [sqrt(kg)/s] (voxels)
   // voxel pass (pneuvox part 1 -> part 2 carry-over, §2.1 "fork-only per-voxel scratch")
   std::vector<Vec3> collision_force;             // collisionF [N] (voxels)
   std::vector<Vec3> part2_force;                 // gravityF + collisionF + fric [N] (voxels)
