@@ -261,6 +261,27 @@ inline void store2(const V2& v, Vec3& a, Vec3& b) {  // lane 0 -> a, lane 1 -> b
 inline Q2 load2(const Quat& a, const Quat& b) {
   return {D2{a.w, b.w}, D2{a.x, b.x}, D2{a.y, b.y}, D2{a.z, b.z}};
 }
+inline void store2(const Q2& q, Quat& a, Quat& b) {
+  a = Quat{q.w[0], q.x[0], q.y[0], q.z[0]};
+  b = Quat{q.w[1], q.x[1], q.y[1], q.z[1]};
+}
+// quat_from_rotvec (§2.11) per lane: the Taylor branch in SIMD, the cos/sin branch per lane.
+inline Q2 quat_from_rotvec2(const V2& r) {
+  const D2 hx = r.x / 2.0, hy = r.y / 2.0, hz = r.z / 2.0;
+  const D2 t = hx * hx + hy * hy + hz * hz;
+  const D2 w = 1.0 - t / 2.0, s = 1.0 - t / 6.0;
+  Q2 q{w, hx * s, hy * s, hz * s};
+  const int wide = ~lanes(t * t < 5.328e-15) & 3;
+  for (int k = 0; k < 2; ++k) {
+    if (!(wide >> k & 1)) continue;
+    const Quat qk = quat_from_rotvec(Vec3(r.x[k], r.y[k], r.z[k]));
+    q.w[k] = qk.w;
+    q.x[k] = qk.x;
+    q.y[k] = qk.y;
+    q.z[k] = qk.z;
+  }
+  return q;
+}
 // §2.2 permutations on lane pairs (same signs and order as the scalar to_x / from_x)
 template <Axis A>
 inline V2 to_x2(D2 x, D2 y, D2 z) {
@@ -629,7 +650,246 @@ inline Vec3 floor_force(const VoxelConst& c, const Vec3& pos, const Vec3& vel, c
   return fric;
 }
 
-// §2.12 steps 3-9 (after the link pass and the collisions): the fork's two-part step.
+// §2.8 static-friction capture of the fork's part 2 for a voxel in floor contact at its new
+// position: whole-step displacement against the friction force of part 1.
+inline void fork_static_capture(const VoxelConst& c, const Vec3& fr, const Vec3& op, Vec3& pos,
+                                Vec3& mom, std::uint8_t& sf) {
+  const float pen = static_cast<float>(0.0 - pos.z());
+  if (pen >= 0) {
+    const double work = fr.x() * (pos.x() - op.x()) + fr.y() * (pos.y() - op.y());
+    const double hke = 0.5 * c.inv_mass * (mom.x() * mom.x() + mom.y() * mom.y());
+    if (hke + work <= 0) sf = 1;
+    if (sf) {
+      mom.x() = 0.0;
+      mom.y() = 0.0;
+      pos.x() = op.x();
+      pos.y() = op.y();
+    }
+  } else {
+    sf = 0;
+  }
+}
+
+// §2.12 step 5, part 1 of the fork's step for one free voxel: the reference path. Returns the
+// voxel's angular momentum about the CoG before (la) and after (lb) the part.
+inline void fork_part1_voxel(const Model& m, State& st, Scratch& sc, std::span<const Vec3> ext,
+                             int v, const Vec3& cog, Vec3& la, Vec3& lb) {
+  const float dt = m.dt_f;
+  const VoxelConst& c = m.voxel_const[v];
+  Vec3& pos = st.pos[v];
+  Vec3& mom = st.lin_mom[v];
+  Vec3& am = st.ang_mom[v];
+  Quat& q = st.orient[v];
+  la = cross(pos - cog, mom) + am;
+  sc.old_pos[v] = pos;
+  Vec3 lsum, msum;
+  gather_links(m, sc, v, lsum, msum);
+  // §2.7 linkF = q (sum of link forces) - v C_glob
+  const Vec3 vel(mom.x() * c.inv_mass, mom.y() * c.inv_mass, mom.z() * c.inv_mass);
+  const Vec3 rl = rotate(q, lsum);
+  const Vec3 link_f(rl.x() - vel.x() * c.c_glob, rl.y() - vel.y() * c.c_glob,
+                    rl.z() - vel.z() * c.c_glob);
+  Vec3 ext_f = Vec3::Zero();
+  if (!ext.empty())
+    ext_f = Vec3(static_cast<float>(ext[v].x()), static_cast<float>(ext[v].y()),
+                 static_cast<float>(ext[v].z()));
+  const Vec3 grav_f(0.0, 0.0, c.gravity_force);
+  const Vec3& col_f = sc.collision_force[v];
+  Vec3 fric = Vec3::Zero();
+  if (m.floor) {
+    const Vec3 fsum = ((link_f + ext_f) + grav_f) + col_f;
+    fric = floor_force(c, pos, vel, fsum, st.static_friction[v]);
+  }
+  // pos += (linkF + extF) dt (dt/m), linMom += (linkF + extF) dt
+  const Vec3 fle = link_f + ext_f;
+  const float dt_m = dt * c.inv_mass;
+  pos += Vec3(fle.x() * dt * dt_m, fle.y() * dt * dt_m, fle.z() * dt * dt_m);
+  mom += Vec3(fle.x() * dt, fle.y() * dt, fle.z() * dt);
+  // §2.7 curMoment = q (sum of link moments) - omega C_glob,rot
+  const Vec3 rm = rotate(q, msum);
+  const Vec3 cur_m(rm.x() - am.x() * c.inv_inertia * c.c_glob_rot,
+                   rm.y() - am.y() * c.inv_inertia * c.c_glob_rot,
+                   rm.z() - am.z() * c.inv_inertia * c.c_glob_rot);
+  const float dt_i = dt * c.inv_inertia;
+  q = mul(
+      quat_from_rotvec(Vec3(cur_m.x() * dt * dt_i, cur_m.y() * dt * dt_i, cur_m.z() * dt * dt_i)),
+      q);
+  am += Vec3(cur_m.x() * dt, cur_m.y() * dt, cur_m.z() * dt);
+  sc.part2_force[v] = (grav_f + col_f) + fric;
+  sc.fric[v] = fric;
+  lb = cross(pos - cog, mom) + am;
+}
+
+// fork_part1_voxel for two free voxels, one per SSE2 lane (same operations per lane; the floor
+// force of §2.8 and the large-rotation branch of quat_from_rotvec per lane in scalar code).
+inline void fork_part1_pair(const Model& m, State& st, Scratch& sc, std::span<const Vec3> ext,
+                            int v0, int v1, const Vec3& cog, V2& la, V2& lb) {
+  const double dt = m.dt_f;
+  const VoxelConst& c0 = m.voxel_const[v0];
+  const VoxelConst& c1 = m.voxel_const[v1];
+  V2 pos = load2(st.pos[v0], st.pos[v1]);
+  V2 mom = load2(st.lin_mom[v0], st.lin_mom[v1]);
+  V2 am = load2(st.ang_mom[v0], st.ang_mom[v1]);
+  const Q2 q = load2(st.orient[v0], st.orient[v1]);
+  const D2 cgx = splat(cog.x()), cgy = splat(cog.y()), cgz = splat(cog.z());
+  {
+    const D2 rx = pos.x - cgx, ry = pos.y - cgy, rz = pos.z - cgz;  // cross(pos - cog, mom) + am
+    la = {(ry * mom.z - rz * mom.y) + am.x, (rz * mom.x - rx * mom.z) + am.y,
+          (rx * mom.y - ry * mom.x) + am.z};
+  }
+  sc.old_pos[v0] = st.pos[v0];
+  sc.old_pos[v1] = st.pos[v1];
+  Vec3 ls0, ms0, ls1, ms1;
+  gather_links(m, sc, v0, ls0, ms0);
+  gather_links(m, sc, v1, ls1, ms1);
+  const V2 lsum = load2(ls0, ls1), msum = load2(ms0, ms1);
+  const D2 inv_mass = float_pair(c0.inv_mass, c1.inv_mass);
+  const V2 vel{mom.x * inv_mass, mom.y * inv_mass, mom.z * inv_mass};
+  V2 rl;
+  rotate_c(q.w, q.x, q.y, q.z, lsum.x, lsum.y, lsum.z, rl.x, rl.y, rl.z);
+  const D2 c_glob = float_pair(c0.c_glob, c1.c_glob);
+  const V2 link_f{rl.x - vel.x * c_glob, rl.y - vel.y * c_glob, rl.z - vel.z * c_glob};
+  V2 ext_f{splat(0.0), splat(0.0), splat(0.0)};
+  if (!ext.empty()) {
+    const Vec3& e0 = ext[v0];
+    const Vec3& e1 = ext[v1];
+    ext_f = {float_pair(static_cast<float>(e0.x()), static_cast<float>(e1.x())),
+             float_pair(static_cast<float>(e0.y()), static_cast<float>(e1.y())),
+             float_pair(static_cast<float>(e0.z()), static_cast<float>(e1.z()))};
+  }
+  const D2 zero = splat(0.0);
+  const V2 grav_f{zero, zero, float_pair(c0.gravity_force, c1.gravity_force)};
+  const V2 col_f = load2(sc.collision_force[v0], sc.collision_force[v1]);
+  V2 fric{zero, zero, zero};
+  if (m.floor) {
+    const int contact = lanes(round_to_float(0.0 - pos.z) >= 0.0);
+    const V2 fsum{((link_f.x + ext_f.x) + grav_f.x) + col_f.x,
+                  ((link_f.y + ext_f.y) + grav_f.y) + col_f.y,
+                  ((link_f.z + ext_f.z) + grav_f.z) + col_f.z};
+    for (int k = 0; k < 2; ++k) {
+      std::uint8_t& sf = st.static_friction[k ? v1 : v0];
+      if (!(contact >> k & 1)) {
+        sf = 0;  // floor_force without contact
+        continue;
+      }
+      const Vec3 fr = floor_force(k ? c1 : c0, Vec3(pos.x[k], pos.y[k], pos.z[k]),
+                                  Vec3(vel.x[k], vel.y[k], vel.z[k]),
+                                  Vec3(fsum.x[k], fsum.y[k], fsum.z[k]), sf);
+      fric.x[k] = fr.x();
+      fric.y[k] = fr.y();
+      fric.z[k] = fr.z();
+    }
+  }
+  const V2 fle{link_f.x + ext_f.x, link_f.y + ext_f.y, link_f.z + ext_f.z};
+  const D2 dt_m = round_to_float(dt * inv_mass);  // float dt * (1/m)
+  pos = {pos.x + fle.x * dt * dt_m, pos.y + fle.y * dt * dt_m, pos.z + fle.z * dt * dt_m};
+  mom = {mom.x + fle.x * dt, mom.y + fle.y * dt, mom.z + fle.z * dt};
+  V2 rm;
+  rotate_c(q.w, q.x, q.y, q.z, msum.x, msum.y, msum.z, rm.x, rm.y, rm.z);
+  const D2 inv_i = float_pair(c0.inv_inertia, c1.inv_inertia);
+  const D2 c_rot = float_pair(c0.c_glob_rot, c1.c_glob_rot);
+  const V2 cur_m{rm.x - am.x * inv_i * c_rot, rm.y - am.y * inv_i * c_rot,
+                 rm.z - am.z * inv_i * c_rot};
+  const D2 dt_i = round_to_float(dt * inv_i);  // float dt * (1/I)
+  const Q2 dq = quat_from_rotvec2({cur_m.x * dt * dt_i, cur_m.y * dt * dt_i, cur_m.z * dt * dt_i});
+  Q2 qn;
+  mul_c(dq.w, dq.x, dq.y, dq.z, q.w, q.x, q.y, q.z, qn.w, qn.x, qn.y, qn.z);
+  am = {am.x + cur_m.x * dt, am.y + cur_m.y * dt, am.z + cur_m.z * dt};
+  store2(pos, st.pos[v0], st.pos[v1]);
+  store2(mom, st.lin_mom[v0], st.lin_mom[v1]);
+  store2(am, st.ang_mom[v0], st.ang_mom[v1]);
+  store2(qn, st.orient[v0], st.orient[v1]);
+  store2(V2{(grav_f.x + col_f.x) + fric.x, (grav_f.y + col_f.y) + fric.y,
+            (grav_f.z + col_f.z) + fric.z},
+         sc.part2_force[v0], sc.part2_force[v1]);
+  store2(fric, sc.fric[v0], sc.fric[v1]);
+  {
+    const D2 rx = pos.x - cgx, ry = pos.y - cgy, rz = pos.z - cgz;
+    lb = {(ry * mom.z - rz * mom.y) + am.x, (rz * mom.x - rx * mom.z) + am.y,
+          (rx * mom.y - ry * mom.x) + am.z};
+  }
+}
+
+// §2.12 step 8, part 2 of the fork's step for one free voxel: the reference path.
+inline void fork_part2_voxel(const Model& m, State& st, Scratch& sc, int v, float me_x, float me_y,
+                             float me_z, double& check) {
+  const float dt = m.dt_f;
+  const double dtd = dt;
+  const VoxelConst& c = m.voxel_const[v];
+  Vec3& pos = st.pos[v];
+  Vec3& mom = st.lin_mom[v];
+  Vec3& am = st.ang_mom[v];
+  Quat& q = st.orient[v];
+  const Vec3& f2 = sc.part2_force[v];
+  const float dt_m = dt * c.inv_mass;
+  pos += Vec3(f2.x() * dt * dt_m, f2.y() * dt * dt_m, f2.z() * dt * dt_m);
+  pos += Vec3(mom.x() * dt_m, mom.y() * dt_m, mom.z() * dt_m);
+  mom += Vec3(f2.x() * dt, f2.y() * dt, f2.z() * dt);
+  if (m.floor) fork_static_capture(c, sc.fric[v], sc.old_pos[v], pos, mom, st.static_friction[v]);
+  // angMom += M_ext dt (float moment promoted to double, times the float dt)
+  am.x() += static_cast<double>(me_x) * dtd;
+  am.y() += static_cast<double>(me_y) * dtd;
+  am.z() += static_cast<double>(me_z) * dtd;
+  q = mul(quat_from_rotvec(Vec3(am.x() * c.inv_inertia * dt, am.y() * c.inv_inertia * dt,
+                                am.z() * c.inv_inertia * dt)),
+          q);
+  sc.ext_moment[v] = {me_x, me_y, me_z};
+  // NaN/inf anywhere makes the running sum non-finite (checked once after the loop; finite
+  // values beyond ~1e307 that overflow the sum are reported as non-finite too)
+  check +=
+      pos.x() + pos.y() + pos.z() + mom.x() + mom.y() + mom.z() + am.x() + am.y() + am.z() + q.w;
+}
+
+// fork_part2_voxel for two free voxels, one per SSE2 lane (same operations per lane).
+inline void fork_part2_pair(const Model& m, State& st, Scratch& sc, int v0, int v1, float me_x,
+                            float me_y, float me_z, double& check) {
+  const double dt = m.dt_f;
+  const VoxelConst& c0 = m.voxel_const[v0];
+  const VoxelConst& c1 = m.voxel_const[v1];
+  V2 pos = load2(st.pos[v0], st.pos[v1]);
+  V2 mom = load2(st.lin_mom[v0], st.lin_mom[v1]);
+  V2 am = load2(st.ang_mom[v0], st.ang_mom[v1]);
+  const Q2 q = load2(st.orient[v0], st.orient[v1]);
+  const V2 f2 = load2(sc.part2_force[v0], sc.part2_force[v1]);
+  const D2 inv_mass = float_pair(c0.inv_mass, c1.inv_mass);
+  const D2 dt_m = round_to_float(dt * inv_mass);  // float dt * (1/m)
+  pos = {pos.x + f2.x * dt * dt_m, pos.y + f2.y * dt * dt_m, pos.z + f2.z * dt * dt_m};
+  pos = {pos.x + mom.x * dt_m, pos.y + mom.y * dt_m, pos.z + mom.z * dt_m};
+  mom = {mom.x + f2.x * dt, mom.y + f2.y * dt, mom.z + f2.z * dt};
+  if (m.floor) {
+    const int contact = lanes(round_to_float(0.0 - pos.z) >= 0.0);
+    for (int k = 0; k < 2; ++k) {
+      const int v = k ? v1 : v0;
+      if (!(contact >> k & 1)) {
+        st.static_friction[v] = 0;
+        continue;
+      }
+      Vec3 pk(pos.x[k], pos.y[k], pos.z[k]), mk(mom.x[k], mom.y[k], mom.z[k]);
+      fork_static_capture(k ? c1 : c0, sc.fric[v], sc.old_pos[v], pk, mk, st.static_friction[v]);
+      pos.x[k] = pk.x();
+      pos.y[k] = pk.y();
+      mom.x[k] = mk.x();
+      mom.y[k] = mk.y();
+    }
+  }
+  am = {am.x + splat(static_cast<double>(me_x) * dt), am.y + splat(static_cast<double>(me_y) * dt),
+        am.z + splat(static_cast<double>(me_z) * dt)};
+  const D2 inv_i = float_pair(c0.inv_inertia, c1.inv_inertia);
+  const Q2 dq = quat_from_rotvec2({am.x * inv_i * dt, am.y * inv_i * dt, am.z * inv_i * dt});
+  Q2 qn;
+  mul_c(dq.w, dq.x, dq.y, dq.z, q.w, q.x, q.y, q.z, qn.w, qn.x, qn.y, qn.z);
+  store2(pos, st.pos[v0], st.pos[v1]);
+  store2(mom, st.lin_mom[v0], st.lin_mom[v1]);
+  store2(am, st.ang_mom[v0], st.ang_mom[v1]);
+  store2(qn, st.orient[v0], st.orient[v1]);
+  sc.ext_moment[v0] = sc.ext_moment[v1] = {me_x, me_y, me_z};
+  const D2 sum = pos.x + pos.y + pos.z + mom.x + mom.y + mom.z + am.x + am.y + am.z + qn.w;
+  check += sum[0];
+  check += sum[1];
+}
+
+// §2.12 steps 3-9 (after the link pass and the collisions): the fork's two-part step. Free
+// voxels go through the parts in pairs (SSE2 lanes); sums over voxels keep list order.
 [[gnu::noinline]] bool fork_voxel_passes(const Model& m, State& st, Scratch& sc,
                                          std::span<const Vec3> ext) {
   const float dt = m.dt_f;
@@ -643,52 +903,27 @@ inline Vec3 floor_force(const VoxelConst& c, const Vec3& pos, const Vec3& vel, c
   st.previous_dt = dt;
 
   // 5. part 1; L_A (start state) and L_B (after part 1) are summed per voxel in list order
-  for (int v = 0; v < nv; ++v) {
-    if (m.voxel_fixed[v]) continue;
-    const VoxelConst& c = m.voxel_const[v];
-    Vec3& pos = st.pos[v];
-    Vec3& mom = st.lin_mom[v];
-    Vec3& am = st.ang_mom[v];
-    Quat& q = st.orient[v];
-    la += cross(pos - cog, mom) + am;
-    sc.old_pos[v] = pos;
-    Vec3 lsum, msum;
-    gather_links(m, sc, v, lsum, msum);
-    // §2.7 linkF = q (sum of link forces) - v C_glob
-    const Vec3 vel(mom.x() * c.inv_mass, mom.y() * c.inv_mass, mom.z() * c.inv_mass);
-    const Vec3 rl = rotate(q, lsum);
-    const Vec3 link_f(rl.x() - vel.x() * c.c_glob, rl.y() - vel.y() * c.c_glob,
-                      rl.z() - vel.z() * c.c_glob);
-    Vec3 ext_f = Vec3::Zero();
-    if (!ext.empty())
-      ext_f = Vec3(static_cast<float>(ext[v].x()), static_cast<float>(ext[v].y()),
-                   static_cast<float>(ext[v].z()));
-    const Vec3 grav_f(0.0, 0.0, c.gravity_force);
-    const Vec3& col_f = sc.collision_force[v];
-    Vec3 fric = Vec3::Zero();
-    if (m.floor) {
-      const Vec3 fsum = ((link_f + ext_f) + grav_f) + col_f;
-      fric = floor_force(c, pos, vel, fsum, st.static_friction[v]);
+  auto part1 = [&](int v) {
+    Vec3 a, b;
+    fork_part1_voxel(m, st, sc, ext, v, cog, a, b);
+    la += a;
+    lb += b;
+  };
+  int v = 0;
+  for (; v + 1 < nv; v += 2) {
+    if (!m.voxel_fixed[v] && !m.voxel_fixed[v + 1]) {
+      V2 a, b;
+      fork_part1_pair(m, st, sc, ext, v, v + 1, cog, a, b);
+      la += Vec3(a.x[0], a.y[0], a.z[0]);
+      la += Vec3(a.x[1], a.y[1], a.z[1]);
+      lb += Vec3(b.x[0], b.y[0], b.z[0]);
+      lb += Vec3(b.x[1], b.y[1], b.z[1]);
+    } else {
+      if (!m.voxel_fixed[v]) part1(v);
+      if (!m.voxel_fixed[v + 1]) part1(v + 1);
     }
-    // pos += (linkF + extF) dt (dt/m), linMom += (linkF + extF) dt
-    const Vec3 fle = link_f + ext_f;
-    const float dt_m = dt * c.inv_mass;
-    pos += Vec3(fle.x() * dt * dt_m, fle.y() * dt * dt_m, fle.z() * dt * dt_m);
-    mom += Vec3(fle.x() * dt, fle.y() * dt, fle.z() * dt);
-    // §2.7 curMoment = q (sum of link moments) - omega C_glob,rot
-    const Vec3 rm = rotate(q, msum);
-    const Vec3 cur_m(rm.x() - am.x() * c.inv_inertia * c.c_glob_rot,
-                     rm.y() - am.y() * c.inv_inertia * c.c_glob_rot,
-                     rm.z() - am.z() * c.inv_inertia * c.c_glob_rot);
-    const float dt_i = dt * c.inv_inertia;
-    q = mul(
-        quat_from_rotvec(Vec3(cur_m.x() * dt * dt_i, cur_m.y() * dt * dt_i, cur_m.z() * dt * dt_i)),
-        q);
-    am += Vec3(cur_m.x() * dt, cur_m.y() * dt, cur_m.z() * dt);
-    sc.part2_force[v] = (grav_f + col_f) + fric;
-    sc.fric[v] = fric;
-    lb += cross(pos - cog, mom) + am;
   }
+  if (v < nv && !m.voxel_fixed[v]) part1(v);
 
   // 6. mid-step link update (state only)
   link_pass_state_only(m, st, sc);
@@ -703,113 +938,174 @@ inline Vec3 floor_force(const VoxelConst& c, const Vec3& pos, const Vec3& vel, c
 
   // 8. part 2
   double check = 0.0;
-  for (int v = 0; v < nv; ++v) {
-    if (m.voxel_fixed[v]) continue;
-    const VoxelConst& c = m.voxel_const[v];
-    Vec3& pos = st.pos[v];
-    Vec3& mom = st.lin_mom[v];
-    Vec3& am = st.ang_mom[v];
-    Quat& q = st.orient[v];
-    const Vec3& f2 = sc.part2_force[v];
-    const float dt_m = dt * c.inv_mass;
-    pos += Vec3(f2.x() * dt * dt_m, f2.y() * dt * dt_m, f2.z() * dt * dt_m);
-    pos += Vec3(mom.x() * dt_m, mom.y() * dt_m, mom.z() * dt_m);
-    mom += Vec3(f2.x() * dt, f2.y() * dt, f2.z() * dt);
-    if (m.floor) {
-      // §2.8 static-friction capture at the new position, whole-step displacement
-      const float pen = static_cast<float>(0.0 - pos.z());
-      std::uint8_t& sf = st.static_friction[v];
-      if (pen >= 0) {
-        const Vec3& fr = sc.fric[v];
-        const Vec3& op = sc.old_pos[v];
-        const double work = fr.x() * (pos.x() - op.x()) + fr.y() * (pos.y() - op.y());
-        const double hke = 0.5 * c.inv_mass * (mom.x() * mom.x() + mom.y() * mom.y());
-        if (hke + work <= 0) sf = 1;
-        if (sf) {
-          mom.x() = 0.0;
-          mom.y() = 0.0;
-          pos.x() = op.x();
-          pos.y() = op.y();
-        }
-      } else {
-        sf = 0;
-      }
+  for (v = 0; v + 1 < nv; v += 2) {
+    if (!m.voxel_fixed[v] && !m.voxel_fixed[v + 1]) {
+      fork_part2_pair(m, st, sc, v, v + 1, me_x, me_y, me_z, check);
+    } else {
+      if (!m.voxel_fixed[v]) fork_part2_voxel(m, st, sc, v, me_x, me_y, me_z, check);
+      if (!m.voxel_fixed[v + 1]) fork_part2_voxel(m, st, sc, v + 1, me_x, me_y, me_z, check);
     }
-    // angMom += M_ext dt (float moment promoted to double, times the float dt)
-    am.x() += static_cast<double>(me_x) * dtd;
-    am.y() += static_cast<double>(me_y) * dtd;
-    am.z() += static_cast<double>(me_z) * dtd;
-    q = mul(quat_from_rotvec(Vec3(am.x() * c.inv_inertia * dt, am.y() * c.inv_inertia * dt,
-                                  am.z() * c.inv_inertia * dt)),
-            q);
-    sc.ext_moment[v] = {me_x, me_y, me_z};
-    // NaN/inf anywhere makes the running sum non-finite (checked once after the loop; finite
-    // values beyond ~1e307 that overflow the sum are reported as non-finite too)
-    check +=
-        pos.x() + pos.y() + pos.z() + mom.x() + mom.y() + mom.z() + am.x() + am.y() + am.z() + q.w;
   }
+  if (v < nv && !m.voxel_fixed[v]) fork_part2_voxel(m, st, sc, v, me_x, me_y, me_z, check);
   return std::isfinite(check);
 }
 
-// §2.9 upstream single-pass symplectic Euler with the same forces.
+// §2.9 upstream single-pass symplectic Euler with the same forces, one voxel: the reference path.
+inline void symplectic_voxel(const Model& m, State& st, Scratch& sc, std::span<const Vec3> ext,
+                             int v, double& check) {
+  const float dt = m.dt_f;
+  const VoxelConst& c = m.voxel_const[v];
+  Vec3& pos = st.pos[v];
+  Vec3& mom = st.lin_mom[v];
+  Vec3& am = st.ang_mom[v];
+  Quat& q = st.orient[v];
+  Vec3 lsum, msum;
+  gather_links(m, sc, v, lsum, msum);
+  const Vec3 vel(mom.x() * c.inv_mass, mom.y() * c.inv_mass, mom.z() * c.inv_mass);
+  // force(): links (rotated to global) + external - global damping + gravity + collisions
+  Vec3 f = rotate(q, lsum);
+  if (!ext.empty())
+    f += Vec3(static_cast<float>(ext[v].x()), static_cast<float>(ext[v].y()),
+              static_cast<float>(ext[v].z()));
+  f -= Vec3(vel.x() * c.c_glob, vel.y() * c.c_glob, vel.z() * c.c_glob);
+  f.z() += c.gravity_force;
+  f += sc.collision_force[v];
+  const float pen = static_cast<float>(0.0 - pos.z());  // at the old position (upstream)
+  const bool contact = m.floor && pen >= 0;
+  if (m.floor) f += floor_force(c, pos, vel, f, st.static_friction[v]);
+  mom += Vec3(f.x() * dt, f.y() * dt, f.z() * dt);
+  const float dt_m = dt * c.inv_mass;
+  Vec3 tr(mom.x() * dt_m, mom.y() * dt_m, mom.z() * dt_m);
+  if (m.floor) {
+    std::uint8_t& sf = st.static_friction[v];
+    if (contact) {
+      const double work = f.x() * tr.x() + f.y() * tr.y();
+      const double hke = 0.5 * c.inv_mass * (mom.x() * mom.x() + mom.y() * mom.y());
+      if (hke + work <= 0) sf = 1;
+      if (sf) {
+        mom.x() = mom.y() = 0.0;
+        tr.x() = tr.y() = 0.0;
+      }
+    } else {
+      sf = 0;
+    }
+  }
+  pos += tr;
+  const Vec3 rm = rotate(q, msum);
+  const Vec3 cur_m(rm.x() - am.x() * c.inv_inertia * c.c_glob_rot,
+                   rm.y() - am.y() * c.inv_inertia * c.c_glob_rot,
+                   rm.z() - am.z() * c.inv_inertia * c.c_glob_rot);
+  am += Vec3(cur_m.x() * dt, cur_m.y() * dt, cur_m.z() * dt);
+  q = mul(quat_from_rotvec(Vec3(am.x() * c.inv_inertia * dt, am.y() * c.inv_inertia * dt,
+                                am.z() * c.inv_inertia * dt)),
+          q);
+  // NaN/inf anywhere makes the running sum non-finite (checked once after the loop; finite
+  // values beyond ~1e307 that overflow the sum are reported as non-finite too)
+  check +=
+      pos.x() + pos.y() + pos.z() + mom.x() + mom.y() + mom.z() + am.x() + am.y() + am.z() + q.w;
+}
+
+// symplectic_voxel for two free voxels v0, v1, one per SSE2 lane (same operations per lane as
+// the scalar path; the floor contact of §2.8 and the large-rotation branch of quat_from_rotvec
+// are done per lane in scalar code).
+inline void symplectic_pair(const Model& m, State& st, Scratch& sc, std::span<const Vec3> ext,
+                            int v0, int v1, double& check) {
+  const double dt = m.dt_f;
+  const VoxelConst& c0 = m.voxel_const[v0];
+  const VoxelConst& c1 = m.voxel_const[v1];
+  Vec3 ls0, ms0, ls1, ms1;
+  gather_links(m, sc, v0, ls0, ms0);
+  gather_links(m, sc, v1, ls1, ms1);
+  const V2 lsum = load2(ls0, ls1), msum = load2(ms0, ms1);
+  V2 pos = load2(st.pos[v0], st.pos[v1]);
+  V2 mom = load2(st.lin_mom[v0], st.lin_mom[v1]);
+  V2 am = load2(st.ang_mom[v0], st.ang_mom[v1]);
+  const Q2 q = load2(st.orient[v0], st.orient[v1]);
+  const D2 inv_mass = float_pair(c0.inv_mass, c1.inv_mass);
+  const V2 vel{mom.x * inv_mass, mom.y * inv_mass, mom.z * inv_mass};
+  V2 f;
+  rotate_c(q.w, q.x, q.y, q.z, lsum.x, lsum.y, lsum.z, f.x, f.y, f.z);
+  if (!ext.empty()) {
+    const Vec3& e0 = ext[v0];
+    const Vec3& e1 = ext[v1];
+    f.x = f.x + float_pair(static_cast<float>(e0.x()), static_cast<float>(e1.x()));
+    f.y = f.y + float_pair(static_cast<float>(e0.y()), static_cast<float>(e1.y()));
+    f.z = f.z + float_pair(static_cast<float>(e0.z()), static_cast<float>(e1.z()));
+  }
+  const D2 c_glob = float_pair(c0.c_glob, c1.c_glob);
+  f = {f.x - vel.x * c_glob, f.y - vel.y * c_glob, f.z - vel.z * c_glob};
+  f.z = f.z + float_pair(c0.gravity_force, c1.gravity_force);
+  const V2 col = load2(sc.collision_force[v0], sc.collision_force[v1]);
+  f = {f.x + col.x, f.y + col.y, f.z + col.z};
+  int contact = 0;  // lane bits
+  if (m.floor) {
+    contact = lanes(round_to_float(0.0 - pos.z) >= 0.0);
+    V2 fric{splat(0.0), splat(0.0), splat(0.0)};
+    for (int k = 0; k < 2; ++k) {
+      std::uint8_t& sf = st.static_friction[k ? v1 : v0];
+      if (!(contact >> k & 1)) {
+        sf = 0;  // floor_force without contact
+        continue;
+      }
+      const Vec3 fr =
+          floor_force(k ? c1 : c0, Vec3(pos.x[k], pos.y[k], pos.z[k]),
+                      Vec3(vel.x[k], vel.y[k], vel.z[k]), Vec3(f.x[k], f.y[k], f.z[k]), sf);
+      fric.x[k] = fr.x();
+      fric.y[k] = fr.y();
+      fric.z[k] = fr.z();
+    }
+    f = {f.x + fric.x, f.y + fric.y, f.z + fric.z};
+  }
+  mom = {mom.x + f.x * dt, mom.y + f.y * dt, mom.z + f.z * dt};
+  const D2 dt_m = round_to_float(dt * inv_mass);  // float dt * (1/m)
+  V2 tr{mom.x * dt_m, mom.y * dt_m, mom.z * dt_m};
+  for (int k = 0; k < 2; ++k) {
+    if (!(contact >> k & 1)) continue;
+    std::uint8_t& sf = st.static_friction[k ? v1 : v0];
+    const double work = f.x[k] * tr.x[k] + f.y[k] * tr.y[k];
+    const double hke = 0.5 * (k ? c1 : c0).inv_mass * (mom.x[k] * mom.x[k] + mom.y[k] * mom.y[k]);
+    if (hke + work <= 0) sf = 1;
+    if (sf) {
+      mom.x[k] = mom.y[k] = 0.0;
+      tr.x[k] = tr.y[k] = 0.0;
+    }
+  }
+  pos = {pos.x + tr.x, pos.y + tr.y, pos.z + tr.z};
+  V2 rm;
+  rotate_c(q.w, q.x, q.y, q.z, msum.x, msum.y, msum.z, rm.x, rm.y, rm.z);
+  const D2 inv_i = float_pair(c0.inv_inertia, c1.inv_inertia);
+  const D2 c_rot = float_pair(c0.c_glob_rot, c1.c_glob_rot);
+  const V2 cur_m{rm.x - am.x * inv_i * c_rot, rm.y - am.y * inv_i * c_rot,
+                 rm.z - am.z * inv_i * c_rot};
+  am = {am.x + cur_m.x * dt, am.y + cur_m.y * dt, am.z + cur_m.z * dt};
+  const Q2 dq = quat_from_rotvec2({am.x * inv_i * dt, am.y * inv_i * dt, am.z * inv_i * dt});
+  Q2 qn;
+  mul_c(dq.w, dq.x, dq.y, dq.z, q.w, q.x, q.y, q.z, qn.w, qn.x, qn.y, qn.z);
+  store2(pos, st.pos[v0], st.pos[v1]);
+  store2(mom, st.lin_mom[v0], st.lin_mom[v1]);
+  store2(am, st.ang_mom[v0], st.ang_mom[v1]);
+  store2(qn, st.orient[v0], st.orient[v1]);
+  const D2 sum = pos.x + pos.y + pos.z + mom.x + mom.y + mom.z + am.x + am.y + am.z + qn.w;
+  check += sum[0];
+  check += sum[1];
+}
+
+// §2.9 upstream single-pass symplectic Euler with the same forces; free voxels in pairs.
 [[gnu::noinline]] bool symplectic_voxel_pass(const Model& m, State& st, Scratch& sc,
                                              std::span<const Vec3> ext) {
-  const float dt = m.dt_f;
   const int nv = m.voxel_count;
-  st.previous_dt = dt;
+  st.previous_dt = m.dt_f;
   double check = 0.0;
-  for (int v = 0; v < nv; ++v) {
-    if (m.voxel_fixed[v]) continue;
-    const VoxelConst& c = m.voxel_const[v];
-    Vec3& pos = st.pos[v];
-    Vec3& mom = st.lin_mom[v];
-    Vec3& am = st.ang_mom[v];
-    Quat& q = st.orient[v];
-    Vec3 lsum, msum;
-    gather_links(m, sc, v, lsum, msum);
-    const Vec3 vel(mom.x() * c.inv_mass, mom.y() * c.inv_mass, mom.z() * c.inv_mass);
-    // force(): links (rotated to global) + external - global damping + gravity + collisions
-    Vec3 f = rotate(q, lsum);
-    if (!ext.empty())
-      f += Vec3(static_cast<float>(ext[v].x()), static_cast<float>(ext[v].y()),
-                static_cast<float>(ext[v].z()));
-    f -= Vec3(vel.x() * c.c_glob, vel.y() * c.c_glob, vel.z() * c.c_glob);
-    f.z() += c.gravity_force;
-    f += sc.collision_force[v];
-    const float pen = static_cast<float>(0.0 - pos.z());  // at the old position (upstream)
-    const bool contact = m.floor && pen >= 0;
-    if (m.floor) f += floor_force(c, pos, vel, f, st.static_friction[v]);
-    mom += Vec3(f.x() * dt, f.y() * dt, f.z() * dt);
-    const float dt_m = dt * c.inv_mass;
-    Vec3 tr(mom.x() * dt_m, mom.y() * dt_m, mom.z() * dt_m);
-    if (m.floor) {
-      std::uint8_t& sf = st.static_friction[v];
-      if (contact) {
-        const double work = f.x() * tr.x() + f.y() * tr.y();
-        const double hke = 0.5 * c.inv_mass * (mom.x() * mom.x() + mom.y() * mom.y());
-        if (hke + work <= 0) sf = 1;
-        if (sf) {
-          mom.x() = mom.y() = 0.0;
-          tr.x() = tr.y() = 0.0;
-        }
-      } else {
-        sf = 0;
-      }
+  int v = 0;
+  for (; v + 1 < nv; v += 2) {
+    if (!m.voxel_fixed[v] && !m.voxel_fixed[v + 1]) {
+      symplectic_pair(m, st, sc, ext, v, v + 1, check);
+    } else {
+      if (!m.voxel_fixed[v]) symplectic_voxel(m, st, sc, ext, v, check);
+      if (!m.voxel_fixed[v + 1]) symplectic_voxel(m, st, sc, ext, v + 1, check);
     }
-    pos += tr;
-    const Vec3 rm = rotate(q, msum);
-    const Vec3 cur_m(rm.x() - am.x() * c.inv_inertia * c.c_glob_rot,
-                     rm.y() - am.y() * c.inv_inertia * c.c_glob_rot,
-                     rm.z() - am.z() * c.inv_inertia * c.c_glob_rot);
-    am += Vec3(cur_m.x() * dt, cur_m.y() * dt, cur_m.z() * dt);
-    q = mul(quat_from_rotvec(Vec3(am.x() * c.inv_inertia * dt, am.y() * c.inv_inertia * dt,
-                                  am.z() * c.inv_inertia * dt)),
-            q);
-    // NaN/inf anywhere makes the running sum non-finite (checked once after the loop; finite
-    // values beyond ~1e307 that overflow the sum are reported as non-finite too)
-    check +=
-        pos.x() + pos.y() + pos.z() + mom.x() + mom.y() + mom.z() + am.x() + am.y() + am.z() + q.w;
   }
+  if (v < nv && !m.voxel_fixed[v]) symplectic_voxel(m, st, sc, ext, v, check);
   return std::isfinite(check);
 }
 
