@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <stdexcept>
 #include <string>
 
@@ -305,6 +306,28 @@ inline D2 float_pair(float a, float b) {
   return D2{static_cast<double>(a), static_cast<double>(b)};
 }
 
+// The members of two LinkConst as lane pairs (float -> double, exact): four members at a time,
+// interleaved with unpack, instead of one scalar conversion per member and lane.
+struct LinkConst2 {
+  D2 e_area, area, a2, b1, b2, b3, sq_a1, sq_a2xip, sq_b1, sq_b2xfmp, sq_b3xip;
+};
+inline LinkConst2 load2(const LinkConst& a, const LinkConst& b) {
+  static_assert(sizeof(LinkConst) == 12 * sizeof(float) && offsetof(LinkConst, e_area) == 0 &&
+                offsetof(LinkConst, sq_b3xip) == 10 * sizeof(float));
+  const float* pa = &a.e_area;
+  const float* pb = &b.e_area;
+  D2 d[12];
+  for (int k = 0; k < 3; ++k) {
+    const __m128 va = _mm_loadu_ps(pa + 4 * k), vb = _mm_loadu_ps(pb + 4 * k);
+    const __m128 lo = _mm_unpacklo_ps(va, vb), hi = _mm_unpackhi_ps(va, vb);
+    d[4 * k] = _mm_cvtps_pd(lo);
+    d[4 * k + 1] = _mm_cvtps_pd(_mm_movehl_ps(lo, lo));
+    d[4 * k + 2] = _mm_cvtps_pd(hi);
+    d[4 * k + 3] = _mm_cvtps_pd(_mm_movehl_ps(hi, hi));
+  }
+  return {d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8], d[9], d[10]};
+}
+
 // Links i0, i1 of axis A, both ending in small-angle mode. Returns false (and changes nothing)
 // if a lane needs the large-angle path; otherwise updates both links like link_scalar (or
 // link_scalar_state_only if !kForces) and ORs their strain > 100 into `diverged`.
@@ -356,14 +379,12 @@ inline bool link_pair(const Model& m, State& st, Scratch& sc, int i0, int i1, bo
   const D2 strain = round_to_float(pos2.x / l);
 
   if constexpr (kForces) {
-    const LinkConst& c0 = m.link_const[i0];
-    const LinkConst& c1 = m.link_const[i1];
+    const LinkConst2 c = load2(m.link_const[i0], m.link_const[i1]);
     if (lanes(strain > splat(kStrainDiverged))) diverged = true;
     // §2.4 (see link_scalar)
-    const D2 stress = round_to_float(float_pair(c0.e_area, c1.e_area) * strain);
-    const D2 b1 = float_pair(c0.b1, c1.b1), b2 = float_pair(c0.b2, c1.b2),
-             b3 = float_pair(c0.b3, c1.b3), a2c = float_pair(c0.a2, c1.a2);
-    V2 fn{round_to_float(stress * float_pair(c0.area, c1.area)), b1 * pos2.y - b2 * (a1.z + a2.z),
+    const D2 stress = round_to_float(c.e_area * strain);
+    const D2 b1 = c.b1, b2 = c.b2, b3 = c.b3, a2c = c.a2;
+    V2 fn{round_to_float(stress * c.area), b1 * pos2.y - b2 * (a1.z + a2.z),
           b1 * pos2.z + b2 * (a1.y + a2.y)};
     V2 fp{-fn.x, -fn.y, -fn.z};
     V2 mn{a2c * (a2.x - a1.x), -b2 * pos2.z - b3 * (2.0 * a1.y + a2.y),
@@ -375,7 +396,6 @@ inline bool link_pair(const Model& m, State& st, Scratch& sc, int i0, int i1, bo
     const int damp =
         ((st.link_vel_valid[i0] != 0 ? 1 : 0) | (st.link_vel_valid[i1] != 0 ? 2 : 0)) & ~switched;
     if (damp) {
-      const M2 on = M2{(damp & 1) ? -1LL : 0LL, (damp & 2) ? -1LL : 0LL};
       const V2 old_pos2 = load2(st.link_pos2[i0], st.link_pos2[i1]);
       const V2 old_a1 = load2(st.link_angle1v[i0], st.link_angle1v[i1]);
       const V2 old_a2 = load2(st.link_angle2v[i0], st.link_angle2v[i1]);
@@ -385,25 +405,33 @@ inline bool link_pair(const Model& m, State& st, Scratch& sc, int i0, int i1, bo
                d1z = 0.5 * (a1.z - old_a1.z);
       const D2 d2x = 0.5 * (a2.x - old_a2.x), d2y = 0.5 * (a2.y - old_a2.y),
                d2z = 0.5 * (a2.z - old_a2.z);
-      const D2 sq_a1 = float_pair(c0.sq_a1, c1.sq_a1), sq_a2 = float_pair(c0.sq_a2xip, c1.sq_a2xip),
-               sq_b1 = float_pair(c0.sq_b1, c1.sq_b1),
-               sq_b2 = float_pair(c0.sq_b2xfmp, c1.sq_b2xfmp),
-               sq_b3 = float_pair(c0.sq_b3xip, c1.sq_b3xip);
+      const D2 sq_a1 = c.sq_a1, sq_a2 = c.sq_a2xip, sq_b1 = c.sq_b1, sq_b2 = c.sq_b2xfmp,
+               sq_b3 = c.sq_b3xip;
       const D2 vx = sq_a1 * dpx, vy = sq_b1 * dpy - sq_b2 * (d1z + d2z),
                vz = sq_b1 * dpz + sq_b2 * (d1y + d2y);
       const D2 cn = float_pair(sc.link_damping[n0], sc.link_damping[n1]);
       const D2 cp = float_pair(sc.link_damping[p0], sc.link_damping[p1]);
       const D2 hn = 0.5 * cn, hp = 0.5 * cp;
-      fn = {select(on, fn.x + cn * vx, fn.x), select(on, fn.y + cn * vy, fn.y),
-            select(on, fn.z + cn * vz, fn.z)};
-      fp = {select(on, fp.x - cp * vx, fp.x), select(on, fp.y - cp * vy, fp.y),
-            select(on, fp.z - cp * vz, fp.z)};
-      mn = {select(on, mn.x - hn * (-sq_a2 * (d2x - d1x)), mn.x),
-            select(on, mn.y - hn * (sq_b2 * dpz + sq_b3 * (2.0 * d1y + d2y)), mn.y),
-            select(on, mn.z - hn * (-sq_b2 * dpy + sq_b3 * (2.0 * d1z + d2z)), mn.z)};
-      mp = {select(on, mp.x - hp * (sq_a2 * (d2x - d1x)), mp.x),
-            select(on, mp.y - hp * (sq_b2 * dpz + sq_b3 * (d1y + 2.0 * d2y)), mp.y),
-            select(on, mp.z - hp * (-sq_b2 * dpy + sq_b3 * (d1z + 2.0 * d2z)), mp.z)};
+      const V2 fn_d{fn.x + cn * vx, fn.y + cn * vy, fn.z + cn * vz};
+      const V2 fp_d{fp.x - cp * vx, fp.y - cp * vy, fp.z - cp * vz};
+      const V2 mn_d{mn.x - hn * (-sq_a2 * (d2x - d1x)),
+                    mn.y - hn * (sq_b2 * dpz + sq_b3 * (2.0 * d1y + d2y)),
+                    mn.z - hn * (-sq_b2 * dpy + sq_b3 * (2.0 * d1z + d2z))};
+      const V2 mp_d{mp.x - hp * (sq_a2 * (d2x - d1x)),
+                    mp.y - hp * (sq_b2 * dpz + sq_b3 * (d1y + 2.0 * d2y)),
+                    mp.z - hp * (-sq_b2 * dpy + sq_b3 * (d1z + 2.0 * d2z))};
+      if (damp == 3) {  // both lanes (the usual case)
+        fn = fn_d;
+        fp = fp_d;
+        mn = mn_d;
+        mp = mp_d;
+      } else {
+        const M2 on = M2{(damp & 1) ? -1LL : 0LL, (damp & 2) ? -1LL : 0LL};
+        fn = {select(on, fn_d.x, fn.x), select(on, fn_d.y, fn.y), select(on, fn_d.z, fn.z)};
+        fp = {select(on, fp_d.x, fp.x), select(on, fp_d.y, fp.y), select(on, fp_d.z, fp.z)};
+        mn = {select(on, mn_d.x, mn.x), select(on, mn_d.y, mn.y), select(on, mn_d.z, mn.z)};
+        mp = {select(on, mp_d.x, mp.x), select(on, mp_d.y, mp.y), select(on, mp_d.z, mp.z)};
+      }
     }
     // §2.6: small-angle mode, so F_N and M_N are already in N's frame; F_P, M_P rotate by q2*
     V2 fpl, mpl;
