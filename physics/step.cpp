@@ -225,7 +225,7 @@ void link_scalar_state_only(const Model& m, State& st, int i) {
 // float roundings are a float conversion of the same double; float x float products and
 // float / float quotients are formed in double and rounded to float, which gives the float
 // result exactly since 53 >= 2 x 24 + 2), so results are bit-identical to link_scalar. Lanes that
-// need the large-angle path (§2.3) send the pair through link_scalar.
+// need the large-angle path (§2.3) go through link_scalar alone.
 using D2 = double __attribute__((vector_size(16)));
 using M2 = long long __attribute__((vector_size(16)));  // comparison result: all ones = true
 
@@ -261,6 +261,15 @@ inline void store2(const V2& v, Vec3& a, Vec3& b) {  // lane 0 -> a, lane 1 -> b
 }
 inline Q2 load2(const Quat& a, const Quat& b) {
   return {D2{a.w, b.w}, D2{a.x, b.x}, D2{a.y, b.y}, D2{a.z, b.z}};
+}
+// store2 of the lanes in `mask` only (bit k = lane k)
+inline void store2(const V2& v, Vec3& a, Vec3& b, int mask) {
+  if (mask == 3) {
+    store2(v, a, b);
+    return;
+  }
+  if (mask & 1) a = Vec3(v.x[0], v.y[0], v.z[0]);
+  if (mask & 2) b = Vec3(v.x[1], v.y[1], v.z[1]);
 }
 inline void store2(const Q2& q, Quat& a, Quat& b) {
   a = Quat{q.w[0], q.x[0], q.y[0], q.z[0]};
@@ -328,11 +337,13 @@ inline LinkConst2 load2(const LinkConst& a, const LinkConst& b) {
   return {d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8], d[9], d[10]};
 }
 
-// Links i0, i1 of axis A, both ending in small-angle mode. Returns false (and changes nothing)
-// if a lane needs the large-angle path; otherwise updates both links like link_scalar (or
-// link_scalar_state_only if !kForces) and ORs their strain > 100 into `diverged`.
+// Links i0, i1 of axis A. Each lane whose link ends in small-angle mode is updated like
+// link_scalar (or link_scalar_state_only if !kForces), its strain > 100 ORed into `diverged`;
+// returns those lanes (bit k = lane k). Lanes that need the large-angle path are left unchanged
+// for the caller's link_scalar.
 template <Axis A, bool kForces>
-inline bool link_pair(const Model& m, State& st, Scratch& sc, int i0, int i1, bool& diverged) {
+[[gnu::always_inline]] inline int link_pair(const Model& m, State& st, Scratch& sc, int i0, int i1,
+                                            bool& diverged) {
   const int n0 = m.link_neg[i0], p0 = m.link_pos[i0], n1 = m.link_neg[i1], p1 = m.link_pos[i1];
   // §2.3 orient link (see orient_link)
   const V2 pn = load2(st.pos[n0], st.pos[n1]);
@@ -353,7 +364,8 @@ inline bool link_pair(const Model& m, State& st, Scratch& sc, int i0, int i1, bo
       lanes((turn > splat(kHysteresis * kSmallBend)) | (ext > splat(kHysteresis * kSmallExt)));
   const int was = (st.link_small_angle[i0] != 0 ? 1 : 0) | (st.link_small_angle[i1] != 0 ? 2 : 0);
   const int small = (was & ~leave) | (~was & enter);
-  if ((small & 3) != 3) return false;
+  const int done = small & 3;
+  if (!done) return 0;
   const int switched = ~was & 3;  // entered small-angle mode on this update
 
   const V2 pos2{d.x - l, d.y, d.z};
@@ -380,7 +392,7 @@ inline bool link_pair(const Model& m, State& st, Scratch& sc, int i0, int i1, bo
 
   if constexpr (kForces) {
     const LinkConst2 c = load2(m.link_const[i0], m.link_const[i1]);
-    if (lanes(strain > splat(kStrainDiverged))) diverged = true;
+    if (lanes(strain > splat(kStrainDiverged)) & done) diverged = true;
     // §2.4 (see link_scalar)
     const D2 stress = round_to_float(c.e_area * strain);
     const D2 b1 = c.b1, b2 = c.b2, b3 = c.b3, a2c = c.a2;
@@ -439,24 +451,32 @@ inline bool link_pair(const Model& m, State& st, Scratch& sc, int i0, int i1, bo
     rotate_c(q2.w, -q2.x, -q2.y, -q2.z, mp.x, mp.y, mp.z, mpl.x, mpl.y, mpl.z);
     Scratch::EndLoad* out0 = &sc.link_end_load[2 * static_cast<std::size_t>(i0)];
     Scratch::EndLoad* out1 = &sc.link_end_load[2 * static_cast<std::size_t>(i1)];
-    store2(from_x2<A>(fn), out0[0].force, out1[0].force);
-    store2(from_x2<A>(mn), out0[0].moment, out1[0].moment);
-    store2(from_x2<A>(fpl), out0[1].force, out1[1].force);
-    store2(from_x2<A>(mpl), out0[1].moment, out1[1].moment);
+    store2(from_x2<A>(fn), out0[0].force, out1[0].force, done);
+    store2(from_x2<A>(mn), out0[0].moment, out1[0].moment, done);
+    store2(from_x2<A>(fpl), out0[1].force, out1[1].force, done);
+    store2(from_x2<A>(mpl), out0[1].moment, out1[1].moment, done);
   }
-  st.link_vel_valid[i0] = st.link_vel_valid[i1] = 1;
-  st.link_small_angle[i0] = st.link_small_angle[i1] = 1;
-  st.link_strain[i0] = static_cast<float>(strain[0]);
-  st.link_strain[i1] = static_cast<float>(strain[1]);
-  store2(pos2, st.link_pos2[i0], st.link_pos2[i1]);
-  store2(a1, st.link_angle1v[i0], st.link_angle1v[i1]);
-  store2(a2, st.link_angle2v[i0], st.link_angle2v[i1]);
-  return true;
+  const float strain0 = static_cast<float>(strain[0]), strain1 = static_cast<float>(strain[1]);
+  if (done & 1) {
+    st.link_vel_valid[i0] = st.link_small_angle[i0] = 1;
+    st.link_strain[i0] = strain0;
+  }
+  if (done & 2) {
+    st.link_vel_valid[i1] = st.link_small_angle[i1] = 1;
+    st.link_strain[i1] = strain1;
+  }
+  store2(pos2, st.link_pos2[i0], st.link_pos2[i1], done);
+  store2(a1, st.link_angle1v[i0], st.link_angle1v[i1], done);
+  store2(a2, st.link_angle2v[i0], st.link_angle2v[i1], done);
+  return done;
 }
 
-// Link pass (§2.3-2.6) over the links of axis A, in pairs where possible. With kForces the end
-// loads are computed and the return value is true if any strain > 100; without, the state-only
-// mid-step pass of the fork (§2.9 item 6).
+// Link pass (§2.3-2.6) over the links of axis A. Links that were in small-angle mode at their
+// last update go through link_pair two at a time (a lane that leaves small-angle mode falls back
+// to link_scalar); the others, in large-angle mode, through link_scalar directly. Links are
+// independent within a pass, so this order gives the same results as list order. With kForces
+// the end loads are computed and the return value is true if any strain > 100; without, the
+// state-only mid-step pass of the fork (§2.9 item 6).
 template <Axis A, bool kForces>
 bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
   bool diverged = false;
@@ -470,14 +490,21 @@ bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
       link_scalar_state_only<A>(m, st, i);
     }
   };
-  int j = begin;
-  for (; j + 1 < end; j += 2) {
-    if (!link_pair<A, kForces>(m, st, sc, ids[j], ids[j + 1], diverged)) {
-      one(ids[j]);
-      one(ids[j + 1]);
+  int pending = -1;  // a small-angle link waiting for a partner
+  for (int j = begin; j < end; ++j) {
+    const int i = ids[j];
+    if (!st.link_small_angle[i]) {
+      one(i);
+    } else if (pending < 0) {
+      pending = i;
+    } else {
+      const int done = link_pair<A, kForces>(m, st, sc, pending, i, diverged);
+      if (!(done & 1)) one(pending);
+      if (!(done & 2)) one(i);
+      pending = -1;
     }
   }
-  if (j < end) one(ids[j]);
+  if (pending >= 0) one(pending);
   return diverged;
 }
 
