@@ -6,6 +6,11 @@
 // -ffp-contract=off, so the written operation order is the executed one.
 #include "physics/step.hpp"
 
+// The paired link and voxel passes use SSE2 (part of every x86-64 CPU). Other architectures
+// would need a scalar build of those passes (the scalar per-lane code is already there).
+#if !defined(__SSE2__)
+#error "softevo physics needs an x86-64 (SSE2) target; see the note at the top of step.cpp"
+#endif
 #include <emmintrin.h>
 
 #include <algorithm>
