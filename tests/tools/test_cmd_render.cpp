@@ -14,20 +14,14 @@
 #include "common/robot.hpp"
 #include "tools/render.hpp"
 
+#include "tests/tools/build_tree.hpp"
+
 namespace softevo {
 namespace {
 
 namespace fs = std::filesystem;
 
-// The build tree: SOFTEVO_BINARY_DIR, else the parent of this test executable's folder
-// (tests are built into <build>/tests).
-std::string build_dir() {
-  if (const char* dir = std::getenv("SOFTEVO_BINARY_DIR"); dir != nullptr && *dir != '\0')
-    return dir;
-  std::error_code ec;
-  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  return ec ? std::string("build") : self.parent_path().parent_path().string();
-}
+using test::build_dir;
 
 std::string softevo_binary() {
   return build_dir() + "/bin/softevo";
