@@ -27,6 +27,7 @@
 #include "master/archive.hpp"
 #include "master/mpi_driver.hpp"
 #include "master/signals.hpp"
+#include "tests/build_tree.hpp"
 #include "worker/evaluate_robot.hpp"
 #include "worker/worker_loop.hpp"
 
@@ -161,8 +162,7 @@ std::string file_bytes(const std::string& path) {
 
 // ---- the binary as a child process (rank 0 only) ----------------------------------------------
 std::string mpi_binary() {
-  const char* b = std::getenv("SOFTEVO_BINARY_DIR");
-  return std::string(b != nullptr ? b : "build") + "/bin/softevo-mpi";
+  return test::build_dir() + "/bin/softevo-mpi";
 }
 
 // Starts softevo-mpi as an MPI singleton: the launcher's OMPI_/PMIX_ variables are removed so

@@ -14,7 +14,7 @@
 #include "common/robot.hpp"
 #include "tools/render.hpp"
 
-#include "tests/tools/build_tree.hpp"
+#include "tests/build_tree.hpp"
 
 namespace softevo {
 namespace {

@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "tests/tools/build_tree.hpp"
+#include "tests/build_tree.hpp"
 
 namespace softevo {
 namespace {

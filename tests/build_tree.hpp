@@ -1,4 +1,4 @@
-// Where the tests of the command-line tools find the built `softevo` and `softevo-mpi`.
+// Where the tests that start the built `softevo` and `softevo-mpi` find them.
 #pragma once
 
 #include <cstdlib>
