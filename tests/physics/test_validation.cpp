@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/rng.hpp"
@@ -24,6 +25,30 @@ class Validation : public ::testing::TestWithParam<std::string> {
     PhysicsConfig cfg;
     cfg.integrator = GetParam();
     return cfg;
+  }
+
+  // The statics scenes: a 1 x 1 x n beam along x of Young's modulus e [Pa], voxel 0 clamped
+  // (all DOFs), no gravity, floor or self-collision; global_damping (dimensionless, §2.5) lets
+  // it settle. `ext` holds one zero force per voxel [N] for the test to load.
+  struct ClampedBeam {
+    Model model;
+    State state;
+    Scratch scratch;
+    std::vector<Vec3> ext;
+  };
+  ClampedBeam clamped_beam(int n, double e, double global_damping) const {
+    PhysicsConfig cfg = base_config();
+    cfg.gravity = 0.0;
+    cfg.floor = false;
+    cfg.self_collision = false;
+    cfg.global_damping = global_damping;
+    BuildOptions opt;
+    opt.fixed_cells = {{0, 0, 0}};
+    Model m = build_model(solid_block(n, 1, 1, e), cfg, opt);
+    State st = initial_state(m);
+    Scratch sc = make_scratch(m);
+    std::vector<Vec3> ext(m.voxel_count, Vec3::Zero());
+    return {std::move(m), std::move(st), std::move(sc), std::move(ext)};
   }
 };
 
@@ -48,21 +73,11 @@ double max_speed(const Model& m, const State& st) {
 // loads, so the tip deflection of a span (n-1) s is F ((n-1) s)^3 / (3 E I)
 // = 4 F (n-1)^3 / (E s). Global damping near critical for the first bending mode lets it settle.
 TEST_P(Validation, CantileverTipDeflection) {
-  PhysicsConfig cfg = base_config();
-  cfg.gravity = 0.0;
-  cfg.floor = false;
-  cfg.self_collision = false;
-  cfg.global_damping = 0.0125;
   const int n = 10;
-  const double e = 1.0e5;
-  BuildOptions opt;
-  opt.fixed_cells = {{0, 0, 0}};
-  const Model m = build_model(solid_block(n, 1, 1, e), cfg, opt);
-  State st = initial_state(m);
-  Scratch sc = make_scratch(m);
+  const double e = 1.0e5;  // [Pa]
+  auto [m, st, sc, ext] = clamped_beam(n, e, 0.0125);
   const double s = m.voxel_size;
   const double force = 3.0e-4;  // [N], deflection ~ 0.1 voxel
-  std::vector<Vec3> ext(m.voxel_count, Vec3::Zero());
   ext[n - 1] = Vec3(0.0, 0.0, -force);
   run(m, st, sc, 40000, ext);
   const double span = (n - 1) * s;
@@ -81,21 +96,11 @@ TEST_P(Validation, CantileverTipDeflection) {
 // Axial stretch: same clamped beam, tip force F along +x. Each link has a1 = E A / L = E s
 // (A = s^2, L = s), so the tip moves F (n-1) s / (E A) = F (n-1) / (E s).
 TEST_P(Validation, AxialStretch) {
-  PhysicsConfig cfg = base_config();
-  cfg.gravity = 0.0;
-  cfg.floor = false;
-  cfg.self_collision = false;
-  cfg.global_damping = 0.05;
   const int n = 10;
-  const double e = 1.0e5;
-  BuildOptions opt;
-  opt.fixed_cells = {{0, 0, 0}};
-  const Model m = build_model(solid_block(n, 1, 1, e), cfg, opt);
-  State st = initial_state(m);
-  Scratch sc = make_scratch(m);
+  const double e = 1.0e5;  // [Pa]
+  auto [m, st, sc, ext] = clamped_beam(n, e, 0.05);
   const double s = m.voxel_size;
   const double force = 1.0e-2;  // [N], strain 1e-3
-  std::vector<Vec3> ext(m.voxel_count, Vec3::Zero());
   ext[n - 1] = Vec3(force, 0.0, 0.0);
   run(m, st, sc, 20000, ext);
   const double expected = force * (n - 1) * s / (e * s * s);
