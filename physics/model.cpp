@@ -144,6 +144,9 @@ Model build_model(const BodyPlan& plan, const PhysicsConfig& cfg, const BuildOpt
   }
   if (!(cfg.dt_fraction > 0.0) || !std::isfinite(cfg.dt_fraction))
     fail("physics.dt_fraction must be > 0");
+  m.simd = options.simd == Simd::best ? best_simd() : options.simd;
+  if (!simd_supported(m.simd))
+    fail(std::string("SIMD width ") + to_string(m.simd) + " is not supported by this CPU or build");
   const int nx = plan.lattice[0], ny = plan.lattice[1], nz = plan.lattice[2];
   if (nx <= 0 || ny <= 0 || nz <= 0) fail("body plan lattice must be positive in x, y and z");
   if (plan.cells.size() != static_cast<std::size_t>(nx) * ny * nz)

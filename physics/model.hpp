@@ -28,6 +28,20 @@ enum class Integrator : std::uint8_t {
   symplectic = 1,  // upstream single-pass symplectic Euler, §2.9
 };
 
+// SIMD width of the step passes (physics/step_kernels.hpp). Every width gives bit-identical
+// results (same IEEE operations per lane); only the speed differs. `best` = the widest this CPU
+// runs (resolved by build_model; Model::simd never holds `best`).
+enum class Simd : std::uint8_t {
+  best = 0,
+  sse2 = 1,  // 2 lanes, every x86-64 CPU
+  avx2 = 2,  // 4 lanes
+};
+const char* to_string(Simd simd);
+// True if this build contains the passes for `simd` and this CPU (and OS) can run them.
+bool simd_supported(Simd simd);
+// The widest supported width.
+Simd best_simd();
+
 // Link axis; also the order of the per-axis permutation of §2.2.
 enum class Axis : std::uint8_t { x = 0, y = 1, z = 2 };
 
@@ -73,6 +87,7 @@ struct Model {
   double dt = 0.0;             // = dt_f: §2.14 recommended step x dt_fraction [s]
   bool floor = true;           // floor contact at z = 0 (voxel centres, §2.8)
   bool self_collision = true;  // §2.10
+  Simd simd = Simd::sse2;      // SIMD width of the step passes (never `best`)
 
   // ---- voxels (index = voxel id, insertion order x outer, y, z inner; §2.1, §5 step 4) -----
   int voxel_count = 0;
@@ -125,6 +140,9 @@ struct BuildOptions {
   // Lattice cells (x, y, z) whose voxel is fixed in place (all 6 DOFs; validation scenes).
   // Each must be a structural cell of the plan.
   std::vector<std::array<int, 3>> fixed_cells;
+  // SIMD width of the step passes; a width this CPU cannot run is an error. Results do not
+  // depend on it (tests and `softevo bench physics --simd` compare the widths).
+  Simd simd = Simd::best;
 };
 
 // Build the model of §2.1 / §5 step 4: one voxel per structural cell (1..K) in the order x outer,

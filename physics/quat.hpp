@@ -32,6 +32,10 @@ inline Quat conj(const Quat& q) {
   return {q.w, -q.x, -q.y, -q.z};
 }
 
+// The larger helpers below are always_inline: the step passes are also compiled for AVX2
+// (physics/step_avx2.cpp), and an out-of-line copy emitted there could be linked into the SSE2
+// code as well (checked by the PhysicsIsa test).
+//
 // The formulas below are written once, generic over the scalar type T (double, or a pair of
 // doubles for the two-link SIMD link pass of step.cpp), so every caller performs exactly the
 // same operations in the same order (bit-identical results, -ffp-contract=off).
@@ -73,7 +77,7 @@ inline Vec3 rotate_inv(const Quat& q, const Vec3& f) {
 }
 
 // §2.11: quaternion from rotation vector r (Taylor branch for half-angles below ~2.7e-4 rad).
-inline Quat quat_from_rotvec(const Vec3& r) {
+[[gnu::always_inline]] inline Quat quat_from_rotvec(const Vec3& r) {
   const double hx = r.x() / 2, hy = r.y() / 2, hz = r.z() / 2;  // theta = r/2
   const double t = hx * hx + hy * hy + hz * hz;                 // |theta|^2
   double w, s;
@@ -89,7 +93,7 @@ inline Quat quat_from_rotvec(const Vec3& r) {
 }
 
 // §2.11: rotation vector of q (no renormalisation; w outside (-1,1) gives 0).
-inline Vec3 rotvec(const Quat& q) {
+[[gnu::always_inline]] inline Vec3 rotvec(const Quat& q) {
   if (q.w >= 1.0 || q.w <= -1.0) return Vec3::Zero();
   const double t = 1.0 - q.w * q.w;
   if (t < 2.4e-3) {
@@ -101,7 +105,7 @@ inline Vec3 rotvec(const Quat& q) {
 }
 
 // §2.11 "angle to +X": the rotation taking direction d onto +X; identity for d = 0.
-inline Quat quat_to_pos_x(const Vec3& d) {
+[[gnu::always_inline]] inline Quat quat_to_pos_x(const Vec3& d) {
   if (d.x() == 0.0 && d.y() == 0.0 && d.z() == 0.0) return {};
   const double a = d.y() / d.x(), b = d.z() / d.x();
   if (std::fabs(a) < 1.732e-2 && std::fabs(b) < 1.732e-2) {

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -37,8 +38,12 @@ struct Scratch {
   };
   std::vector<EndLoad> link_end_load;  // (2 x links)
   // §2.5 link damping multiplier c_V = damp_base_V / previous_dt (float) per voxel, refreshed at
-  // the start of each force link pass (one division per voxel instead of two per link)
+  // the start of a force link pass when previous_dt changed (one division per voxel instead of
+  // two per link)
   std::vector<float> link_damping;  // [sqrt(kg)/s] (voxels)
+  // previous_dt that link_damping was computed for (NaN: not yet); the division is redone only
+  // when State::previous_dt changes (in practice once, after the first step)
+  float link_damping_dt = std::numeric_limits<float>::quiet_NaN();  // [s]
   // voxel pass (pneuvox part 1 -> part 2 carry-over, §2.1 "fork-only per-voxel scratch")
   std::vector<Vec3> collision_force;             // collisionF [N] (voxels)
   std::vector<Vec3> part2_force;                 // gravityF + collisionF + fric [N] (voxels)

@@ -1,5 +1,5 @@
-// `softevo bench physics [--json] [--steps N] [--runs R] [--scene NAME]`: raw physics speed
-// (issue 3). Named scenes of 1 cm voxels, E = 100 kPa, the thesis material settings, floor,
+// `softevo bench physics [--json] [--steps N] [--runs R] [--scene NAME] [--simd W]`: raw physics
+// speed (issue 3). Named scenes of 1 cm voxels, E = 100 kPa, the thesis material settings, floor,
 // gravity and self-collision on (../shared/reference/measurements.md "Raw physics speed"), for
 // both integrators. Each figure is the best of R runs of N steps from the initial state, in CPU
 // seconds of this thread (the machine is shared; wall time is printed alongside).
@@ -26,17 +26,21 @@ struct Scene {
 };
 
 struct BenchRow {
-  std::string scene, integrator;
+  std::string scene, integrator, simd;
   int voxels = 0, links = 0, steps = 0, failed_steps = 0;
   double cpu_seconds = 0.0, wall_seconds = 0.0;
 };
 
-BenchRow bench_one(const Scene& scene, const std::string& integrator, int steps, int runs) {
+BenchRow bench_one(const Scene& scene, const std::string& integrator, physics::Simd simd, int steps,
+                   int runs) {
   PhysicsConfig cfg;  // thesis defaults: floor, gravity, self-collision, damping 0.1/0.001/0.1
   cfg.integrator = integrator;
+  physics::BuildOptions options;
+  options.simd = simd;
   const physics::Model model =
-      physics::build_model(physics::solid_block(scene.x, scene.y, scene.z, 1.0e5), cfg);
-  BenchRow row{scene.name, integrator, model.voxel_count, model.link_count, steps};
+      physics::build_model(physics::solid_block(scene.x, scene.y, scene.z, 1.0e5), cfg, options);
+  BenchRow row{scene.name,        integrator,       physics::to_string(model.simd),
+               model.voxel_count, model.link_count, steps};
   row.cpu_seconds = 1e300;
   for (int r = 0; r < runs; ++r) {
     physics::State state = physics::initial_state(model);
@@ -70,39 +74,62 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
   cmd->add_option("--runs", *runs, "runs per figure, best is kept (default 3)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--scene", *only, "only scenes whose name contains this");
-  cmd->callback([&exit_code, json, steps, runs, only] {
+  auto simd_name = std::make_shared<std::string>("best");
+  cmd->add_option("--simd", *simd_name,
+                  "SIMD width of the step passes: best (default), sse2, avx2 or all "
+                  "(results are bit-identical; only the speed differs)")
+      ->check(CLI::IsMember({"best", "sse2", "avx2", "all"}));
+  cmd->callback([&exit_code, json, steps, runs, only, simd_name] {
+    std::vector<physics::Simd> widths;
+    for (physics::Simd s : {physics::Simd::sse2, physics::Simd::avx2}) {
+      if (*simd_name == physics::to_string(s) ||
+          (*simd_name == "all" && physics::simd_supported(s)))
+        widths.push_back(s);
+    }
+    if (*simd_name == "best") widths.push_back(physics::best_simd());
+    for (physics::Simd s : widths) {
+      if (!physics::simd_supported(s)) {
+        std::fprintf(stderr,
+                     "softevo bench physics: --simd %s is not supported by this CPU or build\n",
+                     physics::to_string(s));
+        exit_code = kExitUsage;
+        return;
+      }
+    }
     const std::vector<Scene> scenes = {
         {"block10x10x10", 10, 10, 10}, {"block4x4x4", 4, 4, 4}, {"beam10x2x2", 10, 2, 2}};
     nlohmann::json out = nlohmann::json::array();
     if (!*json)
-      std::printf("%-14s %-10s %6s %6s %12s %14s %10s %8s\n", "scene", "integrator", "voxels",
-                  "links", "us/vox-step", "steps/second", "wall/cpu", "failed");
+      std::printf("%-14s %-10s %-6s %6s %6s %12s %14s %10s %8s\n", "scene", "integrator", "simd",
+                  "voxels", "links", "us/vox-step", "steps/second", "wall/cpu", "failed");
     int failed = 0;
     for (const Scene& scene : scenes) {
       if (!only->empty() && std::string(scene.name).find(*only) == std::string::npos) continue;
-      for (const char* integrator : {"pneuvox", "symplectic"}) {
-        const BenchRow r = bench_one(scene, integrator, *steps, *runs);
-        const double us = r.cpu_seconds * 1e6 / (static_cast<double>(r.steps) * r.voxels);
-        const double sps = r.steps / r.cpu_seconds;
-        failed += r.failed_steps;
-        if (*json) {
-          out.push_back({{"scene", r.scene},
-                         {"integrator", r.integrator},
-                         {"voxels", r.voxels},
-                         {"links", r.links},
-                         {"steps", r.steps},
-                         {"runs", *runs},
-                         {"us_per_voxel_step", us},
-                         {"steps_per_second", sps},
-                         {"cpu_seconds", r.cpu_seconds},
-                         {"wall_seconds", r.wall_seconds},
-                         {"failed_steps", r.failed_steps}});
-        } else {
-          std::printf("%-14s %-10s %6d %6d %12.4f %14.1f %10.2f %8d\n", r.scene.c_str(),
-                      r.integrator.c_str(), r.voxels, r.links, us, sps,
-                      r.wall_seconds / r.cpu_seconds, r.failed_steps);
+      for (const char* integrator : {"pneuvox", "symplectic"})
+        for (physics::Simd simd : widths) {
+          const BenchRow r = bench_one(scene, integrator, simd, *steps, *runs);
+          const double us = r.cpu_seconds * 1e6 / (static_cast<double>(r.steps) * r.voxels);
+          const double sps = r.steps / r.cpu_seconds;
+          failed += r.failed_steps;
+          if (*json) {
+            out.push_back({{"scene", r.scene},
+                           {"integrator", r.integrator},
+                           {"simd", r.simd},
+                           {"voxels", r.voxels},
+                           {"links", r.links},
+                           {"steps", r.steps},
+                           {"runs", *runs},
+                           {"us_per_voxel_step", us},
+                           {"steps_per_second", sps},
+                           {"cpu_seconds", r.cpu_seconds},
+                           {"wall_seconds", r.wall_seconds},
+                           {"failed_steps", r.failed_steps}});
+          } else {
+            std::printf("%-14s %-10s %-6s %6d %6d %12.4f %14.1f %10.2f %8d\n", r.scene.c_str(),
+                        r.integrator.c_str(), r.simd.c_str(), r.voxels, r.links, us, sps,
+                        r.wall_seconds / r.cpu_seconds, r.failed_steps);
+          }
         }
-      }
     }
     if (*json) std::printf("%s\n", out.dump(2).c_str());
     exit_code = failed == 0 ? kExitOk : kExitMismatch;

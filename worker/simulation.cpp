@@ -43,7 +43,9 @@ EvalResult simulate(const Config& config, const BodyPlan& plan, const Controller
   result.direction_index = direction_index;
 
   // ---- setup (§5 setup 1-8) -------------------------------------------------------------------
-  const physics::Model model = physics::build_model(plan, config.physics);
+  physics::BuildOptions build_options;
+  build_options.simd = opts.simd;
+  const physics::Model model = physics::build_model(plan, config.physics, build_options);
   const physics::PneumaticsModel pm = physics::build_pneumatics(plan, model, config.pneumatics);
   result.voxels = model.voxel_count;
   result.chambers = pm.chamber_count;

@@ -48,6 +48,8 @@ struct TraceHeader {
 struct EvalOptions {
   bool ablate_oscillator = false;  // feed 0 to the sin/cos inputs (thesis section 5.1.1)
   bool ablate_sensors = false;     // feed 0 to the pressure-sensor inputs
+  // SIMD width of the physics step passes; results are bit-identical for every width
+  physics::Simd simd = physics::Simd::best;
   std::function<void(const TraceHeader&)> on_start;  // optional observer
   std::function<void(const TraceFrame&)> on_frame;   // optional observer, 60 Hz
 };

@@ -18,7 +18,8 @@ inline constexpr int kSteps = 1500;
 // A 5x4x3 body of two materials (30 kPa / 100 kPa checkerboard) with a hole, lifted 0.3 s,
 // random initial momenta (Rng seed 2024) and a time-varying external force on four voxels:
 // exercises links in both angle modes, damping, floor contact, friction and self-collision.
-inline std::uint64_t run_scene(const std::string& integrator) {
+// `simd` picks the width of the step passes (results must not depend on it).
+inline std::uint64_t run_scene(const std::string& integrator, Simd simd = Simd::best) {
   BodyPlan plan = solid_block(5, 4, 3, 3.0e4);
   plan.materials.push_back(StructuralMaterial{1.0e5, 1000.0});
   for (int x = 0; x < 5; ++x)
@@ -29,7 +30,9 @@ inline std::uint64_t run_scene(const std::string& integrator) {
   plan.cells[plan.cell_index(3, 2, 1)] = kFirstChamberCell;
   PhysicsConfig cfg;
   cfg.integrator = integrator;
-  const Model m = build_model(plan, cfg);
+  BuildOptions options;
+  options.simd = simd;
+  const Model m = build_model(plan, cfg, options);
   State st = initial_state(m);
   Scratch sc = make_scratch(m);
   Rng rng(2024);

@@ -48,6 +48,34 @@ TEST(Determinism, GoldenHashInProcess) {
   EXPECT_NE(hp, hs);
 }
 
+// Every SIMD width of the step passes this build and CPU can run gives the same bits (the
+// lanes perform the scalar path's operations; only the grouping of links and voxels differs).
+TEST(Determinism, GoldenHashAtEverySimdWidth) {
+  int widths = 0;
+  for (Simd simd : {Simd::sse2, Simd::avx2}) {
+    if (!simd_supported(simd)) {
+      std::printf("SIMD width %s: not supported here, not checked\n", to_string(simd));
+      continue;
+    }
+    ++widths;
+    EXPECT_EQ(hex(golden::run_scene("pneuvox", simd)), hex(kGoldenPneuvox)) << to_string(simd);
+    EXPECT_EQ(hex(golden::run_scene("symplectic", simd)), hex(kGoldenSymplectic))
+        << to_string(simd);
+  }
+  EXPECT_GE(widths, 1);
+  std::printf("best SIMD width here: %s\n", to_string(best_simd()));
+}
+
+// The default width is resolved to the widest supported one; an explicit width is kept.
+TEST(Determinism, SimdWidthIsResolvedAtBuild) {
+  const Model best = build_model(solid_block(2, 2, 2, 1e5), PhysicsConfig{});
+  EXPECT_EQ(best.simd, best_simd());
+  EXPECT_NE(best.simd, Simd::best);
+  BuildOptions options;
+  options.simd = Simd::sse2;
+  EXPECT_EQ(build_model(solid_block(2, 2, 2, 1e5), PhysicsConfig{}, options).simd, Simd::sse2);
+}
+
 TEST(Determinism, SameHashInTwoOtherProcesses) {
   const std::string expected =
       "pneuvox " + hex(kGoldenPneuvox) + "\nsymplectic " + hex(kGoldenSymplectic) + "\n";

@@ -1,8 +1,10 @@
 // Helper of test_eval_determinism: evaluates ROBOT.json for SECONDS with the built-in config
 // (task from the controller) and prints the fitness bits ("%a") and status. Run in separate
-// processes by the test to show that the result does not depend on the process.
+// processes by the test to show that the result does not depend on the process. An optional
+// third argument names the SIMD width of the physics (sse2, avx2; default: the best here).
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <exception>
 
 #include "common/config.hpp"
@@ -10,9 +12,20 @@
 #include "worker/evaluate_robot.hpp"
 
 int main(int argc, char** argv) {
-  if (argc != 3) {
-    std::fprintf(stderr, "usage: %s ROBOT.json SECONDS\n", argv[0]);
+  if (argc != 3 && argc != 4) {
+    std::fprintf(stderr, "usage: %s ROBOT.json SECONDS [sse2|avx2]\n", argv[0]);
     return 2;
+  }
+  softevo::EvalOptions options;
+  if (argc == 4) {
+    if (std::strcmp(argv[3], "sse2") == 0) {
+      options.simd = softevo::physics::Simd::sse2;
+    } else if (std::strcmp(argv[3], "avx2") == 0) {
+      options.simd = softevo::physics::Simd::avx2;
+    } else {
+      std::fprintf(stderr, "unknown SIMD width '%s'\n", argv[3]);
+      return 2;
+    }
   }
   try {
     const softevo::RobotFile robot = softevo::read_robot_file(argv[1]);
@@ -20,7 +33,8 @@ int main(int argc, char** argv) {
     config.run.eval_timeout_seconds = 0.0;
     config.task.eval_seconds = std::atof(argv[2]);
     config.task.kind = robot.controller.directed ? "directed" : "gait";
-    const softevo::EvalResult r = softevo::evaluate_task(config, robot.body, robot.controller);
+    const softevo::EvalResult r =
+        softevo::evaluate_task(config, robot.body, robot.controller, options);
     std::printf("%a %s\n", r.fitness, softevo::to_string(r.status));
     return 0;
   } catch (const std::exception& e) {

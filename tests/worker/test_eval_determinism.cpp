@@ -9,6 +9,7 @@
 #include <string>
 
 #include "common/robot.hpp"
+#include "physics/model.hpp"
 
 namespace fs = std::filesystem;
 
@@ -19,8 +20,10 @@ fs::path shared_dir() {
   return (env ? fs::path(env) : fs::current_path()) / ".." / "shared";
 }
 
-std::string run(const std::string& robot, const std::string& seconds) {
-  const std::string cmd = std::string(SOFTEVO_EVAL_FITNESS_EXE) + " '" + robot + "' " + seconds;
+std::string run(const std::string& robot, const std::string& seconds,
+                const std::string& simd = "") {
+  const std::string cmd =
+      std::string(SOFTEVO_EVAL_FITNESS_EXE) + " '" + robot + "' " + seconds + " " + simd;
   FILE* pipe = popen(cmd.c_str(), "r");
   if (!pipe) return "popen failed";
   std::string out;
@@ -30,7 +33,8 @@ std::string run(const std::string& robot, const std::string& seconds) {
   return rc == 0 ? out : "exit " + std::to_string(rc) + ": " + out;
 }
 
-// A closed-loop directed robot with two chambers, written as a robot file.
+// A closed-loop directed robot with two chambers, written as a robot file named after the
+// calling test (ctest runs the tests of this file in parallel processes).
 std::string write_closed_loop_robot() {
   softevo::RobotFile r;
   r.name = "determinism-closed";
@@ -60,7 +64,8 @@ std::string write_closed_loop_robot() {
   fill(c.vectors.weights_context, 4, 0.5);
   fill(c.vectors.bias_context, 4, 0.1);
   c.vectors.freq = {2.5};
-  const fs::path path = fs::temp_directory_path() / "softevo_determinism_closed.robot.json";
+  const std::string test = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  const fs::path path = fs::temp_directory_path() / ("softevo_determinism_" + test + ".robot.json");
   softevo::write_robot_file(r, path.string());
   return path.string();
 }
@@ -73,6 +78,21 @@ TEST(EvalDeterminism, SyntheticClosedLoopRobotInTwoProcesses) {
   fs::remove(robot);
   EXPECT_EQ(a, b);
   EXPECT_NE(a.find(" ok"), std::string::npos) << a;
+}
+
+// The SIMD width of the physics passes does not change a single bit of a whole evaluation
+// (links in both angle modes, floor, friction, self-collision, pneumatics, closed loop).
+TEST(EvalDeterminism, SameBitsAtEverySimdWidth) {
+  if (!softevo::physics::simd_supported(softevo::physics::Simd::avx2))
+    GTEST_SKIP() << "this CPU has no AVX2: only the SSE2 width runs here";
+  const std::string robot = write_closed_loop_robot();
+  const std::string narrow = run(robot, "1", "sse2"), wide = run(robot, "1", "avx2");
+  fs::remove(robot);
+  EXPECT_EQ(narrow, wide);
+  EXPECT_NE(narrow.find(" ok"), std::string::npos) << narrow;
+  const fs::path champion = shared_dir() / "reference" / "bestbots" / "gait-open-01.robot.json";
+  if (!fs::exists(champion)) GTEST_SKIP() << "../shared not found (" << champion << ")";
+  EXPECT_EQ(run(champion.string(), "1", "sse2"), run(champion.string(), "1", "avx2"));
 }
 
 TEST(EvalDeterminism, FiveChamberClosedLoopChampionInTwoProcesses) {

@@ -1,0 +1,1186 @@
+// The passes of one physics time step (pneuvox-model.md §2.3-2.13), written once over a SIMD lane
+// width. Internal to physics/: included only by the step_*.cpp translation units, each of which
+// supplies its lane traits L and is compiled for its own instruction set (step.cpp: SSE2, W = 2;
+// step_avx2.cpp: AVX2, W = 4). Everything here has internal
+// linkage (anonymous namespace), so the copies built with different instruction sets never meet
+// in the linker; the only thing a translation unit exports is its StepKernels table.
+//
+// Precision: state is double; constants are float (Model); products the reference forms in float
+// (dt * (1/m), k_pen * pen, mu * N, strain, stress * A, collision forces) are formed in float
+// here too, and a float times a double is promoted exactly as in the reference. The build uses
+// -ffp-contract=off, so the written operation order is the executed one.
+//
+// Lanes: links in small-angle mode (the common case) and free voxels go through the passes W at
+// a time, one link or voxel per lane of a W x double vector. Every lane performs exactly the
+// scalar path's IEEE operations in the same order (the quaternion formulas are the shared
+// templates of quat.hpp; float roundings are a float conversion of the same double; float x
+// float products and float / float quotients are formed in double and rounded to float, which
+// gives the float result exactly since 53 >= 2 x 24 + 2), so every width gives results
+// bit-identical to the scalar reference path (link_scalar, fork_part1_voxel, ...), and thus to
+// each other. Lanes that need a rare branch (large-angle links, floor contact, large rotations)
+// run it per lane in the scalar code.
+//
+// Lane traits L: static constexpr int W; using D = double vector of W lanes; using M = long long
+// vector of W lanes (comparison result, all ones = true); static D round_to_float(D);
+// static D sqrt(D) (IEEE, correctly rounded); static int bits(M) (bit k = lane k true).
+#pragma once
+
+#include <emmintrin.h>
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <utility>
+
+#include "physics/model.hpp"
+#include "physics/state.hpp"
+#include "physics/step.hpp"
+#include "physics/step_kernels_table.hpp"
+
+namespace softevo::physics {
+namespace {
+
+// ---- §2.2 axis permutation ("as if the link pointed along +X") --------------------------------
+// The axis is a template parameter: the link pass runs one axis at a time (Model::links_by_axis),
+// so the permutations are free register moves instead of a data-dependent switch per link end.
+template <Axis A>
+inline Vec3 to_x(double x, double y, double z) {
+  if constexpr (A == Axis::x) return {x, y, z};
+  if constexpr (A == Axis::y) return {y, -x, z};
+  if constexpr (A == Axis::z) return {z, y, -x};
+}
+template <Axis A>
+inline Quat to_x(const Quat& q) {
+  if constexpr (A == Axis::x) return q;
+  if constexpr (A == Axis::y) return {q.w, q.y, -q.x, q.z};
+  if constexpr (A == Axis::z) return {q.w, q.z, q.y, -q.x};
+}
+template <Axis A>
+inline Vec3 from_x(const Vec3& v) {
+  if constexpr (A == Axis::x) return v;
+  if constexpr (A == Axis::y) return {-v.y(), v.x(), v.z()};
+  if constexpr (A == Axis::z) return {-v.z(), v.y(), v.x()};
+}
+
+// §2.3 small-angle hysteresis thresholds (float, as the reference's static float constants).
+constexpr float kSmallBend = 0.05f;        // turn below this -> small angle
+constexpr float kSmallExt = 0.5f;          // extension below this -> small angle
+constexpr float kHysteresis = 1.2f;        // leave small angle above 1.2x the thresholds
+constexpr float kStrainDiverged = 100.0f;  // §2.12 item 1
+
+// Result of the link kinematics (§2.3): the new link state and the frame quaternions. Kept in
+// locals (not written through State references) so the force code reads registers.
+struct LinkKinematics {
+  Vec3 pos2;  // [m]
+  Vec3 a1v;   // [rad]
+  Vec3 a2v;   // [rad]
+  Quat q1;    // rotation to +X of the large-angle frame (identity in small-angle mode)
+  Quat q2;    // orientation of P in the link frame
+  bool small;
+  bool switched;  // the hysteresis changed mode: local velocity becomes invalid
+};
+
+// §2.3 "orient link": pos2, angle1v, angle2v and the small-angle flag with hysteresis. Reads
+// voxel state and the link's current mode only; the caller stores the result.
+template <Axis A>
+inline void orient_link(const Model& m, const State& st, int i, LinkKinematics& k) {
+  const int n = m.link_neg[i], p = m.link_pos[i];
+  const Vec3& pn = st.pos[n];
+  const Vec3& pp = st.pos[p];
+  const Vec3 d0 = to_x<A>(pp.x() - pn.x(), pp.y() - pn.y(), pp.z() - pn.z());
+  const Quat r = conj(to_x<A>(st.orient[n]));  // total rotation so far = conj(q1)
+  const Vec3 d = rotate(r, d0);
+  k.q1 = Quat{};
+  k.q2 = mul(r, to_x<A>(st.orient[p]));
+  const double l = m.rest_length;
+  // §2.3 step 3: small-angle test in float with floating-point abs.
+  const float turn = static_cast<float>((std::fabs(d.z()) + std::fabs(d.y())) / d.x());
+  const float ext = static_cast<float>(std::fabs(1 - d.x() / l));
+  const bool was_small = st.link_small_angle[i] != 0;
+  bool small = was_small;
+  if (!was_small && turn < kSmallBend && ext < kSmallExt) {
+    small = true;
+  } else if (was_small && (turn > kHysteresis * kSmallBend || ext > kHysteresis * kSmallExt)) {
+    small = false;
+  }
+  k.small = small;
+  k.switched = small != was_small;
+  if (small) {
+    k.pos2 = Vec3(d.x() - l, d.y(), d.z());
+    k.a1v = Vec3::Zero();  // rotvec(identity) = 0
+  } else {
+    k.q1 = quat_to_pos_x(d);
+    k.q2 = mul(k.q1, k.q2);
+    k.pos2 = Vec3(std::sqrt(d.x() * d.x() + d.y() * d.y() + d.z() * d.z()) - l, 0.0, 0.0);
+    k.a1v = rotvec(k.q1);
+  }
+  k.a2v = rotvec(k.q2);
+}
+
+// Full link update (§2.3-2.6) of link i of axis A, any mode: the reference path. Returns true
+// if its strain > 100.
+template <Axis A>
+bool link_scalar(const Model& m, State& st, Scratch& sc, int i) {
+  LinkKinematics k;
+  orient_link<A>(m, st, i, k);
+  const Vec3& pos2 = k.pos2;
+  const Vec3& a1 = k.a1v;
+  const Vec3& a2 = k.a2v;
+  const LinkConst& c = m.link_const[i];
+
+  // §2.4: strain = pos2.x / L (float), sigma = E_L strain (linear material, float)
+  const float strain = static_cast<float>(pos2.x() / m.rest_length);
+  const bool diverged = strain > kStrainDiverged;
+  const float stress = c.e_area * strain;
+  const float b1 = c.b1, b2 = c.b2, b3 = c.b3, a2c = c.a2;
+  // §2.4 F_N = (sigma A, b1 y - b2 (t1z + t2z), b1 z + b2 (t1y + t2y)), F_P = -F_N
+  Vec3 fn(static_cast<double>(stress * c.area), b1 * pos2.y() - b2 * (a1.z() + a2.z()),
+          b1 * pos2.z() + b2 * (a1.y() + a2.y()));
+  Vec3 fp(-fn.x(), -fn.y(), -fn.z());
+  Vec3 mn(a2c * (a2.x() - a1.x()), -b2 * pos2.z() - b3 * (2 * a1.y() + a2.y()),
+          b2 * pos2.y() - b3 * (2 * a1.z() + a2.z()));
+  Vec3 mp(a2c * (a1.x() - a2.x()), -b2 * pos2.z() - b3 * (a1.y() + 2 * a2.y()),
+          b2 * pos2.y() - b3 * (a1.z() + 2 * a2.z()));
+
+  // §2.5 internal damping from the change since the previous link update; skipped (and the
+  // flag set) after a mode switch or at the first update
+  if (st.link_vel_valid[i] && !k.switched) {
+    const Vec3& old_pos2 = st.link_pos2[i];
+    const Vec3& old_a1 = st.link_angle1v[i];
+    const Vec3& old_a2 = st.link_angle2v[i];
+    const double dpx = 0.5 * (pos2.x() - old_pos2.x()), dpy = 0.5 * (pos2.y() - old_pos2.y()),
+                 dpz = 0.5 * (pos2.z() - old_pos2.z());
+    const double d1x = 0.5 * (a1.x() - old_a1.x()), d1y = 0.5 * (a1.y() - old_a1.y()),
+                 d1z = 0.5 * (a1.z() - old_a1.z());
+    const double d2x = 0.5 * (a2.x() - old_a2.x()), d2y = 0.5 * (a2.y() - old_a2.y()),
+                 d2z = 0.5 * (a2.z() - old_a2.z());
+    const float sq_a1 = c.sq_a1, sq_a2 = c.sq_a2xip, sq_b1 = c.sq_b1, sq_b2 = c.sq_b2xfmp,
+                sq_b3 = c.sq_b3xip;
+    const double vx = sq_a1 * dpx, vy = sq_b1 * dpy - sq_b2 * (d1z + d2z),
+                 vz = sq_b1 * dpz + sq_b2 * (d1y + d2y);
+    // c_V = 2 sqrt(m_V) zeta_int / previousDt_V (float)
+    const float cn = sc.link_damping[m.link_neg[i]];
+    const float cp = sc.link_damping[m.link_pos[i]];
+    fn += Vec3(cn * vx, cn * vy, cn * vz);
+    fp -= Vec3(cp * vx, cp * vy, cp * vz);
+    const double hn = 0.5 * cn, hp = 0.5 * cp;
+    mn -= Vec3(hn * (-sq_a2 * (d2x - d1x)), hn * (sq_b2 * dpz + sq_b3 * (2 * d1y + d2y)),
+               hn * (-sq_b2 * dpy + sq_b3 * (2 * d1z + d2z)));
+    mp -= Vec3(hp * (sq_a2 * (d2x - d1x)), hp * (sq_b2 * dpz + sq_b3 * (d1y + 2 * d2y)),
+               hp * (-sq_b2 * dpy + sq_b3 * (d1z + 2 * d2z)));
+  }
+  st.link_vel_valid[i] = 1;
+  st.link_small_angle[i] = k.small;
+  st.link_strain[i] = strain;
+  st.link_pos2[i] = pos2;
+  st.link_angle1v[i] = a1;
+  st.link_angle2v[i] = a2;
+
+  // §2.6 back to the end voxels' local frames
+  if (!k.small) {
+    fn = rotate_inv(k.q1, fn);
+    mn = rotate_inv(k.q1, mn);
+  }
+  fp = rotate_inv(k.q2, fp);
+  mp = rotate_inv(k.q2, mp);
+  Scratch::EndLoad* out = &sc.link_end_load[2 * static_cast<std::size_t>(i)];
+  out[0].force = from_x<A>(fn);
+  out[0].moment = from_x<A>(mn);
+  out[1].force = from_x<A>(fp);
+  out[1].moment = from_x<A>(mp);
+  return diverged;
+}
+
+// Mid-step link update of the fork (§2.9 item 6): same kinematics and state update, forces
+// discarded (so they are not computed). The local-velocity flag ends up set, as after any update.
+template <Axis A>
+void link_scalar_state_only(const Model& m, State& st, int i) {
+  LinkKinematics k;
+  orient_link<A>(m, st, i, k);
+  st.link_strain[i] = static_cast<float>(k.pos2.x() / m.rest_length);
+  st.link_vel_valid[i] = 1;
+  st.link_small_angle[i] = k.small;
+  st.link_pos2[i] = k.pos2;
+  st.link_angle1v[i] = k.a1v;
+  st.link_angle2v[i] = k.a2v;
+}
+
+// ---- lanes --------------------------------------------------------------------------------------
+template <class L>
+using DV = typename L::D;
+template <class L>
+using MV = typename L::M;
+template <class L>
+constexpr int kAllLanes = (1 << L::W) - 1;
+
+template <class L, class F, std::size_t... K>
+[[gnu::always_inline]] inline DV<L> make_lanes(F& f, std::index_sequence<K...>) {
+  return DV<L>{f(static_cast<int>(K))...};
+}
+// The vector whose lane k is f(k) (a double).
+template <class L, class F>
+[[gnu::always_inline]] inline DV<L> make_lanes(F&& f) {
+  return make_lanes<L>(f, std::make_index_sequence<L::W>{});
+}
+template <class L>
+[[gnu::always_inline]] inline DV<L> splat(double x) {
+  return make_lanes<L>([x](int) { return x; });
+}
+template <class L>
+[[gnu::always_inline]] inline DV<L> abs_lanes(DV<L> x) {  // clear the sign bit
+  return reinterpret_cast<DV<L>>(reinterpret_cast<MV<L>>(x) & 0x7fffffffffffffffLL);
+}
+template <class L>
+[[gnu::always_inline]] inline DV<L> select(MV<L> mask, DV<L> a, DV<L> b) {  // mask ? a : b
+  return reinterpret_cast<DV<L>>((reinterpret_cast<MV<L>>(a) & mask) |
+                                 (reinterpret_cast<MV<L>>(b) & ~mask));
+}
+// Lane mask with bits `on` set to all ones.
+template <class L>
+[[gnu::always_inline]] inline MV<L> mask_of(int on) {
+  MV<L> m{};
+  for (int k = 0; k < L::W; ++k) m[k] = (on >> k & 1) ? -1LL : 0LL;
+  return m;
+}
+
+template <class L>
+struct VL {  // W Vec3
+  DV<L> x, y, z;
+};
+template <class L>
+struct QL {  // W Quat
+  DV<L> w, x, y, z;
+};
+
+// Transposing loads and stores between W records and lanes. Lane traits may supply faster
+// versions (whole-record loads and register transposes: L::gather3, L::gather4, L::scatter3,
+// L::gather_f12); these are the generic fallbacks. Records: 3 or 4 consecutive doubles, or 12
+// consecutive floats (LinkConst, VoxelConst).
+template <class L>
+[[gnu::always_inline]] inline void gather3(const double* const* p, DV<L>& x, DV<L>& y, DV<L>& z) {
+  if constexpr (requires { L::gather3(p, x, y, z); }) {
+    L::gather3(p, x, y, z);
+  } else {
+    x = make_lanes<L>([&](int k) { return p[k][0]; });
+    y = make_lanes<L>([&](int k) { return p[k][1]; });
+    z = make_lanes<L>([&](int k) { return p[k][2]; });
+  }
+}
+template <class L>
+[[gnu::always_inline]] inline void scatter3(double* const* p, DV<L> x, DV<L> y, DV<L> z, int mask) {
+  if constexpr (requires { L::scatter3(p, x, y, z, mask); }) {
+    L::scatter3(p, x, y, z, mask);
+  } else {
+    for (int k = 0; k < L::W; ++k) {
+      if (!(mask >> k & 1)) continue;
+      p[k][0] = x[k];
+      p[k][1] = y[k];
+      p[k][2] = z[k];
+    }
+  }
+}
+// Member j of W records of 12 floats, as doubles (exact).
+template <class L>
+[[gnu::always_inline]] inline void gather_f12(const float* const* p, DV<L> (&out)[12]) {
+  if constexpr (requires { L::gather_f12(p, out); }) {
+    L::gather_f12(p, out);
+  } else {
+    for (int j = 0; j < 12; ++j)
+      out[j] = make_lanes<L>([&](int k) { return static_cast<double>(p[k][j]); });
+  }
+}
+
+static_assert(sizeof(Vec3) == 3 * sizeof(double) && sizeof(Quat) == 4 * sizeof(double));
+static_assert(sizeof(LinkConst) == 12 * sizeof(float) && sizeof(VoxelConst) == 12 * sizeof(float));
+
+template <class L>
+[[gnu::always_inline]] inline VL<L> gather(const std::vector<Vec3>& a, const int* id) {
+  const double* p[L::W];
+  for (int k = 0; k < L::W; ++k) p[k] = a[id[k]].data();
+  VL<L> v;
+  gather3<L>(p, v.x, v.y, v.z);
+  return v;
+}
+template <class L>
+[[gnu::always_inline]] inline QL<L> gather(const std::vector<Quat>& a, const int* id) {
+  const double* p[L::W];
+  for (int k = 0; k < L::W; ++k) p[k] = &a[id[k]].w;
+  QL<L> q;
+  if constexpr (requires { L::gather4(p, q.w, q.x, q.y, q.z); }) {
+    L::gather4(p, q.w, q.x, q.y, q.z);
+  } else {
+    q.w = make_lanes<L>([&](int k) { return p[k][0]; });
+    q.x = make_lanes<L>([&](int k) { return p[k][1]; });
+    q.y = make_lanes<L>([&](int k) { return p[k][2]; });
+    q.z = make_lanes<L>([&](int k) { return p[k][3]; });
+  }
+  return q;
+}
+// Lane k -> a[id[k]] for the lanes in `mask` (bit k = lane k).
+template <class L>
+[[gnu::always_inline]] inline void scatter(const VL<L>& v, std::vector<Vec3>& a, const int* id,
+                                           int mask = kAllLanes<L>) {
+  double* p[L::W];
+  for (int k = 0; k < L::W; ++k) p[k] = a[id[k]].data();
+  scatter3<L>(p, v.x, v.y, v.z, mask);
+}
+template <class L>
+[[gnu::always_inline]] inline void scatter(const QL<L>& q, std::vector<Quat>& a, const int* id) {
+  for (int k = 0; k < L::W; ++k) a[id[k]] = Quat{q.w[k], q.x[k], q.y[k], q.z[k]};
+}
+// The float constants of W links / voxels as double lanes (exact), indexed by member.
+template <class L>
+struct LinkConstL {
+  DV<L> e_area, area, a2, b1, b2, b3, sq_a1, sq_a2xip, sq_b1, sq_b2xfmp, sq_b3xip;
+};
+template <class L>
+[[gnu::always_inline]] inline LinkConstL<L> gather_link_const(const Model& m, const int* id) {
+  static_assert(offsetof(LinkConst, e_area) == 0 && offsetof(LinkConst, sq_b3xip) == 40);
+  const float* p[L::W];
+  for (int k = 0; k < L::W; ++k) p[k] = &m.link_const[id[k]].e_area;
+  DV<L> d[12];
+  gather_f12<L>(p, d);
+  return {d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8], d[9], d[10]};
+}
+template <class L>
+struct VoxelConstL {
+  DV<L> inv_mass, inv_inertia, c_glob, c_glob_rot, gravity_force;
+};
+template <class L>
+[[gnu::always_inline]] inline VoxelConstL<L> gather_voxel_const(const Model& m, const int* id) {
+  static_assert(offsetof(VoxelConst, mass) == 0 && offsetof(VoxelConst, inv_mass) == 4 &&
+                offsetof(VoxelConst, inv_inertia) == 8 && offsetof(VoxelConst, c_glob) == 12 &&
+                offsetof(VoxelConst, c_glob_rot) == 16 &&
+                offsetof(VoxelConst, gravity_force) == 28);
+  const float* p[L::W];
+  for (int k = 0; k < L::W; ++k) p[k] = &m.voxel_const[id[k]].mass;
+  DV<L> d[12];
+  gather_f12<L>(p, d);
+  return {d[1], d[2], d[3], d[4], d[7]};
+}
+
+// quat_from_rotvec (§2.11) per lane: the Taylor branch in SIMD, the cos/sin branch per lane.
+template <class L>
+inline QL<L> quat_from_rotvec_lanes(const VL<L>& r) {
+  const DV<L> hx = r.x / 2.0, hy = r.y / 2.0, hz = r.z / 2.0;
+  const DV<L> t = hx * hx + hy * hy + hz * hz;
+  const DV<L> w = 1.0 - t / 2.0, s = 1.0 - t / 6.0;
+  QL<L> q{w, hx * s, hy * s, hz * s};
+  const int wide = ~L::bits(t * t < 5.328e-15) & kAllLanes<L>;
+  for (int k = 0; k < L::W; ++k) {
+    if (!(wide >> k & 1)) continue;
+    const Quat qk = quat_from_rotvec(Vec3(r.x[k], r.y[k], r.z[k]));
+    q.w[k] = qk.w;
+    q.x[k] = qk.x;
+    q.y[k] = qk.y;
+    q.z[k] = qk.z;
+  }
+  return q;
+}
+// §2.2 permutations on lanes (same signs and order as the scalar to_x / from_x)
+template <Axis A, class L>
+[[gnu::always_inline]] inline VL<L> to_x_lanes(DV<L> x, DV<L> y, DV<L> z) {
+  if constexpr (A == Axis::x) return {x, y, z};
+  if constexpr (A == Axis::y) return {y, -x, z};
+  if constexpr (A == Axis::z) return {z, y, -x};
+}
+template <Axis A, class L>
+[[gnu::always_inline]] inline QL<L> to_x_lanes(const QL<L>& q) {
+  if constexpr (A == Axis::x) return q;
+  if constexpr (A == Axis::y) return {q.w, q.y, -q.x, q.z};
+  if constexpr (A == Axis::z) return {q.w, q.z, q.y, -q.x};
+}
+template <Axis A, class L>
+[[gnu::always_inline]] inline VL<L> from_x_lanes(const VL<L>& v) {
+  if constexpr (A == Axis::x) return v;
+  if constexpr (A == Axis::y) return {-v.y, v.x, v.z};
+  if constexpr (A == Axis::z) return {-v.z, v.y, v.x};
+}
+
+// Links ids[0..W) of axis A, all in small-angle mode at their last update (the caller's
+// choice). Each lane whose link stays in small-angle mode (§2.3 hysteresis) is updated like
+// link_scalar (or link_scalar_state_only if !kForces), its strain > 100 ORed into `diverged`;
+// returns those lanes (bit k = lane k). Lanes that leave small-angle mode are left unchanged for
+// the caller's link_scalar. A link may fill several lanes (padding of a partial group): all
+// loads precede all stores, so its lanes compute and store the same values.
+// Invariant used here: a link whose last update was in small-angle mode has angle1v = (+0, +0,
+// +0) stored (every small-angle update stores rotvec(identity) = 0, and so does initial_state),
+// so the old angle1v is the constant zero and the new one need not be stored again; likewise
+// its small-angle flag stays 1 and it never "switches" into small-angle mode here.
+template <class L, Axis A, bool kForces>
+[[gnu::always_inline]] inline int link_group(const Model& m, State& st, Scratch& sc, const int* ids,
+                                             bool& diverged) {
+  constexpr int W = L::W;
+  using D = DV<L>;
+  using M = MV<L>;
+  int n[W], p[W];
+  for (int k = 0; k < W; ++k) {
+    n[k] = m.link_neg[ids[k]];
+    p[k] = m.link_pos[ids[k]];
+  }
+  // §2.3 orient link (see orient_link)
+  const VL<L> pn = gather<L>(st.pos, n);
+  const VL<L> pp = gather<L>(st.pos, p);
+  const VL<L> d0 = to_x_lanes<A, L>(pp.x - pn.x, pp.y - pn.y, pp.z - pn.z);
+  const QL<L> qn = to_x_lanes<A, L>(gather<L>(st.orient, n));
+  const QL<L> r{qn.w, -qn.x, -qn.y, -qn.z};  // conj
+  VL<L> d;
+  rotate_c(r.w, r.x, r.y, r.z, d0.x, d0.y, d0.z, d.x, d.y, d.z);
+  const QL<L> qp = to_x_lanes<A, L>(gather<L>(st.orient, p));
+  QL<L> q2;
+  mul_c(r.w, r.x, r.y, r.z, qp.w, qp.x, qp.y, qp.z, q2.w, q2.x, q2.y, q2.z);
+  const D l = splat<L>(m.rest_length);
+  const D turn = L::round_to_float((abs_lanes<L>(d.z) + abs_lanes<L>(d.y)) / d.x);
+  const D ext = L::round_to_float(abs_lanes<L>(1.0 - d.x / l));
+  const int leave = L::bits((turn > splat<L>(kHysteresis * kSmallBend)) |
+                            (ext > splat<L>(kHysteresis * kSmallExt)));
+  const int done = ~leave & kAllLanes<L>;  // stays in small-angle mode
+  if (!done) return 0;
+
+  const VL<L> pos2{d.x - l, d.y, d.z};
+  const D zero = splat<L>(0.0);
+  const VL<L> a1{zero, zero, zero};  // rotvec(identity)
+  // a2 = rotvec(q2) (§2.11), branches as lane masks; the acos branch is done per lane
+  VL<L> a2;
+  {
+    const M unit = (q2.w >= 1.0) | (q2.w <= -1.0);
+    const D t = 1.0 - q2.w * q2.w;
+    const D k = L::sqrt((2.0 - 2.0 * q2.w) / t);
+    a2 = {select<L>(unit, zero, q2.x * 2.0 * k), select<L>(unit, zero, q2.y * 2.0 * k),
+          select<L>(unit, zero, q2.z * 2.0 * k)};
+    const int wide = ~L::bits(unit) & ~L::bits(t < 2.4e-3) & kAllLanes<L>;
+    for (int lane = 0; lane < W; ++lane) {
+      if (!(wide >> lane & 1)) continue;
+      const Vec3 v = rotvec(Quat{q2.w[lane], q2.x[lane], q2.y[lane], q2.z[lane]});
+      a2.x[lane] = v.x();
+      a2.y[lane] = v.y();
+      a2.z[lane] = v.z();
+    }
+  }
+  const D strain = L::round_to_float(pos2.x / l);
+
+  if constexpr (kForces) {
+    if (L::bits(strain > splat<L>(kStrainDiverged)) & done) diverged = true;
+    const LinkConstL<L> c = gather_link_const<L>(m, ids);
+    // §2.4 (see link_scalar)
+    const D stress = L::round_to_float(c.e_area * strain);
+    const D b1 = c.b1;
+    const D b2 = c.b2;
+    const D b3 = c.b3;
+    const D a2c = c.a2;
+    VL<L> fn{L::round_to_float(stress * c.area), b1 * pos2.y - b2 * (a1.z + a2.z),
+             b1 * pos2.z + b2 * (a1.y + a2.y)};
+    VL<L> fp{-fn.x, -fn.y, -fn.z};
+    VL<L> mn{a2c * (a2.x - a1.x), -b2 * pos2.z - b3 * (2.0 * a1.y + a2.y),
+             b2 * pos2.y - b3 * (2.0 * a1.z + a2.z)};
+    VL<L> mp{a2c * (a1.x - a2.x), -b2 * pos2.z - b3 * (a1.y + 2.0 * a2.y),
+             b2 * pos2.y - b3 * (a1.z + 2.0 * a2.z)};
+
+    // §2.5 damping in the lanes with a valid local velocity (none switched mode)
+    int damp = 0;
+    for (int k = 0; k < W; ++k) damp |= st.link_vel_valid[ids[k]] != 0 ? 1 << k : 0;
+    if (damp) {
+      const VL<L> old_pos2 = gather<L>(st.link_pos2, ids);
+      const VL<L> old_a1{zero, zero, zero};  // see the invariant above
+      const VL<L> old_a2 = gather<L>(st.link_angle2v, ids);
+      const D dpx = 0.5 * (pos2.x - old_pos2.x), dpy = 0.5 * (pos2.y - old_pos2.y),
+              dpz = 0.5 * (pos2.z - old_pos2.z);
+      const D d1x = 0.5 * (a1.x - old_a1.x), d1y = 0.5 * (a1.y - old_a1.y),
+              d1z = 0.5 * (a1.z - old_a1.z);
+      const D d2x = 0.5 * (a2.x - old_a2.x), d2y = 0.5 * (a2.y - old_a2.y),
+              d2z = 0.5 * (a2.z - old_a2.z);
+      const D sq_a1 = c.sq_a1;
+      const D sq_a2 = c.sq_a2xip;
+      const D sq_b1 = c.sq_b1;
+      const D sq_b2 = c.sq_b2xfmp;
+      const D sq_b3 = c.sq_b3xip;
+      const D vx = sq_a1 * dpx, vy = sq_b1 * dpy - sq_b2 * (d1z + d2z),
+              vz = sq_b1 * dpz + sq_b2 * (d1y + d2y);
+      const D cn = make_lanes<L>([&](int k) { return static_cast<double>(sc.link_damping[n[k]]); });
+      const D cp = make_lanes<L>([&](int k) { return static_cast<double>(sc.link_damping[p[k]]); });
+      const D hn = 0.5 * cn, hp = 0.5 * cp;
+      const VL<L> fn_d{fn.x + cn * vx, fn.y + cn * vy, fn.z + cn * vz};
+      const VL<L> fp_d{fp.x - cp * vx, fp.y - cp * vy, fp.z - cp * vz};
+      const VL<L> mn_d{mn.x - hn * (-sq_a2 * (d2x - d1x)),
+                       mn.y - hn * (sq_b2 * dpz + sq_b3 * (2.0 * d1y + d2y)),
+                       mn.z - hn * (-sq_b2 * dpy + sq_b3 * (2.0 * d1z + d2z))};
+      const VL<L> mp_d{mp.x - hp * (sq_a2 * (d2x - d1x)),
+                       mp.y - hp * (sq_b2 * dpz + sq_b3 * (d1y + 2.0 * d2y)),
+                       mp.z - hp * (-sq_b2 * dpy + sq_b3 * (d1z + 2.0 * d2z))};
+      if (damp == kAllLanes<L>) {  // every lane (the usual case)
+        fn = fn_d;
+        fp = fp_d;
+        mn = mn_d;
+        mp = mp_d;
+      } else {
+        const M on = mask_of<L>(damp);
+        fn = {select<L>(on, fn_d.x, fn.x), select<L>(on, fn_d.y, fn.y),
+              select<L>(on, fn_d.z, fn.z)};
+        fp = {select<L>(on, fp_d.x, fp.x), select<L>(on, fp_d.y, fp.y),
+              select<L>(on, fp_d.z, fp.z)};
+        mn = {select<L>(on, mn_d.x, mn.x), select<L>(on, mn_d.y, mn.y),
+              select<L>(on, mn_d.z, mn.z)};
+        mp = {select<L>(on, mp_d.x, mp.x), select<L>(on, mp_d.y, mp.y),
+              select<L>(on, mp_d.z, mp.z)};
+      }
+    }
+    // §2.6: small-angle mode, so F_N and M_N are already in N's frame; F_P, M_P rotate by q2*
+    VL<L> fpl, mpl;
+    rotate_c(q2.w, -q2.x, -q2.y, -q2.z, fp.x, fp.y, fp.z, fpl.x, fpl.y, fpl.z);
+    rotate_c(q2.w, -q2.x, -q2.y, -q2.z, mp.x, mp.y, mp.z, mpl.x, mpl.y, mpl.z);
+    const VL<L> fn_g = from_x_lanes<A, L>(fn), mn_g = from_x_lanes<A, L>(mn);
+    const VL<L> fp_g = from_x_lanes<A, L>(fpl), mp_g = from_x_lanes<A, L>(mpl);
+    for (int k = 0; k < W; ++k) {
+      if (!(done >> k & 1)) continue;
+      Scratch::EndLoad* out = &sc.link_end_load[2 * static_cast<std::size_t>(ids[k])];
+      out[0].force = Vec3(fn_g.x[k], fn_g.y[k], fn_g.z[k]);
+      out[0].moment = Vec3(mn_g.x[k], mn_g.y[k], mn_g.z[k]);
+      out[1].force = Vec3(fp_g.x[k], fp_g.y[k], fp_g.z[k]);
+      out[1].moment = Vec3(mp_g.x[k], mp_g.y[k], mp_g.z[k]);
+    }
+  }
+  for (int k = 0; k < W; ++k) {
+    if (!(done >> k & 1)) continue;
+    st.link_vel_valid[ids[k]] = 1;
+    st.link_strain[ids[k]] = static_cast<float>(strain[k]);
+  }
+  scatter<L>(pos2, st.link_pos2, ids, done);  // angle1v stays 0 and the flag 1 (see above)
+  scatter<L>(a2, st.link_angle2v, ids, done);
+  return done;
+}
+
+// Link pass (§2.3-2.6) over the links of axis A. Links that were in small-angle mode at their
+// last update go through link_group W at a time (a lane that leaves small-angle mode falls back
+// to link_scalar); the others, in large-angle mode, through link_scalar directly. Links are
+// independent within a pass, so this order gives the same results as list order. With kForces
+// the end loads are computed and the return value is true if any strain > 100; without, the
+// state-only mid-step pass of the fork (§2.9 item 6).
+template <class L, Axis A, bool kForces>
+bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
+  constexpr int W = L::W;
+  bool diverged = false;
+  const int* ids = m.links_by_axis.data();
+  const int begin = m.axis_link_begin[static_cast<int>(A)];
+  const int end = m.axis_link_begin[static_cast<int>(A) + 1];
+  auto one = [&](int i) {
+    if constexpr (kForces) {
+      if (link_scalar<A>(m, st, sc, i)) diverged = true;
+    } else {
+      link_scalar_state_only<A>(m, st, i);
+    }
+  };
+  int group[W];  // small-angle links waiting for a full group
+  int count = 0;
+  auto flush = [&]() {
+    for (int k = count; k < W; ++k) group[k] = group[count - 1];  // pad with the last link
+    const int done = link_group<L, A, kForces>(m, st, sc, group, diverged);
+    for (int k = 0; k < count; ++k)
+      if (!(done >> k & 1)) one(group[k]);
+    count = 0;
+  };
+  for (int j = begin; j < end; ++j) {
+    const int i = ids[j];
+    if (!st.link_small_angle[i]) {
+      one(i);
+    } else {
+      group[count++] = i;
+      if (count == W) flush();
+    }
+  }
+  if (count > 0) flush();
+  return diverged;
+}
+
+// Full link pass (§2.3-2.6) over all links. Returns true if any strain > 100. (The passes are
+// kept out of line, once per step, so that profiles attribute their cost.)
+template <class L>
+[[gnu::noinline]] bool link_pass_forces(const Model& m, State& st, Scratch& sc) {
+  // c_V = 2 sqrt(m_V) zeta_int / previousDt_V (float, §2.5); only read by links with a valid
+  // local velocity, i.e. after a step has set previous_dt
+  const float prev_dt = st.previous_dt;
+  if (!(prev_dt == sc.link_damping_dt)) {  // a pure function of prev_dt: recompute on change only
+    for (int v = 0; v < m.voxel_count; ++v)
+      sc.link_damping[v] = m.voxel_const[v].damp_base / prev_dt;
+    sc.link_damping_dt = prev_dt;
+  }
+  const bool dx = link_pass_axis<L, Axis::x, true>(m, st, sc);
+  const bool dy = link_pass_axis<L, Axis::y, true>(m, st, sc);
+  const bool dz = link_pass_axis<L, Axis::z, true>(m, st, sc);
+  return dx || dy || dz;
+}
+
+// Mid-step link pass of the fork (§2.9 item 6), state only.
+template <class L>
+[[gnu::noinline]] void link_pass_state_only(const Model& m, State& st, Scratch& sc) {
+  link_pass_axis<L, Axis::x, false>(m, st, sc);
+  link_pass_axis<L, Axis::y, false>(m, st, sc);
+  link_pass_axis<L, Axis::z, false>(m, st, sc);
+}
+
+// Sum of the link forces and moments acting on voxel v (local frame), direction order 0..5.
+// The six sums in three pairs of doubles (fx fy | fz mx | my mz): element-wise additions in entry
+// order from +0.0, so the same roundings as force += load.force; moment += load.moment on Vec3.
+struct LinkSums {
+  __m128d fxy, fz_mx, myz;
+};
+inline LinkSums sum_links(const Model& m, const Scratch& sc, int v) {
+  static_assert(sizeof(Scratch::EndLoad) == 6 * sizeof(double));
+  LinkSums s{_mm_setzero_pd(), _mm_setzero_pd(), _mm_setzero_pd()};
+  const int end = m.voxel_link_begin[v + 1];
+  for (int e = m.voxel_link_begin[v]; e < end; ++e) {
+    const double* load = sc.link_end_load[m.voxel_link_entry[e]].force.data();
+    s.fxy = _mm_add_pd(s.fxy, _mm_loadu_pd(load));
+    s.fz_mx = _mm_add_pd(s.fz_mx, _mm_loadu_pd(load + 2));
+    s.myz = _mm_add_pd(s.myz, _mm_loadu_pd(load + 4));
+  }
+  return s;
+}
+inline void gather_links(const Model& m, const Scratch& sc, int v, Vec3& force, Vec3& moment) {
+  const LinkSums s = sum_links(m, sc, v);
+  force = Vec3(s.fxy[0], s.fxy[1], s.fz_mx[0]);
+  moment = Vec3(s.fz_mx[1], s.myz[0], s.myz[1]);
+}
+
+// §2.8 floorForce(Fsum): normal spring-damper + friction at the start-of-step velocity; may
+// clear the static flag. Returns fric (normal + friction).
+inline Vec3 floor_force(const VoxelConst& c, const Vec3& pos, const Vec3& vel, const Vec3& fsum,
+                        std::uint8_t& static_flag) {
+  const float pen = static_cast<float>(0.0 - pos.z());  // s/2 - s/2 - z
+  if (!(pen >= 0)) {
+    static_flag = 0;
+    return Vec3::Zero();
+  }
+  const float normal = c.k_pen * pen;  // N = 2 E s pen (float)
+  Vec3 fric(0.0, 0.0, normal - c.c_col * vel.z());
+  if (static_flag) {
+    const double sx = fsum.x() + fric.x(), sy = fsum.y() + fric.y();
+    const float surface_sq = static_cast<float>(sx * sx + sy * sy);
+    const float limit = c.mu_static * normal;
+    if (surface_sq > limit * limit) static_flag = 0;  // breaks: no friction on this step
+  } else {
+    const double hl = std::sqrt(vel.x() * vel.x() + vel.y() * vel.y() + 0.0 * 0.0);
+    if (hl > 0) {
+      const float f = c.mu_kinetic * normal;
+      fric -= Vec3(f * (vel.x() / hl), f * (vel.y() / hl), f * (0.0 / hl));
+    }
+  }
+  return fric;
+}
+
+// §2.8 static-friction capture of the fork's part 2 for a voxel in floor contact at its new
+// position: whole-step displacement against the friction force of part 1.
+inline void fork_static_capture(const VoxelConst& c, const Vec3& fr, const Vec3& op, Vec3& pos,
+                                Vec3& mom, std::uint8_t& sf) {
+  const float pen = static_cast<float>(0.0 - pos.z());
+  if (pen >= 0) {
+    const double work = fr.x() * (pos.x() - op.x()) + fr.y() * (pos.y() - op.y());
+    const double hke = 0.5 * c.inv_mass * (mom.x() * mom.x() + mom.y() * mom.y());
+    if (hke + work <= 0) sf = 1;
+    if (sf) {
+      mom.x() = 0.0;
+      mom.y() = 0.0;
+      pos.x() = op.x();
+      pos.y() = op.y();
+    }
+  } else {
+    sf = 0;
+  }
+}
+
+// §2.12 step 5, part 1 of the fork's step for one free voxel: the reference path. Returns the
+// voxel's angular momentum about the CoG before (la) and after (lb) the part.
+inline void fork_part1_voxel(const Model& m, State& st, Scratch& sc, std::span<const Vec3> ext,
+                             int v, const Vec3& cog, Vec3& la, Vec3& lb) {
+  const float dt = m.dt_f;
+  const VoxelConst& c = m.voxel_const[v];
+  Vec3& pos = st.pos[v];
+  Vec3& mom = st.lin_mom[v];
+  Vec3& am = st.ang_mom[v];
+  Quat& q = st.orient[v];
+  la = cross(pos - cog, mom) + am;
+  sc.old_pos[v] = pos;
+  Vec3 lsum, msum;
+  gather_links(m, sc, v, lsum, msum);
+  // §2.7 linkF = q (sum of link forces) - v C_glob
+  const Vec3 vel(mom.x() * c.inv_mass, mom.y() * c.inv_mass, mom.z() * c.inv_mass);
+  const Vec3 rl = rotate(q, lsum);
+  const Vec3 link_f(rl.x() - vel.x() * c.c_glob, rl.y() - vel.y() * c.c_glob,
+                    rl.z() - vel.z() * c.c_glob);
+  Vec3 ext_f = Vec3::Zero();
+  if (!ext.empty())
+    ext_f = Vec3(static_cast<float>(ext[v].x()), static_cast<float>(ext[v].y()),
+                 static_cast<float>(ext[v].z()));
+  const Vec3 grav_f(0.0, 0.0, c.gravity_force);
+  const Vec3& col_f = sc.collision_force[v];
+  Vec3 fric = Vec3::Zero();
+  if (m.floor) {
+    const Vec3 fsum = ((link_f + ext_f) + grav_f) + col_f;
+    fric = floor_force(c, pos, vel, fsum, st.static_friction[v]);
+  }
+  // pos += (linkF + extF) dt (dt/m), linMom += (linkF + extF) dt
+  const Vec3 fle = link_f + ext_f;
+  const float dt_m = dt * c.inv_mass;
+  pos += Vec3(fle.x() * dt * dt_m, fle.y() * dt * dt_m, fle.z() * dt * dt_m);
+  mom += Vec3(fle.x() * dt, fle.y() * dt, fle.z() * dt);
+  // §2.7 curMoment = q (sum of link moments) - omega C_glob,rot
+  const Vec3 rm = rotate(q, msum);
+  const Vec3 cur_m(rm.x() - am.x() * c.inv_inertia * c.c_glob_rot,
+                   rm.y() - am.y() * c.inv_inertia * c.c_glob_rot,
+                   rm.z() - am.z() * c.inv_inertia * c.c_glob_rot);
+  const float dt_i = dt * c.inv_inertia;
+  q = mul(
+      quat_from_rotvec(Vec3(cur_m.x() * dt * dt_i, cur_m.y() * dt * dt_i, cur_m.z() * dt * dt_i)),
+      q);
+  am += Vec3(cur_m.x() * dt, cur_m.y() * dt, cur_m.z() * dt);
+  sc.part2_force[v] = (grav_f + col_f) + fric;
+  sc.fric[v] = fric;
+  lb = cross(pos - cog, mom) + am;
+}
+
+// The state and constants of W voxels as lanes.
+template <class L>
+struct VoxelLanes {
+  VL<L> pos, mom, am;
+  QL<L> q;
+  VoxelConstL<L> c;
+};
+template <class L>
+[[gnu::always_inline]] inline VoxelLanes<L> load_voxels(const Model& m, const State& st,
+                                                        const int* v) {
+  return {gather<L>(st.pos, v), gather<L>(st.lin_mom, v), gather<L>(st.ang_mom, v),
+          gather<L>(st.orient, v), gather_voxel_const<L>(m, v)};
+}
+template <class L>
+[[gnu::always_inline]] inline void store_voxels(const VL<L>& pos, const VL<L>& mom, const VL<L>& am,
+                                                const QL<L>& q, State& st, const int* v) {
+  scatter<L>(pos, st.pos, v);
+  scatter<L>(mom, st.lin_mom, v);
+  scatter<L>(am, st.ang_mom, v);
+  scatter<L>(q, st.orient, v);
+}
+// gather_links of W voxels as lanes: sums of link forces (lsum) and moments (msum), local frame.
+template <class L>
+[[gnu::always_inline]] inline void gather_links_lanes(const Model& m, const Scratch& sc,
+                                                      const int* v, VL<L>& lsum, VL<L>& msum) {
+  LinkSums s[L::W];
+  for (int k = 0; k < L::W; ++k) s[k] = sum_links(m, sc, v[k]);
+  lsum = {make_lanes<L>([&](int k) { return s[k].fxy[0]; }),
+          make_lanes<L>([&](int k) { return s[k].fxy[1]; }),
+          make_lanes<L>([&](int k) { return s[k].fz_mx[0]; })};
+  msum = {make_lanes<L>([&](int k) { return s[k].fz_mx[1]; }),
+          make_lanes<L>([&](int k) { return s[k].myz[0]; }),
+          make_lanes<L>([&](int k) { return s[k].myz[1]; })};
+}
+
+// fork_part1_voxel for W free voxels v[0..W), one per lane (same operations per lane; the floor
+// force of §2.8 and the large-rotation branch of quat_from_rotvec per lane in scalar code).
+template <class L>
+inline void fork_part1_group(const Model& m, State& st, Scratch& sc, std::span<const Vec3> ext,
+                             const int* v, const Vec3& cog, VL<L>& la, VL<L>& lb) {
+  constexpr int W = L::W;
+  using D = DV<L>;
+  const double dt = m.dt_f;
+  const VoxelLanes<L> start = load_voxels<L>(m, st, v);
+  VL<L> pos = start.pos, mom = start.mom, am = start.am;
+  const QL<L> q = start.q;
+  const VoxelConstL<L>& c = start.c;
+  const D cgx = splat<L>(cog.x()), cgy = splat<L>(cog.y()), cgz = splat<L>(cog.z());
+  {
+    const D rx = pos.x - cgx, ry = pos.y - cgy, rz = pos.z - cgz;  // cross(pos - cog, mom) + am
+    la = {(ry * mom.z - rz * mom.y) + am.x, (rz * mom.x - rx * mom.z) + am.y,
+          (rx * mom.y - ry * mom.x) + am.z};
+  }
+  for (int k = 0; k < W; ++k) sc.old_pos[v[k]] = st.pos[v[k]];
+  VL<L> lsum, msum;
+  gather_links_lanes<L>(m, sc, v, lsum, msum);
+  const D inv_mass = c.inv_mass;
+  const VL<L> vel{mom.x * inv_mass, mom.y * inv_mass, mom.z * inv_mass};
+  VL<L> rl;
+  rotate_c(q.w, q.x, q.y, q.z, lsum.x, lsum.y, lsum.z, rl.x, rl.y, rl.z);
+  const D c_glob = c.c_glob;
+  const VL<L> link_f{rl.x - vel.x * c_glob, rl.y - vel.y * c_glob, rl.z - vel.z * c_glob};
+  const D zero = splat<L>(0.0);
+  VL<L> ext_f{zero, zero, zero};
+  if (!ext.empty()) {  // the reference's External stores float
+    ext_f = {make_lanes<L>(
+                 [&](int k) { return static_cast<double>(static_cast<float>(ext[v[k]].x())); }),
+             make_lanes<L>(
+                 [&](int k) { return static_cast<double>(static_cast<float>(ext[v[k]].y())); }),
+             make_lanes<L>(
+                 [&](int k) { return static_cast<double>(static_cast<float>(ext[v[k]].z())); })};
+  }
+  const VL<L> grav_f{zero, zero, c.gravity_force};
+  const VL<L> col_f = gather<L>(sc.collision_force, v);
+  VL<L> fric{zero, zero, zero};
+  if (m.floor) {
+    const int contact = L::bits(L::round_to_float(0.0 - pos.z) >= 0.0);
+    const VL<L> fsum{((link_f.x + ext_f.x) + grav_f.x) + col_f.x,
+                     ((link_f.y + ext_f.y) + grav_f.y) + col_f.y,
+                     ((link_f.z + ext_f.z) + grav_f.z) + col_f.z};
+    for (int k = 0; k < W; ++k) {
+      std::uint8_t& sf = st.static_friction[v[k]];
+      if (!(contact >> k & 1)) {
+        sf = 0;  // floor_force without contact
+        continue;
+      }
+      const Vec3 fr = floor_force(m.voxel_const[v[k]], Vec3(pos.x[k], pos.y[k], pos.z[k]),
+                                  Vec3(vel.x[k], vel.y[k], vel.z[k]),
+                                  Vec3(fsum.x[k], fsum.y[k], fsum.z[k]), sf);
+      fric.x[k] = fr.x();
+      fric.y[k] = fr.y();
+      fric.z[k] = fr.z();
+    }
+  }
+  const VL<L> fle{link_f.x + ext_f.x, link_f.y + ext_f.y, link_f.z + ext_f.z};
+  const D dt_m = L::round_to_float(dt * inv_mass);  // float dt * (1/m)
+  pos = {pos.x + fle.x * dt * dt_m, pos.y + fle.y * dt * dt_m, pos.z + fle.z * dt * dt_m};
+  mom = {mom.x + fle.x * dt, mom.y + fle.y * dt, mom.z + fle.z * dt};
+  VL<L> rm;
+  rotate_c(q.w, q.x, q.y, q.z, msum.x, msum.y, msum.z, rm.x, rm.y, rm.z);
+  const D inv_i = c.inv_inertia;
+  const D c_rot = c.c_glob_rot;
+  const VL<L> cur_m{rm.x - am.x * inv_i * c_rot, rm.y - am.y * inv_i * c_rot,
+                    rm.z - am.z * inv_i * c_rot};
+  const D dt_i = L::round_to_float(dt * inv_i);  // float dt * (1/I)
+  const QL<L> dq =
+      quat_from_rotvec_lanes<L>({cur_m.x * dt * dt_i, cur_m.y * dt * dt_i, cur_m.z * dt * dt_i});
+  QL<L> qn;
+  mul_c(dq.w, dq.x, dq.y, dq.z, q.w, q.x, q.y, q.z, qn.w, qn.x, qn.y, qn.z);
+  am = {am.x + cur_m.x * dt, am.y + cur_m.y * dt, am.z + cur_m.z * dt};
+  store_voxels<L>(pos, mom, am, qn, st, v);
+  scatter<L>(VL<L>{(grav_f.x + col_f.x) + fric.x, (grav_f.y + col_f.y) + fric.y,
+                   (grav_f.z + col_f.z) + fric.z},
+             sc.part2_force, v);
+  scatter<L>(fric, sc.fric, v);
+  {
+    const D rx = pos.x - cgx, ry = pos.y - cgy, rz = pos.z - cgz;
+    lb = {(ry * mom.z - rz * mom.y) + am.x, (rz * mom.x - rx * mom.z) + am.y,
+          (rx * mom.y - ry * mom.x) + am.z};
+  }
+}
+
+// §2.12 step 8, part 2 of the fork's step for one free voxel: the reference path.
+inline void fork_part2_voxel(const Model& m, State& st, Scratch& sc, int v, float me_x, float me_y,
+                             float me_z, double& check) {
+  const float dt = m.dt_f;
+  const double dtd = dt;
+  const VoxelConst& c = m.voxel_const[v];
+  Vec3& pos = st.pos[v];
+  Vec3& mom = st.lin_mom[v];
+  Vec3& am = st.ang_mom[v];
+  Quat& q = st.orient[v];
+  const Vec3& f2 = sc.part2_force[v];
+  const float dt_m = dt * c.inv_mass;
+  pos += Vec3(f2.x() * dt * dt_m, f2.y() * dt * dt_m, f2.z() * dt * dt_m);
+  pos += Vec3(mom.x() * dt_m, mom.y() * dt_m, mom.z() * dt_m);
+  mom += Vec3(f2.x() * dt, f2.y() * dt, f2.z() * dt);
+  if (m.floor) fork_static_capture(c, sc.fric[v], sc.old_pos[v], pos, mom, st.static_friction[v]);
+  // angMom += M_ext dt (float moment promoted to double, times the float dt)
+  am.x() += static_cast<double>(me_x) * dtd;
+  am.y() += static_cast<double>(me_y) * dtd;
+  am.z() += static_cast<double>(me_z) * dtd;
+  q = mul(quat_from_rotvec(Vec3(am.x() * c.inv_inertia * dt, am.y() * c.inv_inertia * dt,
+                                am.z() * c.inv_inertia * dt)),
+          q);
+  sc.ext_moment[v] = {me_x, me_y, me_z};
+  // NaN/inf anywhere makes the running sum non-finite (checked once after the loop; finite
+  // values beyond ~1e307 that overflow the sum are reported as non-finite too)
+  check +=
+      pos.x() + pos.y() + pos.z() + mom.x() + mom.y() + mom.z() + am.x() + am.y() + am.z() + q.w;
+}
+
+// fork_part2_voxel for W free voxels v[0..W), one per lane (same operations per lane).
+template <class L>
+inline void fork_part2_group(const Model& m, State& st, Scratch& sc, const int* v, float me_x,
+                             float me_y, float me_z, double& check) {
+  constexpr int W = L::W;
+  using D = DV<L>;
+  const double dt = m.dt_f;
+  const VoxelLanes<L> start = load_voxels<L>(m, st, v);
+  VL<L> pos = start.pos, mom = start.mom, am = start.am;
+  const QL<L> q = start.q;
+  const VoxelConstL<L>& c = start.c;
+  const VL<L> f2 = gather<L>(sc.part2_force, v);
+  const D inv_mass = c.inv_mass;
+  const D dt_m = L::round_to_float(dt * inv_mass);  // float dt * (1/m)
+  pos = {pos.x + f2.x * dt * dt_m, pos.y + f2.y * dt * dt_m, pos.z + f2.z * dt * dt_m};
+  pos = {pos.x + mom.x * dt_m, pos.y + mom.y * dt_m, pos.z + mom.z * dt_m};
+  mom = {mom.x + f2.x * dt, mom.y + f2.y * dt, mom.z + f2.z * dt};
+  if (m.floor) {
+    const int contact = L::bits(L::round_to_float(0.0 - pos.z) >= 0.0);
+    for (int k = 0; k < W; ++k) {
+      if (!(contact >> k & 1)) {
+        st.static_friction[v[k]] = 0;
+        continue;
+      }
+      Vec3 pk(pos.x[k], pos.y[k], pos.z[k]), mk(mom.x[k], mom.y[k], mom.z[k]);
+      fork_static_capture(m.voxel_const[v[k]], sc.fric[v[k]], sc.old_pos[v[k]], pk, mk,
+                          st.static_friction[v[k]]);
+      pos.x[k] = pk.x();
+      pos.y[k] = pk.y();
+      mom.x[k] = mk.x();
+      mom.y[k] = mk.y();
+    }
+  }
+  am = {am.x + splat<L>(static_cast<double>(me_x) * dt),
+        am.y + splat<L>(static_cast<double>(me_y) * dt),
+        am.z + splat<L>(static_cast<double>(me_z) * dt)};
+  const D inv_i = c.inv_inertia;
+  const QL<L> dq =
+      quat_from_rotvec_lanes<L>({am.x * inv_i * dt, am.y * inv_i * dt, am.z * inv_i * dt});
+  QL<L> qn;
+  mul_c(dq.w, dq.x, dq.y, dq.z, q.w, q.x, q.y, q.z, qn.w, qn.x, qn.y, qn.z);
+  store_voxels<L>(pos, mom, am, qn, st, v);
+  for (int k = 0; k < W; ++k) sc.ext_moment[v[k]] = {me_x, me_y, me_z};
+  const D sum = pos.x + pos.y + pos.z + mom.x + mom.y + mom.z + am.x + am.y + am.z + qn.w;
+  for (int k = 0; k < W; ++k) check += sum[k];
+}
+
+// W consecutive voxels v0 .. v0 + W - 1 as lane ids; true if none of them is fixed.
+template <class L>
+[[gnu::always_inline]] inline bool free_group(const Model& m, int v0, int* ids) {
+  bool any_fixed = false;
+  for (int k = 0; k < L::W; ++k) {
+    ids[k] = v0 + k;
+    any_fixed |= m.voxel_fixed[v0 + k] != 0;
+  }
+  return !any_fixed;
+}
+
+// §2.12 steps 3-9 (after the link pass and the collisions): the fork's two-part step. Free
+// voxels go through the parts W at a time; sums over voxels keep list order.
+template <class L>
+[[gnu::noinline]] bool fork_voxel_passes(const Model& m, State& st, Scratch& sc,
+                                         std::span<const Vec3> ext) {
+  constexpr int W = L::W;
+  const float dt = m.dt_f;
+  const int nv = m.voxel_count;
+  // 4. CoG = mean position of the non-fixed voxels
+  Vec3 cog = Vec3::Zero();
+  for (int v = 0; v < nv; ++v)
+    if (!m.voxel_fixed[v]) cog += st.pos[v];
+  if (m.free_voxel_count > 0) cog /= static_cast<double>(m.free_voxel_count);
+  Vec3 la = Vec3::Zero(), lb = Vec3::Zero();
+  st.previous_dt = dt;
+
+  // 5. part 1; L_A (start state) and L_B (after part 1) are summed per voxel in list order
+  auto part1 = [&](int v) {
+    Vec3 a, b;
+    fork_part1_voxel(m, st, sc, ext, v, cog, a, b);
+    la += a;
+    lb += b;
+  };
+  int ids[W];
+  int v = 0;
+  for (; v + W <= nv; v += W) {
+    if (free_group<L>(m, v, ids)) {
+      VL<L> a, b;
+      fork_part1_group<L>(m, st, sc, ext, ids, cog, a, b);
+      for (int k = 0; k < W; ++k) la += Vec3(a.x[k], a.y[k], a.z[k]);
+      for (int k = 0; k < W; ++k) lb += Vec3(b.x[k], b.y[k], b.z[k]);
+    } else {
+      for (int k = 0; k < W; ++k)
+        if (!m.voxel_fixed[v + k]) part1(v + k);
+    }
+  }
+  for (; v < nv; ++v)
+    if (!m.voxel_fixed[v]) part1(v);
+
+  // 6. mid-step link update (state only)
+  link_pass_state_only<L>(m, st, sc);
+
+  // 7. correction moment -dL / dt / N_all (float), same for every non-fixed voxel
+  const Vec3 dl = lb - la;
+  const double n_all = static_cast<double>(nv);
+  const double dtd = dt;
+  const float me_x = static_cast<float>(-dl.x() / dtd / n_all);
+  const float me_y = static_cast<float>(-dl.y() / dtd / n_all);
+  const float me_z = static_cast<float>(-dl.z() / dtd / n_all);
+
+  // 8. part 2
+  double check = 0.0;
+  for (v = 0; v + W <= nv; v += W) {
+    if (free_group<L>(m, v, ids)) {
+      fork_part2_group<L>(m, st, sc, ids, me_x, me_y, me_z, check);
+    } else {
+      for (int k = 0; k < W; ++k)
+        if (!m.voxel_fixed[v + k]) fork_part2_voxel(m, st, sc, v + k, me_x, me_y, me_z, check);
+    }
+  }
+  for (; v < nv; ++v)
+    if (!m.voxel_fixed[v]) fork_part2_voxel(m, st, sc, v, me_x, me_y, me_z, check);
+  return std::isfinite(check);
+}
+
+// §2.9 upstream single-pass symplectic Euler with the same forces, one voxel: the reference path.
+inline void symplectic_voxel(const Model& m, State& st, Scratch& sc, std::span<const Vec3> ext,
+                             int v, double& check) {
+  const float dt = m.dt_f;
+  const VoxelConst& c = m.voxel_const[v];
+  Vec3& pos = st.pos[v];
+  Vec3& mom = st.lin_mom[v];
+  Vec3& am = st.ang_mom[v];
+  Quat& q = st.orient[v];
+  Vec3 lsum, msum;
+  gather_links(m, sc, v, lsum, msum);
+  const Vec3 vel(mom.x() * c.inv_mass, mom.y() * c.inv_mass, mom.z() * c.inv_mass);
+  // force(): links (rotated to global) + external - global damping + gravity + collisions
+  Vec3 f = rotate(q, lsum);
+  if (!ext.empty())
+    f += Vec3(static_cast<float>(ext[v].x()), static_cast<float>(ext[v].y()),
+              static_cast<float>(ext[v].z()));
+  f -= Vec3(vel.x() * c.c_glob, vel.y() * c.c_glob, vel.z() * c.c_glob);
+  f.z() += c.gravity_force;
+  f += sc.collision_force[v];
+  const float pen = static_cast<float>(0.0 - pos.z());  // at the old position (upstream)
+  const bool contact = m.floor && pen >= 0;
+  if (m.floor) f += floor_force(c, pos, vel, f, st.static_friction[v]);
+  mom += Vec3(f.x() * dt, f.y() * dt, f.z() * dt);
+  const float dt_m = dt * c.inv_mass;
+  Vec3 tr(mom.x() * dt_m, mom.y() * dt_m, mom.z() * dt_m);
+  if (m.floor) {
+    std::uint8_t& sf = st.static_friction[v];
+    if (contact) {
+      const double work = f.x() * tr.x() + f.y() * tr.y();
+      const double hke = 0.5 * c.inv_mass * (mom.x() * mom.x() + mom.y() * mom.y());
+      if (hke + work <= 0) sf = 1;
+      if (sf) {
+        mom.x() = mom.y() = 0.0;
+        tr.x() = tr.y() = 0.0;
+      }
+    } else {
+      sf = 0;
+    }
+  }
+  pos += tr;
+  const Vec3 rm = rotate(q, msum);
+  const Vec3 cur_m(rm.x() - am.x() * c.inv_inertia * c.c_glob_rot,
+                   rm.y() - am.y() * c.inv_inertia * c.c_glob_rot,
+                   rm.z() - am.z() * c.inv_inertia * c.c_glob_rot);
+  am += Vec3(cur_m.x() * dt, cur_m.y() * dt, cur_m.z() * dt);
+  q = mul(quat_from_rotvec(Vec3(am.x() * c.inv_inertia * dt, am.y() * c.inv_inertia * dt,
+                                am.z() * c.inv_inertia * dt)),
+          q);
+  // NaN/inf anywhere makes the running sum non-finite (checked once after the loop; finite
+  // values beyond ~1e307 that overflow the sum are reported as non-finite too)
+  check +=
+      pos.x() + pos.y() + pos.z() + mom.x() + mom.y() + mom.z() + am.x() + am.y() + am.z() + q.w;
+}
+
+// symplectic_voxel for W free voxels v[0..W), one per lane (same operations per lane as the
+// scalar path; the floor contact of §2.8 and the large-rotation branch of quat_from_rotvec are
+// done per lane in scalar code).
+template <class L>
+inline void symplectic_group(const Model& m, State& st, Scratch& sc, std::span<const Vec3> ext,
+                             const int* v, double& check) {
+  constexpr int W = L::W;
+  using D = DV<L>;
+  const double dt = m.dt_f;
+  const auto& vc = m.voxel_const;
+  VL<L> lsum, msum;
+  gather_links_lanes<L>(m, sc, v, lsum, msum);
+  const VoxelLanes<L> start = load_voxels<L>(m, st, v);
+  VL<L> pos = start.pos, mom = start.mom, am = start.am;
+  const QL<L> q = start.q;
+  const VoxelConstL<L>& c = start.c;
+  const D inv_mass = c.inv_mass;
+  const VL<L> vel{mom.x * inv_mass, mom.y * inv_mass, mom.z * inv_mass};
+  VL<L> f;
+  rotate_c(q.w, q.x, q.y, q.z, lsum.x, lsum.y, lsum.z, f.x, f.y, f.z);
+  if (!ext.empty()) {  // the reference's External stores float
+    f.x = f.x + make_lanes<L>(
+                    [&](int k) { return static_cast<double>(static_cast<float>(ext[v[k]].x())); });
+    f.y = f.y + make_lanes<L>(
+                    [&](int k) { return static_cast<double>(static_cast<float>(ext[v[k]].y())); });
+    f.z = f.z + make_lanes<L>(
+                    [&](int k) { return static_cast<double>(static_cast<float>(ext[v[k]].z())); });
+  }
+  const D c_glob = c.c_glob;
+  f = {f.x - vel.x * c_glob, f.y - vel.y * c_glob, f.z - vel.z * c_glob};
+  f.z = f.z + c.gravity_force;
+  const VL<L> col = gather<L>(sc.collision_force, v);
+  f = {f.x + col.x, f.y + col.y, f.z + col.z};
+  int contact = 0;  // lane bits
+  if (m.floor) {
+    contact = L::bits(L::round_to_float(0.0 - pos.z) >= 0.0);
+    const D zero = splat<L>(0.0);
+    VL<L> fric{zero, zero, zero};
+    for (int k = 0; k < W; ++k) {
+      std::uint8_t& sf = st.static_friction[v[k]];
+      if (!(contact >> k & 1)) {
+        sf = 0;  // floor_force without contact
+        continue;
+      }
+      const Vec3 fr =
+          floor_force(vc[v[k]], Vec3(pos.x[k], pos.y[k], pos.z[k]),
+                      Vec3(vel.x[k], vel.y[k], vel.z[k]), Vec3(f.x[k], f.y[k], f.z[k]), sf);
+      fric.x[k] = fr.x();
+      fric.y[k] = fr.y();
+      fric.z[k] = fr.z();
+    }
+    f = {f.x + fric.x, f.y + fric.y, f.z + fric.z};
+  }
+  mom = {mom.x + f.x * dt, mom.y + f.y * dt, mom.z + f.z * dt};
+  const D dt_m = L::round_to_float(dt * inv_mass);  // float dt * (1/m)
+  VL<L> tr{mom.x * dt_m, mom.y * dt_m, mom.z * dt_m};
+  for (int k = 0; k < W; ++k) {
+    if (!(contact >> k & 1)) continue;
+    std::uint8_t& sf = st.static_friction[v[k]];
+    const double work = f.x[k] * tr.x[k] + f.y[k] * tr.y[k];
+    const double hke = 0.5 * vc[v[k]].inv_mass * (mom.x[k] * mom.x[k] + mom.y[k] * mom.y[k]);
+    if (hke + work <= 0) sf = 1;
+    if (sf) {
+      mom.x[k] = mom.y[k] = 0.0;
+      tr.x[k] = tr.y[k] = 0.0;
+    }
+  }
+  pos = {pos.x + tr.x, pos.y + tr.y, pos.z + tr.z};
+  VL<L> rm;
+  rotate_c(q.w, q.x, q.y, q.z, msum.x, msum.y, msum.z, rm.x, rm.y, rm.z);
+  const D inv_i = c.inv_inertia;
+  const D c_rot = c.c_glob_rot;
+  const VL<L> cur_m{rm.x - am.x * inv_i * c_rot, rm.y - am.y * inv_i * c_rot,
+                    rm.z - am.z * inv_i * c_rot};
+  am = {am.x + cur_m.x * dt, am.y + cur_m.y * dt, am.z + cur_m.z * dt};
+  const QL<L> dq =
+      quat_from_rotvec_lanes<L>({am.x * inv_i * dt, am.y * inv_i * dt, am.z * inv_i * dt});
+  QL<L> qn;
+  mul_c(dq.w, dq.x, dq.y, dq.z, q.w, q.x, q.y, q.z, qn.w, qn.x, qn.y, qn.z);
+  store_voxels<L>(pos, mom, am, qn, st, v);
+  const D sum = pos.x + pos.y + pos.z + mom.x + mom.y + mom.z + am.x + am.y + am.z + qn.w;
+  for (int k = 0; k < W; ++k) check += sum[k];
+}
+
+// §2.9 upstream single-pass symplectic Euler with the same forces; free voxels W at a time.
+template <class L>
+[[gnu::noinline]] bool symplectic_voxel_pass(const Model& m, State& st, Scratch& sc,
+                                             std::span<const Vec3> ext) {
+  constexpr int W = L::W;
+  const int nv = m.voxel_count;
+  st.previous_dt = m.dt_f;
+  double check = 0.0;
+  int ids[W];
+  int v = 0;
+  for (; v + W <= nv; v += W) {
+    if (free_group<L>(m, v, ids)) {
+      symplectic_group<L>(m, st, sc, ext, ids, check);
+    } else {
+      for (int k = 0; k < W; ++k)
+        if (!m.voxel_fixed[v + k]) symplectic_voxel(m, st, sc, ext, v + k, check);
+    }
+  }
+  for (; v < nv; ++v)
+    if (!m.voxel_fixed[v]) symplectic_voxel(m, st, sc, ext, v, check);
+  return std::isfinite(check);
+}
+
+// The exported table of this translation unit's passes.
+template <class L>
+constexpr StepKernels make_step_kernels(Simd simd) {
+  return StepKernels{simd, L::W, &link_pass_forces<L>, &fork_voxel_passes<L>,
+                     &symplectic_voxel_pass<L>};
+}
+
+}  // namespace
+}  // namespace softevo::physics

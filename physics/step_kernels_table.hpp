@@ -1,0 +1,30 @@
+// The per-instruction-set tables of the step passes (internal to physics/). Each step_*.cpp
+// translation unit builds the passes of physics/step_kernels.hpp for its own lane width and
+// exports only its table; step() picks the table of Model::simd.
+#pragma once
+
+#include <span>
+
+#include "physics/model.hpp"
+#include "physics/state.hpp"
+#include "physics/step.hpp"
+
+namespace softevo::physics {
+
+struct StepKernels {
+  Simd simd;
+  int lanes;  // links / voxels per SIMD group
+  // §2.3-2.6 link pass with forces; true if some strain > 100
+  bool (*link_pass_forces)(const Model&, State&, Scratch&);
+  // §2.12 steps 3-9 (pneuvox); false if the state became non-finite
+  bool (*fork_voxel_passes)(const Model&, State&, Scratch&, std::span<const Vec3>);
+  // §2.9 (symplectic); false if the state became non-finite
+  bool (*symplectic_voxel_pass)(const Model&, State&, Scratch&, std::span<const Vec3>);
+};
+
+const StepKernels& step_kernels_sse2();
+#if defined(SOFTEVO_HAVE_AVX2_KERNELS)
+const StepKernels& step_kernels_avx2();
+#endif
+
+}  // namespace softevo::physics
