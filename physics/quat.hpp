@@ -32,7 +32,7 @@ inline Quat conj(const Quat& q) {
   return {q.w, -q.x, -q.y, -q.z};
 }
 
-// The larger helpers below are always_inline: the step passes are also compiled for AVX2
+// The helpers below are always_inline: the step passes are also compiled for AVX2
 // (physics/step_avx2.cpp), and an out-of-line copy emitted there could be linked into the SSE2
 // code as well (checked by the PhysicsIsa test).
 //
@@ -42,7 +42,8 @@ inline Quat conj(const Quat& q) {
 
 // §2.11: Hamilton product a ⊗ b. "Rotate by A then by B" = B ⊗ A.
 template <class T>
-inline void mul_c(T aw, T ax, T ay, T az, T bw, T bx, T by, T bz, T& w, T& x, T& y, T& z) {
+[[gnu::always_inline]] inline void mul_c(T aw, T ax, T ay, T az, T bw, T bx, T by, T bz, T& w, T& x,
+                                         T& y, T& z) {
   w = aw * bw - ax * bx - ay * by - az * bz;
   x = aw * bx + ax * bw + ay * bz - az * by;
   y = aw * by - ax * bz + ay * bw + az * bx;
@@ -56,7 +57,8 @@ inline Quat mul(const Quat& a, const Quat& b) {
 
 // §2.11: v' = q v q*, expanded: t = (0,v) ⊗ q*, then v' = vector part of q ⊗ t.
 template <class T>
-inline void rotate_c(T qw, T qx, T qy, T qz, T fx, T fy, T fz, T& ox, T& oy, T& oz) {
+[[gnu::always_inline]] inline void rotate_c(T qw, T qx, T qy, T qz, T fx, T fy, T fz, T& ox, T& oy,
+                                            T& oz) {
   const T tw = fx * qx + fy * qy + fz * qz;
   const T tx = fx * qw - fy * qz + fz * qy;
   const T ty = fx * qz + fy * qw - fz * qx;

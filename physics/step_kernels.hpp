@@ -252,6 +252,20 @@ template <class L>
 struct QL {  // W Quat
   DV<L> w, x, y, z;
 };
+// Lane k of v / q = a scalar value (the per-lane fallbacks of rare branches).
+template <class L>
+[[gnu::always_inline]] inline void set_lane(VL<L>& v, int k, const Vec3& value) {
+  v.x[k] = value.x();
+  v.y[k] = value.y();
+  v.z[k] = value.z();
+}
+template <class L>
+[[gnu::always_inline]] inline void set_lane(QL<L>& q, int k, const Quat& value) {
+  q.w[k] = value.w;
+  q.x[k] = value.x;
+  q.y[k] = value.y;
+  q.z[k] = value.z;
+}
 
 // Transposing loads and stores between W records and lanes. Lane traits may supply faster
 // versions (whole-record loads and register transposes: L::gather3, L::gather4, L::scatter3,
@@ -370,11 +384,7 @@ inline QL<L> quat_from_rotvec_lanes(const VL<L>& r) {
   const int wide = ~L::bits(t * t < 5.328e-15) & kAllLanes<L>;
   for (int k = 0; k < L::W; ++k) {
     if (!(wide >> k & 1)) continue;
-    const Quat qk = quat_from_rotvec(Vec3(r.x[k], r.y[k], r.z[k]));
-    q.w[k] = qk.w;
-    q.x[k] = qk.x;
-    q.y[k] = qk.y;
-    q.z[k] = qk.z;
+    set_lane<L>(q, k, quat_from_rotvec(Vec3(r.x[k], r.y[k], r.z[k])));
   }
   return q;
 }
@@ -398,17 +408,53 @@ template <Axis A, class L>
   if constexpr (A == Axis::z) return {-v.z, v.y, v.x};
 }
 
-// Links ids[0..W) of axis A, all in small-angle mode at their last update (the caller's
-// choice). Each lane whose link stays in small-angle mode (§2.3 hysteresis) is updated like
-// link_scalar (or link_scalar_state_only if !kForces), its strain > 100 ORed into `diverged`;
-// returns those lanes (bit k = lane k). Lanes that leave small-angle mode are left unchanged for
-// the caller's link_scalar. A link may fill several lanes (padding of a partial group): all
-// loads precede all stores, so its lanes compute and store the same values.
-// Invariant used here: a link whose last update was in small-angle mode has angle1v = (+0, +0,
-// +0) stored (every small-angle update stores rotvec(identity) = 0, and so does initial_state),
-// so the old angle1v is the constant zero and the new one need not be stored again; likewise
-// its small-angle flag stays 1 and it never "switches" into small-angle mode here.
-template <class L, Axis A, bool kForces>
+// rotvec (§2.11) per lane: the unit and Taylor branches in SIMD, the acos branch per lane.
+template <class L>
+inline VL<L> rotvec_lanes(const QL<L>& q) {
+  using D = DV<L>;
+  const D zero = splat<L>(0.0);
+  const MV<L> unit = (q.w >= 1.0) | (q.w <= -1.0);
+  const D t = 1.0 - q.w * q.w;
+  const D k = L::sqrt((2.0 - 2.0 * q.w) / t);
+  VL<L> v{select<L>(unit, zero, q.x * 2.0 * k), select<L>(unit, zero, q.y * 2.0 * k),
+          select<L>(unit, zero, q.z * 2.0 * k)};
+  const int wide = ~L::bits(unit) & ~L::bits(t < 2.4e-3) & kAllLanes<L>;
+  for (int lane = 0; lane < L::W; ++lane) {
+    if (!(wide >> lane & 1)) continue;
+    set_lane<L>(v, lane, rotvec(Quat{q.w[lane], q.x[lane], q.y[lane], q.z[lane]}));
+  }
+  return v;
+}
+
+// quat_to_pos_x (§2.11) per lane: the near-+X Taylor branch in SIMD, the others (acos, sin,
+// cos; zero or reversed direction) per lane.
+template <class L>
+inline QL<L> quat_to_pos_x_lanes(const VL<L>& d) {
+  using D = DV<L>;
+  const D a = d.y / d.x, b = d.z / d.x;
+  const D y = b / 2.0, z = -a / 2.0;
+  QL<L> q{1.0 - 0.5 * (y * y + z * z), splat<L>(0.0), y, z};
+  const int taylor = L::bits((abs_lanes<L>(a) < 1.732e-2) & (abs_lanes<L>(b) < 1.732e-2)) &
+                     ~L::bits((d.x == 0.0) & (d.y == 0.0) & (d.z == 0.0));
+  for (int lane = 0; lane < L::W; ++lane) {
+    if (taylor >> lane & 1) continue;
+    set_lane<L>(q, lane, quat_to_pos_x(Vec3(d.x[lane], d.y[lane], d.z[lane])));
+  }
+  return q;
+}
+
+// Links ids[0..W) of axis A, all in the same mode at their last update: small-angle mode
+// (kLarge false) or large-angle mode (kLarge true), the caller's choice. Each lane whose link
+// stays in that mode (§2.3 hysteresis) is updated like link_scalar (or link_scalar_state_only if
+// !kForces), its strain > 100 ORed into `diverged`; returns those lanes (bit k = lane k). Lanes
+// that switch mode are left unchanged for the caller's link_scalar. A link may fill several
+// lanes (padding of a partial group): all loads precede all stores, so its lanes compute and
+// store the same values.
+// Invariant used for small-angle links: a link whose last update was in small-angle mode has
+// angle1v = (+0, +0, +0) stored (every small-angle update stores rotvec(identity) = 0, and so
+// does initial_state), so the old angle1v is the constant zero and the new one need not be
+// stored again. The mode flag of a lane that stays in its mode need not be stored either.
+template <class L, Axis A, bool kForces, bool kLarge>
 [[gnu::always_inline]] inline int link_group(const Model& m, State& st, Scratch& sc, const int* ids,
                                              bool& diverged) {
   constexpr int W = L::W;
@@ -433,31 +479,31 @@ template <class L, Axis A, bool kForces>
   const D l = splat<L>(m.rest_length);
   const D turn = L::round_to_float((abs_lanes<L>(d.z) + abs_lanes<L>(d.y)) / d.x);
   const D ext = L::round_to_float(abs_lanes<L>(1.0 - d.x / l));
-  const int leave = L::bits((turn > splat<L>(kHysteresis * kSmallBend)) |
-                            (ext > splat<L>(kHysteresis * kSmallExt)));
-  const int done = ~leave & kAllLanes<L>;  // stays in small-angle mode
+  int done;  // lanes that stay in their mode
+  if constexpr (kLarge) {
+    done = ~L::bits((turn < splat<L>(kSmallBend)) & (ext < splat<L>(kSmallExt))) & kAllLanes<L>;
+  } else {
+    done = ~L::bits((turn > splat<L>(kHysteresis * kSmallBend)) |
+                    (ext > splat<L>(kHysteresis * kSmallExt))) &
+           kAllLanes<L>;
+  }
   if (!done) return 0;
 
-  const VL<L> pos2{d.x - l, d.y, d.z};
   const D zero = splat<L>(0.0);
-  const VL<L> a1{zero, zero, zero};  // rotvec(identity)
-  // a2 = rotvec(q2) (§2.11), branches as lane masks; the acos branch is done per lane
-  VL<L> a2;
-  {
-    const M unit = (q2.w >= 1.0) | (q2.w <= -1.0);
-    const D t = 1.0 - q2.w * q2.w;
-    const D k = L::sqrt((2.0 - 2.0 * q2.w) / t);
-    a2 = {select<L>(unit, zero, q2.x * 2.0 * k), select<L>(unit, zero, q2.y * 2.0 * k),
-          select<L>(unit, zero, q2.z * 2.0 * k)};
-    const int wide = ~L::bits(unit) & ~L::bits(t < 2.4e-3) & kAllLanes<L>;
-    for (int lane = 0; lane < W; ++lane) {
-      if (!(wide >> lane & 1)) continue;
-      const Vec3 v = rotvec(Quat{q2.w[lane], q2.x[lane], q2.y[lane], q2.z[lane]});
-      a2.x[lane] = v.x();
-      a2.y[lane] = v.y();
-      a2.z[lane] = v.z();
-    }
+  VL<L> pos2, a1;
+  QL<L> q1;  // large-angle mode: rotation of the link frame onto +X
+  if constexpr (kLarge) {
+    q1 = quat_to_pos_x_lanes<L>(d);
+    QL<L> q12;
+    mul_c(q1.w, q1.x, q1.y, q1.z, q2.w, q2.x, q2.y, q2.z, q12.w, q12.x, q12.y, q12.z);
+    q2 = q12;
+    pos2 = {L::sqrt(d.x * d.x + d.y * d.y + d.z * d.z) - l, zero, zero};
+    a1 = rotvec_lanes<L>(q1);
+  } else {
+    pos2 = {d.x - l, d.y, d.z};
+    a1 = {zero, zero, zero};  // rotvec(identity)
   }
+  const VL<L> a2 = rotvec_lanes<L>(q2);
   const D strain = L::round_to_float(pos2.x / l);
 
   if constexpr (kForces) {
@@ -482,7 +528,8 @@ template <class L, Axis A, bool kForces>
     for (int k = 0; k < W; ++k) damp |= st.link_vel_valid[ids[k]] != 0 ? 1 << k : 0;
     if (damp) {
       const VL<L> old_pos2 = gather<L>(st.link_pos2, ids);
-      const VL<L> old_a1{zero, zero, zero};  // see the invariant above
+      VL<L> old_a1{zero, zero, zero};  // small-angle links: see the invariant above
+      if constexpr (kLarge) old_a1 = gather<L>(st.link_angle1v, ids);
       const VL<L> old_a2 = gather<L>(st.link_angle2v, ids);
       const D dpx = 0.5 * (pos2.x - old_pos2.x), dpy = 0.5 * (pos2.y - old_pos2.y),
               dpz = 0.5 * (pos2.z - old_pos2.z);
@@ -525,7 +572,15 @@ template <class L, Axis A, bool kForces>
               select<L>(on, mp_d.z, mp.z)};
       }
     }
-    // §2.6: small-angle mode, so F_N and M_N are already in N's frame; F_P, M_P rotate by q2*
+    // §2.6: in small-angle mode F_N and M_N are already in N's frame, in large-angle mode they
+    // rotate by q1*; F_P, M_P rotate by q2*
+    if constexpr (kLarge) {
+      VL<L> fnl, mnl;
+      rotate_c(q1.w, -q1.x, -q1.y, -q1.z, fn.x, fn.y, fn.z, fnl.x, fnl.y, fnl.z);
+      rotate_c(q1.w, -q1.x, -q1.y, -q1.z, mn.x, mn.y, mn.z, mnl.x, mnl.y, mnl.z);
+      fn = fnl;
+      mn = mnl;
+    }
     VL<L> fpl, mpl;
     rotate_c(q2.w, -q2.x, -q2.y, -q2.z, fp.x, fp.y, fp.z, fpl.x, fpl.y, fpl.z);
     rotate_c(q2.w, -q2.x, -q2.y, -q2.z, mp.x, mp.y, mp.z, mpl.x, mpl.y, mpl.z);
@@ -545,17 +600,36 @@ template <class L, Axis A, bool kForces>
     st.link_vel_valid[ids[k]] = 1;
     st.link_strain[ids[k]] = static_cast<float>(strain[k]);
   }
-  scatter<L>(pos2, st.link_pos2, ids, done);  // angle1v stays 0 and the flag 1 (see above)
+  scatter<L>(pos2, st.link_pos2, ids, done);
+  if constexpr (kLarge) scatter<L>(a1, st.link_angle1v, ids, done);  // else stays 0 (see above)
   scatter<L>(a2, st.link_angle2v, ids, done);
   return done;
 }
 
-// Link pass (§2.3-2.6) over the links of axis A. Links that were in small-angle mode at their
-// last update go through link_group W at a time (a lane that leaves small-angle mode falls back
-// to link_scalar); the others, in large-angle mode, through link_scalar directly. Links are
-// independent within a pass, so this order gives the same results as list order. With kForces
-// the end loads are computed and the return value is true if any strain > 100; without, the
-// state-only mid-step pass of the fork (§2.9 item 6).
+// One group of link_group: pads a partial group with its last link, and sends the lanes that
+// switched mode through link_scalar (or link_scalar_state_only if !kForces).
+template <class L, Axis A, bool kForces, bool kLarge>
+inline void flush_link_group(const Model& m, State& st, Scratch& sc, int* group, int& count,
+                             bool& diverged) {
+  for (int k = count; k < L::W; ++k) group[k] = group[count - 1];
+  const int done = link_group<L, A, kForces, kLarge>(m, st, sc, group, diverged);
+  for (int k = 0; k < count; ++k) {
+    if (done >> k & 1) continue;
+    if constexpr (kForces) {
+      if (link_scalar<A>(m, st, sc, group[k])) diverged = true;
+    } else {
+      link_scalar_state_only<A>(m, st, group[k]);
+    }
+  }
+  count = 0;
+}
+
+// Link pass (§2.3-2.6) over the links of axis A: links go through link_group W at a time, those
+// in small-angle mode at their last update and those in large-angle mode in separate groups (a
+// lane that switches mode falls back to link_scalar). Links are independent within a pass, so
+// this order gives the same results as list order. With kForces the end loads are computed and
+// the return value is true if any strain > 100; without, the state-only mid-step pass of the
+// fork (§2.9 item 6).
 template <class L, Axis A, bool kForces>
 bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
   constexpr int W = L::W;
@@ -563,32 +637,24 @@ bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
   const int* ids = m.links_by_axis.data();
   const int begin = m.axis_link_begin[static_cast<int>(A)];
   const int end = m.axis_link_begin[static_cast<int>(A) + 1];
-  auto one = [&](int i) {
-    if constexpr (kForces) {
-      if (link_scalar<A>(m, st, sc, i)) diverged = true;
-    } else {
-      link_scalar_state_only<A>(m, st, i);
-    }
-  };
-  int group[W];  // small-angle links waiting for a full group
-  int count = 0;
-  auto flush = [&]() {
-    for (int k = count; k < W; ++k) group[k] = group[count - 1];  // pad with the last link
-    const int done = link_group<L, A, kForces>(m, st, sc, group, diverged);
-    for (int k = 0; k < count; ++k)
-      if (!(done >> k & 1)) one(group[k]);
-    count = 0;
-  };
+  int small[W], large[W];  // links waiting for a full group
+  int small_count = 0, large_count = 0;
   for (int j = begin; j < end; ++j) {
     const int i = ids[j];
-    if (!st.link_small_angle[i]) {
-      one(i);
+    if (st.link_small_angle[i]) {
+      small[small_count++] = i;
+      if (small_count == W)
+        flush_link_group<L, A, kForces, false>(m, st, sc, small, small_count, diverged);
     } else {
-      group[count++] = i;
-      if (count == W) flush();
+      large[large_count++] = i;
+      if (large_count == W)
+        flush_link_group<L, A, kForces, true>(m, st, sc, large, large_count, diverged);
     }
   }
-  if (count > 0) flush();
+  if (small_count > 0)
+    flush_link_group<L, A, kForces, false>(m, st, sc, small, small_count, diverged);
+  if (large_count > 0)
+    flush_link_group<L, A, kForces, true>(m, st, sc, large, large_count, diverged);
   return diverged;
 }
 
@@ -827,9 +893,7 @@ inline void fork_part1_group(const Model& m, State& st, Scratch& sc, std::span<c
       const Vec3 fr = floor_force(m.voxel_const[v[k]], Vec3(pos.x[k], pos.y[k], pos.z[k]),
                                   Vec3(vel.x[k], vel.y[k], vel.z[k]),
                                   Vec3(fsum.x[k], fsum.y[k], fsum.z[k]), sf);
-      fric.x[k] = fr.x();
-      fric.y[k] = fr.y();
-      fric.z[k] = fr.z();
+      set_lane<L>(fric, k, fr);
     }
   }
   const VL<L> fle{link_f.x + ext_f.x, link_f.y + ext_f.y, link_f.z + ext_f.z};
@@ -1115,9 +1179,7 @@ inline void symplectic_group(const Model& m, State& st, Scratch& sc, std::span<c
       const Vec3 fr =
           floor_force(vc[v[k]], Vec3(pos.x[k], pos.y[k], pos.z[k]),
                       Vec3(vel.x[k], vel.y[k], vel.z[k]), Vec3(f.x[k], f.y[k], f.z[k]), sf);
-      fric.x[k] = fr.x();
-      fric.y[k] = fr.y();
-      fric.z[k] = fr.z();
+      set_lane<L>(fric, k, fr);
     }
     f = {f.x + fric.x, f.y + fric.y, f.z + fric.z};
   }
