@@ -84,7 +84,7 @@ TEST(EvalDeterminism, SyntheticClosedLoopRobotInTwoProcesses) {
 // (links in both angle modes, floor, friction, self-collision, pneumatics, closed loop).
 TEST(EvalDeterminism, SameBitsAtEverySimdWidth) {
   if (!softevo::physics::simd_supported(softevo::physics::Simd::avx2))
-    GTEST_SKIP() << "this CPU has no AVX2: only the SSE2 width runs here";
+    GTEST_SKIP() << "no AVX2 width here (CPU or build): only SSE2 runs";
   const std::string robot = write_closed_loop_robot();
   const std::string narrow = run(robot, "1", "sse2"), wide = run(robot, "1", "avx2");
   fs::remove(robot);
@@ -95,7 +95,7 @@ TEST(EvalDeterminism, SameBitsAtEverySimdWidth) {
 // The same for a thesis champion whose body bends many links into large-angle mode.
 TEST(EvalDeterminism, ChampionSameBitsAtEverySimdWidth) {
   if (!softevo::physics::simd_supported(softevo::physics::Simd::avx2))
-    GTEST_SKIP() << "this CPU has no AVX2: only the SSE2 width runs here";
+    GTEST_SKIP() << "no AVX2 width here (CPU or build): only SSE2 runs";
   const fs::path champion = shared_dir() / "reference" / "bestbots" / "gait-open-05.robot.json";
   if (!fs::exists(champion)) GTEST_SKIP() << "../shared not found (" << champion << ")";
   const std::string narrow = run(champion.string(), "1", "sse2");
