@@ -1,6 +1,11 @@
-// Where the tests that start the built `softevo` and `softevo-mpi` find them.
+// Where the tests that start the built `softevo` and `softevo-mpi` find them, and how they run
+// them.
 #pragma once
 
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -15,6 +20,27 @@ inline std::string build_dir() {
   std::error_code ec;
   const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
   return ec ? std::string("build") : self.parent_path().parent_path().string();
+}
+
+inline std::string binary(const std::string& name) {
+  return build_dir() + "/bin/" + name;
+}
+
+struct CommandResult {
+  int code = -1;       // exit status; -1 if the command could not run or died of a signal
+  std::string output;  // stdout and stderr
+};
+
+// Runs `command` through the shell and collects its output (stdout and stderr).
+inline CommandResult run_command(const std::string& command) {
+  CommandResult r;
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (pipe == nullptr) return r;
+  std::array<char, 4096> buf{};
+  while (std::fgets(buf.data(), buf.size(), pipe) != nullptr) r.output += buf.data();
+  const int status = ::pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
 }
 
 }  // namespace softevo::test

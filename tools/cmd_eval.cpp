@@ -262,6 +262,7 @@ int run_eval(const EvalArgs& a) {
     s += ", \"chambers\": " + std::to_string(result.chambers);
     s += ", \"wall_seconds\": " + json_number(result.wall_seconds);
     s += ", \"cpu_seconds\": " + json_number(cpu_seconds);
+    s += ", \"simd\": " + json_string(physics::to_string(physics::best_simd()));
     s += ", \"message\": " + json_string(result.message);
     s += "}";
     std::printf("%s\n", s.c_str());
@@ -287,7 +288,8 @@ int run_eval(const EvalArgs& a) {
     std::printf("simulated    %.6f s in %lld steps\n", result.sim_seconds,
                 static_cast<long long>(result.steps));
     std::printf("body         %d voxels, %d chambers\n", result.voxels, result.chambers);
-    std::printf("time         %.3f s wall, %.3f s CPU\n", result.wall_seconds, cpu_seconds);
+    std::printf("time         %.3f s wall, %.3f s CPU (physics SIMD width %s)\n",
+                result.wall_seconds, cpu_seconds, physics::to_string(physics::best_simd()));
     if (!a.trace.empty())
       std::printf("trace        %s (%d frames)\n", a.trace.c_str(), trace.frames);
   }

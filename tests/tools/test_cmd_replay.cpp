@@ -2,7 +2,6 @@
 // is replayed bit for bit; the same archive with one fitness value nudged by one ulp, or with
 // a foreign config hash, must fail.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <H5Cpp.h>
 
@@ -22,26 +21,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-using test::build_dir;
-
-std::string binary(const std::string& name) {
-  return build_dir() + "/bin/" + name;
-}
-
-struct Result {
-  int code = -1;
-  std::string output;
-};
+using test::binary;
+using Result = test::CommandResult;
 
 Result run(const std::string& command) {
-  Result r;
-  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-  if (pipe == nullptr) return r;
-  std::array<char, 4096> buf{};
-  while (std::fgets(buf.data(), buf.size(), pipe) != nullptr) r.output += buf.data();
-  const int status = ::pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return test::run_command(command);
 }
 
 class CmdReplay : public ::testing::Test {

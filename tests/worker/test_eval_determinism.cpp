@@ -10,6 +10,7 @@
 
 #include "common/robot.hpp"
 #include "physics/model.hpp"
+#include "tests/test_controller_spec.hpp"
 
 namespace fs = std::filesystem;
 
@@ -48,22 +49,8 @@ std::string write_closed_loop_robot() {
       r.body.cells[r.body.cell_index(4, y, z)] = 12;
       r.body.cells[r.body.cell_index(5, y, z)] = 12;
     }
-  auto& c = r.controller;
-  c.closed_loop = true;
-  c.directed = true;
-  auto fill = [](std::vector<double>& v, int count, double scale) {
-    v.resize(static_cast<std::size_t>(count));
-    for (int i = 0; i < count; ++i) v[i] = scale * std::cos(0.5 + 2.1 * i);
-  };
-  fill(c.vectors.weights_hidden, c.input_count() * 4, 1.5);
-  fill(c.vectors.bias_hidden, 4, 0.5);
-  fill(c.vectors.weights_out, 80, 2.0);
-  fill(c.vectors.bias_out, 20, 0.5);
-  fill(c.vectors.weights_recurrent, 16, 0.5);
-  fill(c.vectors.weights_recurrent_self, 4, 0.5);
-  fill(c.vectors.weights_context, 4, 0.5);
-  fill(c.vectors.bias_context, 4, 0.1);
-  c.vectors.freq = {2.5};
+  r.controller = softevo::test::make_controller(
+      true, true, [](int i) { return std::cos(0.5 + 2.1 * i); }, 2.5);
   const std::string test = ::testing::UnitTest::GetInstance()->current_test_info()->name();
   const fs::path path = fs::temp_directory_path() / ("softevo_determinism_" + test + ".robot.json");
   softevo::write_robot_file(r, path.string());

@@ -10,6 +10,7 @@
 
 #include "common/config.hpp"
 #include "common/robot.hpp"
+#include "tests/test_controller_spec.hpp"
 #include "worker/evaluate_robot.hpp"
 
 namespace fs = std::filesystem;
@@ -40,24 +41,8 @@ BodyPlan two_chamber_block() {
 }
 
 ControllerSpec controller(bool closed, bool directed) {
-  ControllerSpec s;
-  s.closed_loop = closed;
-  s.directed = directed;
-  const int n = s.input_count();
-  auto fill = [](std::vector<double>& v, int count, double scale) {
-    v.resize(static_cast<std::size_t>(count));
-    for (int i = 0; i < count; ++i) v[i] = scale * std::sin(2.0 + 1.3 * i);
-  };
-  fill(s.vectors.weights_hidden, n * 4, 1.5);
-  fill(s.vectors.bias_hidden, 4, 0.5);
-  fill(s.vectors.weights_out, 80, 2.0);
-  fill(s.vectors.bias_out, 20, 0.5);
-  fill(s.vectors.weights_recurrent, 16, 0.5);
-  fill(s.vectors.weights_recurrent_self, 4, 0.5);
-  fill(s.vectors.weights_context, 4, 0.5);
-  fill(s.vectors.bias_context, 4, 0.1);
-  s.vectors.freq = {3.0};
-  return s;
+  return test::make_controller(
+      closed, directed, [](int i) { return std::sin(2.0 + 1.3 * i); }, 3.0);
 }
 
 Config short_config(double seconds) {

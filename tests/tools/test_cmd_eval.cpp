@@ -1,0 +1,104 @@
+// `softevo eval ROBOT.json [--task] [--seconds] [--json]` end to end (issue 4): the JSON object
+// carries the named fields with sensible values, the directed task reports five directions, and
+// a malformed robot file stops with an error naming the file and the key.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/robot.hpp"
+#include "tests/build_tree.hpp"
+#include "tests/test_controller_spec.hpp"
+
+namespace softevo {
+namespace {
+
+namespace fs = std::filesystem;
+
+using test::binary;
+using test::run_command;
+
+// A 6x3x3 closed-loop directed robot of one material with a two-cell chamber.
+fs::path write_robot(const fs::path& dir) {
+  RobotFile r;
+  r.name = "cmd-eval";
+  r.body.lattice = {6, 3, 3};
+  r.body.voxel_size = 0.01;
+  for (int k = 1; k <= 10; ++k) r.body.materials.push_back({1.0e4 * k, 1000.0});
+  r.body.cells.assign(6 * 3 * 3, 5);
+  r.body.cells[r.body.cell_index(2, 1, 1)] = 11;
+  r.body.cells[r.body.cell_index(3, 1, 1)] = 11;
+  r.controller = test::make_controller(
+      true, true, [](int i) { return std::sin(0.3 + 1.7 * i); }, 2.0);
+  const fs::path path = dir / "robot.json";
+  write_robot_file(r, path.string());
+  return path;
+}
+
+class CmdEval : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!fs::exists(binary("softevo"))) GTEST_SKIP() << "softevo not built: " << binary("softevo");
+    dir_ = fs::temp_directory_path() /
+           ("softevo_test_cmd_eval_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+    robot_ = write_robot(dir_);
+  }
+  void TearDown() override {
+    if (!dir_.empty()) fs::remove_all(dir_);
+  }
+  fs::path dir_, robot_;
+};
+
+TEST_F(CmdEval, GaitJsonHasTheNamedFields) {
+  const auto r = run_command(binary("softevo") + " eval '" + robot_.string() +
+                             "' --task gait --seconds 0.5 --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  for (const char* key : {"fitness", "status", "components", "sim_seconds", "steps", "voxels",
+                          "chambers", "wall_seconds", "simd"})
+    EXPECT_TRUE(j.contains(key)) << key << " missing in " << r.output;
+  EXPECT_TRUE(j["fitness"].is_number());
+  EXPECT_EQ(j["status"], "ok");
+  EXPECT_EQ(j["task"], "gait");
+  ASSERT_EQ(j["components"].size(), 1u);
+  EXPECT_TRUE(j["components"][0].contains("D"));
+  EXPECT_NEAR(j["sim_seconds"].get<double>(), 0.5, 1.0 / 60.0);
+  EXPECT_GT(j["steps"].get<long long>(), 0);
+  EXPECT_EQ(j["voxels"], 6 * 3 * 3 - 2);
+  EXPECT_EQ(j["chambers"], 1);
+  EXPECT_GE(j["wall_seconds"].get<double>(), 0.0);
+  EXPECT_TRUE(j["simd"] == "sse2" || j["simd"] == "avx2") << j["simd"];
+}
+
+TEST_F(CmdEval, DirectedJsonReportsFiveDirections) {
+  const auto r = run_command(binary("softevo") + " eval '" + robot_.string() +
+                             "' --task directed --seconds 0.25 --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  ASSERT_EQ(j["components"].size(), 5u);
+  for (const auto& c : j["components"])
+    for (const char* key : {"direction_deg", "fitness", "D", "L", "delta", "P", "status"})
+      EXPECT_TRUE(c.contains(key)) << key;
+}
+
+TEST_F(CmdEval, MalformedRobotFileNamesFileAndKey) {
+  nlohmann::json robot;
+  std::ifstream(robot_) >> robot;
+  robot.erase("lattice");
+  const fs::path bad = dir_ / "bad.robot.json";
+  std::ofstream(bad) << robot.dump();
+  const auto r = run_command(binary("softevo") + " eval '" + bad.string() + "' --json");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find(bad.string()), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("lattice"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace softevo
