@@ -305,6 +305,16 @@ template <class L>
   }
 }
 
+// Lane k of x as a float (round to nearest).
+template <class L>
+[[gnu::always_inline]] inline void to_floats(DV<L> x, float* out) {
+  if constexpr (requires { L::to_floats(x, out); }) {
+    L::to_floats(x, out);
+  } else {
+    for (int k = 0; k < L::W; ++k) out[k] = static_cast<float>(x[k]);
+  }
+}
+
 static_assert(sizeof(Vec3) == 3 * sizeof(double) && sizeof(Quat) == 4 * sizeof(double));
 static_assert(sizeof(LinkConst) == 12 * sizeof(float) && sizeof(VoxelConst) == 12 * sizeof(float));
 
@@ -586,19 +596,26 @@ template <class L, Axis A, bool kForces, bool kLarge>
     rotate_c(q2.w, -q2.x, -q2.y, -q2.z, mp.x, mp.y, mp.z, mpl.x, mpl.y, mpl.z);
     const VL<L> fn_g = from_x_lanes<A, L>(fn), mn_g = from_x_lanes<A, L>(mn);
     const VL<L> fp_g = from_x_lanes<A, L>(fpl), mp_g = from_x_lanes<A, L>(mpl);
+    // end loads of the lanes in `done`: (force, moment) of end N, then of end P
+    double* out[4][W];
     for (int k = 0; k < W; ++k) {
-      if (!(done >> k & 1)) continue;
-      Scratch::EndLoad* out = &sc.link_end_load[2 * static_cast<std::size_t>(ids[k])];
-      out[0].force = Vec3(fn_g.x[k], fn_g.y[k], fn_g.z[k]);
-      out[0].moment = Vec3(mn_g.x[k], mn_g.y[k], mn_g.z[k]);
-      out[1].force = Vec3(fp_g.x[k], fp_g.y[k], fp_g.z[k]);
-      out[1].moment = Vec3(mp_g.x[k], mp_g.y[k], mp_g.z[k]);
+      Scratch::EndLoad* load = &sc.link_end_load[2 * static_cast<std::size_t>(ids[k])];
+      out[0][k] = load[0].force.data();
+      out[1][k] = load[0].moment.data();
+      out[2][k] = load[1].force.data();
+      out[3][k] = load[1].moment.data();
     }
+    scatter3<L>(out[0], fn_g.x, fn_g.y, fn_g.z, done);
+    scatter3<L>(out[1], mn_g.x, mn_g.y, mn_g.z, done);
+    scatter3<L>(out[2], fp_g.x, fp_g.y, fp_g.z, done);
+    scatter3<L>(out[3], mp_g.x, mp_g.y, mp_g.z, done);
   }
+  float strain_f[W];  // float(strain) per lane (exact: strain is a float value)
+  to_floats<L>(strain, strain_f);
   for (int k = 0; k < W; ++k) {
     if (!(done >> k & 1)) continue;
     st.link_vel_valid[ids[k]] = 1;
-    st.link_strain[ids[k]] = static_cast<float>(strain[k]);
+    st.link_strain[ids[k]] = strain_f[k];
   }
   scatter<L>(pos2, st.link_pos2, ids, done);
   if constexpr (kLarge) scatter<L>(a1, st.link_angle1v, ids, done);  // else stays 0 (see above)
