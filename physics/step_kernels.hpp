@@ -1,28 +1,30 @@
 // The passes of one physics time step (pneuvox-model.md §2.3-2.13), written once over a SIMD lane
 // width. Internal to physics/: included only by the step_*.cpp translation units, each of which
 // supplies its lane traits L and is compiled for its own instruction set (step.cpp: SSE2, W = 2;
-// step_avx2.cpp: AVX2, W = 4). Everything here has internal
-// linkage (anonymous namespace), so the copies built with different instruction sets never meet
-// in the linker; the only thing a translation unit exports is its StepKernels table.
+// step_avx2.cpp: AVX2, W = 4). Everything here has internal linkage (anonymous namespace), so
+// the copies built with different instruction sets never meet in the linker; the only thing a
+// translation unit exports is its StepKernels table (checked by the PhysicsIsa ctest).
 //
 // Precision: state is double; constants are float (Model); products the reference forms in float
 // (dt * (1/m), k_pen * pen, mu * N, strain, stress * A, collision forces) are formed in float
 // here too, and a float times a double is promoted exactly as in the reference. The build uses
 // -ffp-contract=off, so the written operation order is the executed one.
 //
-// Lanes: links in small-angle mode (the common case) and free voxels go through the passes W at
-// a time, one link or voxel per lane of a W x double vector. Every lane performs exactly the
-// scalar path's IEEE operations in the same order (the quaternion formulas are the shared
-// templates of quat.hpp; float roundings are a float conversion of the same double; float x
-// float products and float / float quotients are formed in double and rounded to float, which
-// gives the float result exactly since 53 >= 2 x 24 + 2), so every width gives results
+// Lanes: links (small-angle and large-angle mode in separate groups) and free voxels go through
+// the passes W at a time, one link or voxel per lane of a W x double vector. Every lane performs
+// exactly the scalar path's IEEE operations in the same order (the quaternion formulas are the
+// shared templates of quat.hpp; float roundings are a float conversion of the same double;
+// float x float products and float / float quotients are formed in double and rounded to float,
+// which gives the float result exactly since 53 >= 2 x 24 + 2), so every width gives results
 // bit-identical to the scalar reference path (link_scalar, fork_part1_voxel, ...), and thus to
-// each other. Lanes that need a rare branch (large-angle links, floor contact, large rotations)
-// run it per lane in the scalar code.
+// each other. Rare branches (a link switching mode, acos / sin / cos in rotvec and
+// quat_to_pos_x, large voxel rotations, floor contact) run per lane in the scalar code.
 //
 // Lane traits L: static constexpr int W; using D = double vector of W lanes; using M = long long
 // vector of W lanes (comparison result, all ones = true); static D round_to_float(D);
-// static D sqrt(D) (IEEE, correctly rounded); static int bits(M) (bit k = lane k true).
+// static D sqrt(D) (IEEE, correctly rounded); static int bits(M) (bit k = lane k true);
+// optionally faster transposing loads / stores (gather3, gather4, scatter3, gather_f12,
+// to_floats; generic fallbacks below).
 #pragma once
 
 #include <emmintrin.h>
