@@ -625,12 +625,11 @@ template <class L, Axis A, bool kForces, bool kLarge>
   return done;
 }
 
-// One group of link_group: pads a partial group with its last link, and sends the lanes that
-// switched mode through link_scalar (or link_scalar_state_only if !kForces).
+// One full group of W links of one mode through link_group; the lanes that switched mode go
+// through link_scalar (or link_scalar_state_only if !kForces).
 template <class L, Axis A, bool kForces, bool kLarge>
-inline void flush_link_group(const Model& m, State& st, Scratch& sc, int* group, int& count,
-                             bool& diverged) {
-  for (int k = count; k < L::W; ++k) group[k] = group[count - 1];
+[[gnu::noinline]] void run_link_group(const Model& m, State& st, Scratch& sc, const int* group,
+                                      int count, bool& diverged) {
   const int done = link_group<L, A, kForces, kLarge>(m, st, sc, group, diverged);
   for (int k = 0; k < count; ++k) {
     if (done >> k & 1) continue;
@@ -640,15 +639,24 @@ inline void flush_link_group(const Model& m, State& st, Scratch& sc, int* group,
       link_scalar_state_only<A>(m, st, group[k]);
     }
   }
+}
+
+// A collected group of `count` links (1..W): padded with its last link, run, emptied.
+template <class L, Axis A, bool kForces, bool kLarge>
+inline void flush_link_group(const Model& m, State& st, Scratch& sc, int* group, int& count,
+                             bool& diverged) {
+  for (int k = count; k < L::W; ++k) group[k] = group[count - 1];
+  run_link_group<L, A, kForces, kLarge>(m, st, sc, group, count, diverged);
   count = 0;
 }
 
 // Link pass (§2.3-2.6) over the links of axis A: links go through link_group W at a time, those
 // in small-angle mode at their last update and those in large-angle mode in separate groups (a
-// lane that switches mode falls back to link_scalar). Links are independent within a pass, so
-// this order gives the same results as list order. With kForces the end loads are computed and
-// the return value is true if any strain > 100; without, the state-only mid-step pass of the
-// fork (§2.9 item 6).
+// lane that switches mode falls back to link_scalar). W consecutive links of the axis list that
+// share a mode (the usual case) form a group as they are; the others are collected per mode.
+// Links are independent within a pass, so this order gives the same results as list order.
+// With kForces the end loads are computed and the return value is true if any strain > 100;
+// without, the state-only mid-step pass of the fork (§2.9 item 6).
 template <class L, Axis A, bool kForces>
 bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
   constexpr int W = L::W;
@@ -656,10 +664,9 @@ bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
   const int* ids = m.links_by_axis.data();
   const int begin = m.axis_link_begin[static_cast<int>(A)];
   const int end = m.axis_link_begin[static_cast<int>(A) + 1];
-  int small[W], large[W];  // links waiting for a full group
+  int small[W], large[W];  // collected links waiting for a full group
   int small_count = 0, large_count = 0;
-  for (int j = begin; j < end; ++j) {
-    const int i = ids[j];
+  auto collect = [&](int i) {
     if (st.link_small_angle[i]) {
       small[small_count++] = i;
       if (small_count == W)
@@ -669,7 +676,21 @@ bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
       if (large_count == W)
         flush_link_group<L, A, kForces, true>(m, st, sc, large, large_count, diverged);
     }
+  };
+  int j = begin;
+  for (; j + W <= end; j += W) {
+    const int* chunk = ids + j;
+    int small_lanes = 0;
+    for (int k = 0; k < W; ++k) small_lanes |= st.link_small_angle[chunk[k]] != 0 ? 1 << k : 0;
+    if (small_lanes == kAllLanes<L>) {
+      run_link_group<L, A, kForces, false>(m, st, sc, chunk, W, diverged);
+    } else if (small_lanes == 0) {
+      run_link_group<L, A, kForces, true>(m, st, sc, chunk, W, diverged);
+    } else {
+      for (int k = 0; k < W; ++k) collect(chunk[k]);
+    }
   }
+  for (; j < end; ++j) collect(ids[j]);
   if (small_count > 0)
     flush_link_group<L, A, kForces, false>(m, st, sc, small, small_count, diverged);
   if (large_count > 0)
