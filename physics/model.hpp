@@ -33,8 +33,9 @@ enum class Integrator : std::uint8_t {
 // runs (resolved by build_model; Model::simd never holds `best`).
 enum class Simd : std::uint8_t {
   best = 0,
-  sse2 = 1,  // 2 lanes, every x86-64 CPU
-  avx2 = 2,  // 4 lanes
+  sse2 = 1,    // 2 lanes, every x86-64 CPU
+  avx2 = 2,    // 4 lanes
+  avx512 = 3,  // 4 lanes, AVX-512VL encoding (32 vector registers)
 };
 const char* to_string(Simd simd);
 // True if this build contains the passes for `simd` and this CPU (and OS) can run them.

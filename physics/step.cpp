@@ -1,6 +1,6 @@
 // One physics time step: the public step(), the self-collision pass (§2.10, scalar) and the
 // choice of SIMD width. The link and voxel passes are in physics/step_kernels.hpp, built here for
-// SSE2 (2 lanes) and in step_avx2.cpp for 4 lanes; both widths give
+// SSE2 (2 lanes) and in step_avx2.cpp / step_avx512.cpp for 4 lanes; all widths give
 // bit-identical results (see step_kernels.hpp).
 //
 // Precision: state is double; constants are float (Model); products the reference forms in float
@@ -262,6 +262,8 @@ const char* to_string(Simd simd) {
       return "sse2";
     case Simd::avx2:
       return "avx2";
+    case Simd::avx512:
+      return "avx512";
   }
   return "unknown";
 }
@@ -277,12 +279,21 @@ bool simd_supported(Simd simd) {
 #else
       return false;
 #endif
+    case Simd::avx512:
+#if defined(SOFTEVO_HAVE_AVX512_KERNELS)
+      return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("avx512f") &&
+             __builtin_cpu_supports("avx512vl");
+#else
+      return false;
+#endif
   }
   return false;
 }
 
 Simd best_simd() {
-  return simd_supported(Simd::avx2) ? Simd::avx2 : Simd::sse2;
+  for (Simd s : {Simd::avx512, Simd::avx2})
+    if (simd_supported(s)) return s;
+  return Simd::sse2;
 }
 
 namespace {
@@ -292,6 +303,10 @@ const StepKernels& kernels_for(Simd simd) {
 #if defined(SOFTEVO_HAVE_AVX2_KERNELS)
     case Simd::avx2:
       return step_kernels_avx2();
+#endif
+#if defined(SOFTEVO_HAVE_AVX512_KERNELS)
+    case Simd::avx512:
+      return step_kernels_avx512();
 #endif
     default:
       return step_kernels_sse2();

@@ -26,5 +26,8 @@ const StepKernels& step_kernels_sse2();
 #if defined(SOFTEVO_HAVE_AVX2_KERNELS)
 const StepKernels& step_kernels_avx2();
 #endif
+#if defined(SOFTEVO_HAVE_AVX512_KERNELS)
+const StepKernels& step_kernels_avx512();
+#endif
 
 }  // namespace softevo::physics

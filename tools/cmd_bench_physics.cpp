@@ -76,12 +76,12 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
   cmd->add_option("--scene", *only, "only scenes whose name contains this");
   auto simd_name = std::make_shared<std::string>("best");
   cmd->add_option("--simd", *simd_name,
-                  "SIMD width of the step passes: best (default), sse2, avx2 or all "
+                  "SIMD width of the step passes: best (default), sse2, avx2, avx512 or all "
                   "(results are bit-identical; only the speed differs)")
-      ->check(CLI::IsMember({"best", "sse2", "avx2", "all"}));
+      ->check(CLI::IsMember({"best", "sse2", "avx2", "avx512", "all"}));
   cmd->callback([&exit_code, json, steps, runs, only, simd_name] {
     std::vector<physics::Simd> widths;
-    for (physics::Simd s : {physics::Simd::sse2, physics::Simd::avx2}) {
+    for (physics::Simd s : {physics::Simd::sse2, physics::Simd::avx2, physics::Simd::avx512}) {
       if (*simd_name == physics::to_string(s) ||
           (*simd_name == "all" && physics::simd_supported(s)))
         widths.push_back(s);

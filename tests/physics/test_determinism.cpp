@@ -52,7 +52,7 @@ TEST(Determinism, GoldenHashInProcess) {
 // lanes perform the scalar path's operations; only the grouping of links and voxels differs).
 TEST(Determinism, GoldenHashAtEverySimdWidth) {
   int widths = 0;
-  for (Simd simd : {Simd::sse2, Simd::avx2}) {
+  for (Simd simd : {Simd::sse2, Simd::avx2, Simd::avx512}) {
     if (!simd_supported(simd)) {
       std::printf("SIMD width %s: not supported here, not checked\n", to_string(simd));
       continue;

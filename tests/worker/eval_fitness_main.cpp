@@ -1,7 +1,8 @@
 // Helper of test_eval_determinism: evaluates ROBOT.json for SECONDS with the built-in config
 // (task from the controller) and prints the fitness bits ("%a") and status. Run in separate
 // processes by the test to show that the result does not depend on the process. An optional
-// third argument names the SIMD width of the physics (sse2, avx2; default: the best here).
+// third argument names the SIMD width of the physics (sse2, avx2, avx512; default: the best
+// here).
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -13,7 +14,7 @@
 
 int main(int argc, char** argv) {
   if (argc != 3 && argc != 4) {
-    std::fprintf(stderr, "usage: %s ROBOT.json SECONDS [sse2|avx2]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s ROBOT.json SECONDS [sse2|avx2|avx512]\n", argv[0]);
     return 2;
   }
   softevo::EvalOptions options;
@@ -22,6 +23,8 @@ int main(int argc, char** argv) {
       options.simd = softevo::physics::Simd::sse2;
     } else if (std::strcmp(argv[3], "avx2") == 0) {
       options.simd = softevo::physics::Simd::avx2;
+    } else if (std::strcmp(argv[3], "avx512") == 0) {
+      options.simd = softevo::physics::Simd::avx512;
     } else {
       std::fprintf(stderr, "unknown SIMD width '%s'\n", argv[3]);
       return 2;
