@@ -518,6 +518,7 @@ template <class L, Axis A, bool kForces, bool kLarge>
   const VL<L> a2 = rotvec_lanes<L>(q2);
   const D strain = L::round_to_float(pos2.x / l);
 
+  int valid = 0;  // lanes whose local velocity was valid (the forces pass reads it)
   if constexpr (kForces) {
     if (L::bits(strain > splat<L>(kStrainDiverged)) & done) diverged = true;
     const LinkConstL<L> c = gather_link_const<L>(m, ids);
@@ -536,8 +537,8 @@ template <class L, Axis A, bool kForces, bool kLarge>
              b2 * pos2.y - b3 * (a1.z + 2.0 * a2.z)};
 
     // §2.5 damping in the lanes with a valid local velocity (none switched mode)
-    int damp = 0;
-    for (int k = 0; k < W; ++k) damp |= st.link_vel_valid[ids[k]] != 0 ? 1 << k : 0;
+    for (int k = 0; k < W; ++k) valid |= st.link_vel_valid[ids[k]] != 0 ? 1 << k : 0;
+    const int damp = valid;
     if (damp) {
       const VL<L> old_pos2 = gather<L>(st.link_pos2, ids);
       VL<L> old_a1{zero, zero, zero};  // small-angle links: see the invariant above
@@ -616,8 +617,11 @@ template <class L, Axis A, bool kForces, bool kLarge>
   to_floats<L>(strain, strain_f);
   for (int k = 0; k < W; ++k) {
     if (!(done >> k & 1)) continue;
-    st.link_vel_valid[ids[k]] = 1;
     st.link_strain[ids[k]] = strain_f[k];
+  }
+  if ((valid & done) != done) {  // the local velocity becomes valid (already is, after a step)
+    for (int k = 0; k < W; ++k)
+      if (done >> k & 1) st.link_vel_valid[ids[k]] = 1;
   }
   scatter<L>(pos2, st.link_pos2, ids, done);
   if constexpr (kLarge) scatter<L>(a1, st.link_angle1v, ids, done);  // else stays 0 (see above)
