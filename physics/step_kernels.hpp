@@ -46,23 +46,45 @@ namespace {
 // ---- §2.2 axis permutation ("as if the link pointed along +X") --------------------------------
 // The axis is a template parameter: the link pass runs one axis at a time (Model::links_by_axis),
 // so the permutations are free register moves instead of a data-dependent switch per link end.
+// Written once per component, generic over T (double, or a lane vector of the grouped passes);
+// a quaternion permutes its vector part the same way.
+template <Axis A, class T>
+[[gnu::always_inline]] inline void to_x_c(T x, T y, T z, T& ox, T& oy, T& oz) {
+  if constexpr (A == Axis::x) {
+    ox = x, oy = y, oz = z;
+  } else if constexpr (A == Axis::y) {
+    ox = y, oy = -x, oz = z;
+  } else {
+    ox = z, oy = y, oz = -x;
+  }
+}
+template <Axis A, class T>
+[[gnu::always_inline]] inline void from_x_c(T x, T y, T z, T& ox, T& oy, T& oz) {
+  if constexpr (A == Axis::x) {
+    ox = x, oy = y, oz = z;
+  } else if constexpr (A == Axis::y) {
+    ox = -y, oy = x, oz = z;
+  } else {
+    ox = -z, oy = y, oz = x;
+  }
+}
 template <Axis A>
 inline Vec3 to_x(double x, double y, double z) {
-  if constexpr (A == Axis::x) return {x, y, z};
-  if constexpr (A == Axis::y) return {y, -x, z};
-  if constexpr (A == Axis::z) return {z, y, -x};
+  Vec3 r;
+  to_x_c<A>(x, y, z, r.x(), r.y(), r.z());
+  return r;
 }
 template <Axis A>
 inline Quat to_x(const Quat& q) {
-  if constexpr (A == Axis::x) return q;
-  if constexpr (A == Axis::y) return {q.w, q.y, -q.x, q.z};
-  if constexpr (A == Axis::z) return {q.w, q.z, q.y, -q.x};
+  Quat r{q.w};
+  to_x_c<A>(q.x, q.y, q.z, r.x, r.y, r.z);
+  return r;
 }
 template <Axis A>
 inline Vec3 from_x(const Vec3& v) {
-  if constexpr (A == Axis::x) return v;
-  if constexpr (A == Axis::y) return {-v.y(), v.x(), v.z()};
-  if constexpr (A == Axis::z) return {-v.z(), v.y(), v.x()};
+  Vec3 r;
+  from_x_c<A>(v.x(), v.y(), v.z(), r.x(), r.y(), r.z());
+  return r;
 }
 
 // §2.3 small-angle hysteresis thresholds (float, as the reference's static float constants).
@@ -400,24 +422,25 @@ inline QL<L> quat_from_rotvec_lanes(const VL<L>& r) {
   }
   return q;
 }
-// §2.2 permutations on lanes (same signs and order as the scalar to_x / from_x)
+// §2.2 permutations on lanes (to_x_c / from_x_c, as the scalar to_x / from_x)
 template <Axis A, class L>
 [[gnu::always_inline]] inline VL<L> to_x_lanes(DV<L> x, DV<L> y, DV<L> z) {
-  if constexpr (A == Axis::x) return {x, y, z};
-  if constexpr (A == Axis::y) return {y, -x, z};
-  if constexpr (A == Axis::z) return {z, y, -x};
+  VL<L> r;
+  to_x_c<A>(x, y, z, r.x, r.y, r.z);
+  return r;
 }
 template <Axis A, class L>
 [[gnu::always_inline]] inline QL<L> to_x_lanes(const QL<L>& q) {
-  if constexpr (A == Axis::x) return q;
-  if constexpr (A == Axis::y) return {q.w, q.y, -q.x, q.z};
-  if constexpr (A == Axis::z) return {q.w, q.z, q.y, -q.x};
+  QL<L> r;
+  r.w = q.w;
+  to_x_c<A>(q.x, q.y, q.z, r.x, r.y, r.z);
+  return r;
 }
 template <Axis A, class L>
 [[gnu::always_inline]] inline VL<L> from_x_lanes(const VL<L>& v) {
-  if constexpr (A == Axis::x) return v;
-  if constexpr (A == Axis::y) return {-v.y, v.x, v.z};
-  if constexpr (A == Axis::z) return {-v.z, v.y, v.x};
+  VL<L> r;
+  from_x_c<A>(v.x, v.y, v.z, r.x, r.y, r.z);
+  return r;
 }
 
 // rotvec (§2.11) per lane: the unit and Taylor branches in SIMD, the acos branch per lane.
