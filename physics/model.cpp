@@ -203,13 +203,22 @@ Model build_model(const BodyPlan& plan, const PhysicsConfig& cfg, const BuildOpt
   }
   m.free_voxel_count = static_cast<int>(std::count(m.voxel_fixed.begin(), m.voxel_fixed.end(), 0));
 
-  // ---- links, creation order of §2.1 ----------------------------------------------------------
+  // ---- links, creation order of §2.1, numbered axis by axis ----------------------------------
   // For each new voxel, directions X+, X-, Y+, Y-, Z+, Z- if the neighbour already exists; with
   // x-outer insertion only X-, Y-, Z- neighbours exist. The link material of an unordered pair is
   // created once, with (new voxel's material, neighbour's material) of its first link.
+  // Link ids: the x links in creation order, then the y links, then the z links, so that the link
+  // pass (one axis at a time) walks contiguous id ranges. Links are independent within a pass and
+  // every per-voxel sum runs in direction order, so the numbering does not change any result.
+  struct NewLink {
+    int neg, pos;
+    LinkConst c;
+  };
   std::map<std::pair<int, int>, LinkConst> link_mats;
-  std::vector<std::array<int, 6>> dir_link(nv);
-  for (auto& d : dir_link) d.fill(-1);
+  std::array<std::vector<NewLink>, 3> axis_links;
+  // (axis, index within the axis) of the link in each direction of each voxel, or -1
+  std::vector<std::array<std::pair<int, int>, 6>> dir_link(nv);
+  for (auto& d : dir_link) d.fill({-1, -1});
   for (int v = 0; v < nv; ++v) {
     const auto [x, y, z] = m.voxel_cell[v];
     const int nb[3] = {x > 0 ? m.cell_to_voxel[m.cell_index(x - 1, y, z)] : -1,
@@ -223,31 +232,33 @@ Model build_model(const BodyPlan& plan, const PhysicsConfig& cfg, const BuildOpt
       auto it = link_mats.find(key);
       if (it == link_mats.end())
         it = link_mats.emplace(key, make_link_const(mats[mv - 1].e, mats[mn - 1].e, s)).first;
-      const int id = m.link_count++;
-      m.link_neg.push_back(n);  // lower index along the axis
-      m.link_pos.push_back(v);
-      m.link_axis.push_back(static_cast<Axis>(a));
-      m.link_const.push_back(it->second);
-      dir_link[n][2 * a] = id;      // + direction of N
-      dir_link[v][2 * a + 1] = id;  // - direction of P
+      const std::pair<int, int> slot{a, static_cast<int>(axis_links[a].size())};
+      axis_links[a].push_back({n, v, it->second});  // n: lower index along the axis
+      dir_link[n][2 * a] = slot;                    // + direction of N
+      dir_link[v][2 * a + 1] = slot;                // - direction of P
     }
   }
-  m.links_by_axis.clear();
   for (int a = 0; a < 3; ++a) {
-    m.axis_link_begin[a] = static_cast<int>(m.links_by_axis.size());
-    for (int l = 0; l < m.link_count; ++l)
-      if (m.link_axis[l] == static_cast<Axis>(a)) m.links_by_axis.push_back(l);
+    m.axis_link_begin[a] = m.link_count;
+    for (const NewLink& l : axis_links[a]) {
+      m.link_neg.push_back(l.neg);
+      m.link_pos.push_back(l.pos);
+      m.link_axis.push_back(static_cast<Axis>(a));
+      m.link_const.push_back(l.c);
+      ++m.link_count;
+    }
   }
-  m.axis_link_begin[3] = static_cast<int>(m.links_by_axis.size());
+  m.axis_link_begin[3] = m.link_count;
   m.voxel_link_begin.assign(nv + 1, 0);
   m.voxel_surface.assign(nv, 0);
   for (int v = 0; v < nv; ++v) {
     int count = 0;
     for (int d = 0; d < 6; ++d) {
-      if (dir_link[v][d] < 0) continue;
+      const auto [axis, index] = dir_link[v][d];
+      if (axis < 0) continue;
       ++count;
       // even directions (X+, Y+, Z+): v is the negative end of that link
-      m.voxel_link_entry.push_back(dir_link[v][d] * 2 + (d & 1));
+      m.voxel_link_entry.push_back((m.axis_link_begin[axis] + index) * 2 + (d & 1));
     }
     m.voxel_link_begin[v + 1] = static_cast<int>(m.voxel_link_entry.size());
     m.voxel_surface[v] = count < 6 ? 1 : 0;

@@ -101,18 +101,18 @@ struct Model {
   std::vector<std::uint8_t> voxel_surface;     // 1 = fewer than 6 links (§2.1 "surface") (voxels)
   int free_voxel_count = 0;                    // voxels that are not fixed
 
-  // ---- links (index = link id, creation order of §2.1) ---------------------------------------
+  // ---- links (index = link id) ---------------------------------------------------------------
+  // Ids run axis by axis (the x links, then y, then z), each axis in the creation order of §2.1.
+  // The link pass handles one axis at a time with the §2.2 permutation fixed at compile time and
+  // walks a contiguous id range. Links are independent within a pass (each writes only its own
+  // state and end loads) and the voxel sums run in direction order, so the numbering gives the
+  // same results as creation order.
   int link_count = 0;
   std::vector<int> link_neg;  // negative-end voxel N (lower lattice index along the axis)
   std::vector<int> link_pos;  // positive-end voxel P
   std::vector<Axis> link_axis;
   std::vector<LinkConst> link_const;
-  // Link ids grouped by axis (x, then y, then z; ascending within an axis): the link pass
-  // handles one axis at a time with the §2.2 permutation fixed at compile time. Links are
-  // independent within a pass (each writes only its own state and end loads), so this order
-  // gives the same results as creation order.
-  std::vector<int> links_by_axis;                  // (links)
-  std::array<int, 4> axis_link_begin{0, 0, 0, 0};  // axis a: [begin[a], begin[a+1])
+  std::array<int, 4> axis_link_begin{0, 0, 0, 0};  // links of axis a: ids [begin[a], begin[a+1])
   double rest_length = 0.0;  // L = s for every link [m] (double, as Voxelyze's baseSize)
 
   // ---- voxel -> links CSR, direction order X+, X-, Y+, Y-, Z+, Z- (§2.1) ---------------------

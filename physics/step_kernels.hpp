@@ -32,6 +32,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <span>
 #include <utility>
 
@@ -44,7 +45,7 @@ namespace softevo::physics {
 namespace {
 
 // ---- §2.2 axis permutation ("as if the link pointed along +X") --------------------------------
-// The axis is a template parameter: the link pass runs one axis at a time (Model::links_by_axis),
+// The axis is a template parameter: the link pass runs one axis at a time (Model::axis_link_begin),
 // so the permutations are free register moves instead of a data-dependent switch per link end.
 // Written once per component, generic over T (double, or a lane vector of the grouped passes);
 // a quaternion permutes its vector part the same way.
@@ -268,6 +269,17 @@ template <class L>
   return m;
 }
 
+// Bit k set where the byte flag p[k] is non-zero, for the W consecutive flags at p.
+template <class L>
+[[gnu::always_inline]] inline int nonzero_flags(const std::uint8_t* p) {
+  static_assert(L::W <= 4);
+  std::uint32_t word = 0;
+  std::memcpy(&word, p, L::W);
+  const __m128i zero =
+      _mm_cmpeq_epi8(_mm_cvtsi32_si128(static_cast<int>(word)), _mm_setzero_si128());
+  return ~_mm_movemask_epi8(zero) & kAllLanes<L>;
+}
+
 template <class L>
 struct VL {  // W Vec3
   DV<L> x, y, z;
@@ -479,7 +491,9 @@ inline QL<L> quat_to_pos_x_lanes(const VL<L>& d) {
 }
 
 // Links ids[0..W) of axis A, all in the same mode at their last update: small-angle mode
-// (kLarge false) or large-angle mode (kLarge true), the caller's choice. Each lane whose link
+// (kLarge false) or large-angle mode (kLarge true), the caller's choice. With kContig the ids are
+// consecutive (ids[k] = ids[0] + k), so the per-link flags and strains are read and written as
+// runs. Each lane whose link
 // stays in that mode (§2.3 hysteresis) is updated like link_scalar (or link_scalar_state_only if
 // !kForces), its strain > 100 ORed into `diverged`; returns those lanes (bit k = lane k). Lanes
 // that switch mode are left unchanged for the caller's link_scalar. A link may fill several
@@ -489,7 +503,7 @@ inline QL<L> quat_to_pos_x_lanes(const VL<L>& d) {
 // angle1v = (+0, +0, +0) stored (every small-angle update stores rotvec(identity) = 0, and so
 // does initial_state), so the old angle1v is the constant zero and the new one need not be
 // stored again. The mode flag of a lane that stays in its mode need not be stored either.
-template <class L, Axis A, bool kForces, bool kLarge>
+template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
 [[gnu::always_inline]] inline int link_group(const Model& m, State& st, Scratch& sc, const int* ids,
                                              bool& diverged) {
   constexpr int W = L::W;
@@ -560,7 +574,11 @@ template <class L, Axis A, bool kForces, bool kLarge>
              b2 * pos2.y - b3 * (a1.z + 2.0 * a2.z)};
 
     // §2.5 damping in the lanes with a valid local velocity (none switched mode)
-    for (int k = 0; k < W; ++k) valid |= st.link_vel_valid[ids[k]] != 0 ? 1 << k : 0;
+    if constexpr (kContig) {
+      valid = nonzero_flags<L>(&st.link_vel_valid[ids[0]]);
+    } else {
+      for (int k = 0; k < W; ++k) valid |= st.link_vel_valid[ids[k]] != 0 ? 1 << k : 0;
+    }
     const int damp = valid;
     if (damp) {
       const VL<L> old_pos2 = gather<L>(st.link_pos2, ids);
@@ -636,15 +654,22 @@ template <class L, Axis A, bool kForces, bool kLarge>
     scatter3<L>(out[2], fp_g.x, fp_g.y, fp_g.z, done);
     scatter3<L>(out[3], mp_g.x, mp_g.y, mp_g.z, done);
   }
-  float strain_f[W];  // float(strain) per lane (exact: strain is a float value)
-  to_floats<L>(strain, strain_f);
-  for (int k = 0; k < W; ++k) {
-    if (!(done >> k & 1)) continue;
-    st.link_strain[ids[k]] = strain_f[k];
-  }
-  if ((valid & done) != done) {  // the local velocity becomes valid (already is, after a step)
-    for (int k = 0; k < W; ++k)
-      if (done >> k & 1) st.link_vel_valid[ids[k]] = 1;
+  // float(strain) per lane (exact: strain is a float value)
+  if (kContig && done == kAllLanes<L>) {
+    to_floats<L>(strain, &st.link_strain[ids[0]]);
+    if (valid != kAllLanes<L>)  // the local velocity becomes valid (already is, after a step)
+      std::memset(&st.link_vel_valid[ids[0]], 1, W);
+  } else {
+    float strain_f[W];
+    to_floats<L>(strain, strain_f);
+    for (int k = 0; k < W; ++k) {
+      if (!(done >> k & 1)) continue;
+      st.link_strain[ids[k]] = strain_f[k];
+    }
+    if ((valid & done) != done) {
+      for (int k = 0; k < W; ++k)
+        if (done >> k & 1) st.link_vel_valid[ids[k]] = 1;
+    }
   }
   scatter<L>(pos2, st.link_pos2, ids, done);
   if constexpr (kLarge) scatter<L>(a1, st.link_angle1v, ids, done);  // else stays 0 (see above)
@@ -652,12 +677,13 @@ template <class L, Axis A, bool kForces, bool kLarge>
   return done;
 }
 
-// One full group of W links of one mode through link_group; the lanes that switched mode go
-// through link_scalar (or link_scalar_state_only if !kForces).
-template <class L, Axis A, bool kForces, bool kLarge>
+// One group of links through link_group: `count` links group[0..count), padded to W lanes; the
+// lanes that switched mode go through link_scalar (or link_scalar_state_only if !kForces).
+template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
 [[gnu::noinline]] void run_link_group(const Model& m, State& st, Scratch& sc, const int* group,
                                       int count, bool& diverged) {
-  const int done = link_group<L, A, kForces, kLarge>(m, st, sc, group, diverged);
+  const int done = link_group<L, A, kForces, kLarge, kContig>(m, st, sc, group, diverged);
+  if (done == kAllLanes<L>) return;  // the usual case: no link switched mode
   for (int k = 0; k < count; ++k) {
     if (done >> k & 1) continue;
     if constexpr (kForces) {
@@ -673,14 +699,15 @@ template <class L, Axis A, bool kForces, bool kLarge>
 inline void flush_link_group(const Model& m, State& st, Scratch& sc, int* group, int& count,
                              bool& diverged) {
   for (int k = count; k < L::W; ++k) group[k] = group[count - 1];
-  run_link_group<L, A, kForces, kLarge>(m, st, sc, group, count, diverged);
+  run_link_group<L, A, kForces, kLarge, false>(m, st, sc, group, count, diverged);
   count = 0;
 }
 
 // Link pass (§2.3-2.6) over the links of axis A: links go through link_group W at a time, those
 // in small-angle mode at their last update and those in large-angle mode in separate groups (a
-// lane that switches mode falls back to link_scalar). W consecutive links of the axis list that
-// share a mode (the usual case) form a group as they are; the others are collected per mode.
+// lane that switches mode falls back to link_scalar). W consecutive links of the axis (ids are
+// contiguous per axis, see Model) that share a mode, the usual case, form a group as they are;
+// the others are collected per mode.
 // Links are independent within a pass, so this order gives the same results as list order.
 // With kForces the end loads are computed and the return value is true if any strain > 100;
 // without, the state-only mid-step pass of the fork (§2.9 item 6).
@@ -688,7 +715,6 @@ template <class L, Axis A, bool kForces>
 bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
   constexpr int W = L::W;
   bool diverged = false;
-  const int* ids = m.links_by_axis.data();
   const int begin = m.axis_link_begin[static_cast<int>(A)];
   const int end = m.axis_link_begin[static_cast<int>(A) + 1];
   int small[W], large[W];  // collected links waiting for a full group
@@ -706,18 +732,18 @@ bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
   };
   int j = begin;
   for (; j + W <= end; j += W) {
-    const int* chunk = ids + j;
-    int small_lanes = 0;
-    for (int k = 0; k < W; ++k) small_lanes |= st.link_small_angle[chunk[k]] != 0 ? 1 << k : 0;
+    int chunk[W];
+    for (int k = 0; k < W; ++k) chunk[k] = j + k;
+    const int small_lanes = nonzero_flags<L>(&st.link_small_angle[j]);
     if (small_lanes == kAllLanes<L>) {
-      run_link_group<L, A, kForces, false>(m, st, sc, chunk, W, diverged);
+      run_link_group<L, A, kForces, false, true>(m, st, sc, chunk, W, diverged);
     } else if (small_lanes == 0) {
-      run_link_group<L, A, kForces, true>(m, st, sc, chunk, W, diverged);
+      run_link_group<L, A, kForces, true, true>(m, st, sc, chunk, W, diverged);
     } else {
-      for (int k = 0; k < W; ++k) collect(chunk[k]);
+      for (int k = 0; k < W; ++k) collect(j + k);
     }
   }
-  for (; j < end; ++j) collect(ids[j]);
+  for (; j < end; ++j) collect(j);
   if (small_count > 0)
     flush_link_group<L, A, kForces, false>(m, st, sc, small, small_count, diverged);
   if (large_count > 0)

@@ -32,22 +32,23 @@ TEST(Model, VoxelOrderAndCellMap) {
   EXPECT_EQ(m.cell_to_voxel[m.cell_index(0, 1, 0)], -1);
   EXPECT_EQ(m.cell_to_voxel[m.cell_index(1, 0, 1)], -1);
   EXPECT_EQ(m.voxel_material[5], 2);
-  // links: (0,0,0)-(0,0,1) z; (0,0,1)-(0,1,1) y; (0,0,0)-(1,0,0) x; (1,0,0)-(1,1,0) y;
-  // (0,1,1)-(1,1,1) x; (1,1,0)-(1,1,1) z, in creation order
+  // links in creation order: (0,0,0)-(0,0,1) z; (0,0,1)-(0,1,1) y; (0,0,0)-(1,0,0) x;
+  // (1,0,0)-(1,1,0) y; (0,1,1)-(1,1,1) x; (1,1,0)-(1,1,1) z; numbered axis by axis (x, y, z),
+  // each axis in creation order
   ASSERT_EQ(m.link_count, 6);
-  const int neg[6] = {0, 1, 0, 3, 2, 4}, pos[6] = {1, 2, 3, 4, 5, 5};
-  const Axis axis[6] = {Axis::z, Axis::y, Axis::x, Axis::y, Axis::x, Axis::z};
+  const int neg[6] = {0, 2, 1, 3, 0, 4}, pos[6] = {3, 5, 2, 4, 1, 5};
+  const Axis axis[6] = {Axis::x, Axis::x, Axis::y, Axis::y, Axis::z, Axis::z};
   for (int l = 0; l < 6; ++l) {
     EXPECT_EQ(m.link_neg[l], neg[l]) << l;
     EXPECT_EQ(m.link_pos[l], pos[l]) << l;
     EXPECT_EQ(m.link_axis[l], axis[l]) << l;
   }
-  // voxel 5 = (1,1,1): links in direction order X- (link 4), Y- none, Z- (link 5)
+  EXPECT_EQ(m.axis_link_begin, (std::array<int, 4>{0, 2, 4, 6}));
+  // voxel 5 = (1,1,1): links in direction order X- (link 1), Y- none, Z- (link 5)
   ASSERT_EQ(m.voxel_link_begin[6] - m.voxel_link_begin[5], 2);
-  EXPECT_EQ(m.voxel_link_entry[m.voxel_link_begin[5]], 4 * 2 + 1);
+  EXPECT_EQ(m.voxel_link_entry[m.voxel_link_begin[5]], 1 * 2 + 1);
   EXPECT_EQ(m.voxel_link_entry[m.voxel_link_begin[5] + 1], 5 * 2 + 1);
-  // mixed link: E_L = 2 E1 E2 / (E1 + E2) = 18181.8 Pa
-  EXPECT_NEAR(m.link_const[4].e_area, 2 * 1e4 * 1e5 / 1.1e5, 0.01);
+  EXPECT_NEAR(m.link_const[1].e_area, 2 * 1e4 * 1e5 / 1.1e5, 0.01);
 }
 
 // Appendix A constants for E = 1e5 Pa, s = 0.01 m (through a float), rho = 1000.
