@@ -8,6 +8,8 @@
 #include <string>
 
 #include "common/chamber_quads.hpp"
+#include "physics/pneumatics_triangle.hpp"
+#include "physics/step_kernels_table.hpp"
 
 namespace softevo::physics {
 
@@ -78,6 +80,8 @@ PneumaticsModel build_pneumatics(const BodyPlan& plan, const Model& model,
       // §3.1: quad (a,b,c,d) -> triangles (a,b,c) and (c,d,a)
       pm.triangle_slots.push_back({a, b, c});
       pm.triangle_slots.push_back({c, d, a});
+      pm.triangle_voxels.push_back({voxel[0], voxel[1], voxel[2]});
+      pm.triangle_voxels.push_back({voxel[2], voxel[3], voxel[0]});
     }
     pm.chamber_triangle_begin.push_back(static_cast<int>(pm.triangle_slots.size()));
   }
@@ -87,6 +91,7 @@ PneumaticsModel build_pneumatics(const BodyPlan& plan, const Model& model,
   pm.ambient_bar = static_cast<float>(cfg.ambient_pressure / kPascalPerBar);
   pm.conductivity = static_cast<float>(cfg.conductivity);
   pm.dt_f = model.dt_f;
+  pm.simd = model.simd;
   // §3.5: normalised cut-off Fc = dt * f_c (f_c Hz sampled at 1/dt).
   pm.filter =
       lowpass_biquad(static_cast<double>(model.dt_f) * cfg.valve_cutoff, cfg.valve_filter_q);
@@ -98,17 +103,13 @@ float chamber_volume(const PneumaticsModel& pm, int chamber, std::span<const Vec
   const int end = pm.chamber_triangle_begin[chamber + 1];
   float volume = 0.0f;  // [m^3], accumulated in float as the reference
   if (begin < end) {
-    const Vec3& p0 = positions[pm.wall_voxel[pm.triangle_slots[begin][0]]];
+    const Point3<double> p0 = to_point3(positions[pm.triangle_voxels[begin][0]]);
     for (int t = begin; t < end; ++t) {
-      const auto& tri = pm.triangle_slots[t];
-      const Vec3 a = positions[pm.wall_voxel[tri[0]]] - p0;
-      const Vec3 b = positions[pm.wall_voxel[tri[1]]] - p0;
-      const Vec3 c = positions[pm.wall_voxel[tri[2]]] - p0;
+      const auto& tri = pm.triangle_voxels[t];
       // §3.2: V += (C-p0) . ((B-p0) x (A-p0)) / 6 (double products, float accumulation)
-      const double cx = b.y() * a.z() - b.z() * a.y();
-      const double cy = b.z() * a.x() - b.x() * a.z();
-      const double cz = b.x() * a.y() - b.y() * a.x();
-      const double tet = (c.x() * cx + c.y() * cy + c.z() * cz) / 6.0;
+      const double tet =
+          triangle_tet_volume(to_point3(positions[tri[0]]), to_point3(positions[tri[1]]),
+                              to_point3(positions[tri[2]]), p0);
       volume = static_cast<float>(volume + tet);
     }
   }
@@ -152,9 +153,11 @@ void set_valve_commands(PneumaticsState& ps, std::span<const float> commands) {
 void pneumatics_update(const PneumaticsModel& pm, PneumaticsState& ps, PneumaticsScratch& scratch,
                        std::span<const Vec3> positions, std::span<Vec3> external_force) {
   // 1. Clear the wall voxels' forces (all chambers first) and recompute every volume.
+  const StepKernels& kernels = step_kernels(pm.simd);
   std::fill(scratch.slot_force.begin(), scratch.slot_force.end(),
             std::array<float, 3>{0.0f, 0.0f, 0.0f});
-  for (int q = 0; q < pm.chamber_count; ++q) ps.volume[q] = chamber_volume(pm, q, positions);
+  for (int q = 0; q < pm.chamber_count; ++q)
+    ps.volume[q] = kernels.chamber_volume(pm, q, positions);
 
   // 2. Valve pre-update (§3.5): a changed state is handed to the conduit's "open" value.
   for (int k = 0; k < pm.valve_count; ++k) {
@@ -169,36 +172,7 @@ void pneumatics_update(const PneumaticsModel& pm, PneumaticsState& ps, Pneumatic
     const float p = ps.quantity[q] / ps.volume[q];  // p = n/V [bar] (float)
     ps.pressure[q] = p;
     const float gauge = p - 1.0f;  // [bar] relative to 1 bar ambient
-    for (int t = pm.chamber_triangle_begin[q]; t < pm.chamber_triangle_begin[q + 1]; ++t) {
-      const auto& tri = pm.triangle_slots[t];
-      const Vec3& a = positions[pm.wall_voxel[tri[0]]];
-      const Vec3& b = positions[pm.wall_voxel[tri[1]]];
-      const Vec3& c = positions[pm.wall_voxel[tri[2]]];
-      // cross = (C-B) x (A-B): inward normal times twice the area
-      const Vec3 cb = c - b, ab = a - b;
-      const double nx = cb.y() * ab.z() - cb.z() * ab.y();
-      const double ny = cb.z() * ab.x() - cb.x() * ab.z();
-      const double nz = cb.x() * ab.y() - cb.y() * ab.x();
-      const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
-      const float area = static_cast<float>(0.5 * len);  // [m^2], returned as float (§3.4)
-      // normalise; a zero vector stays zero (§2.11 normalise)
-      const double ux = len > 0.0 ? nx / len : nx, uy = len > 0.0 ? ny / len : ny,
-                   uz = len > 0.0 ? nz / len : nz;
-      // §3.4: F = -n_hat * (p - 1) * area * 1e5 [N], evaluated left to right per component
-      const double g = gauge, ar = area;
-      const double fx = -ux * g * ar * kPascalPerBar;
-      const double fy = -uy * g * ar * kPascalPerBar;
-      const double fz = -uz * g * ar * kPascalPerBar;
-      // F/3 (to float) added to the float external force of each vertex
-      const float f3x = static_cast<float>(fx / 3.0), f3y = static_cast<float>(fy / 3.0),
-                  f3z = static_cast<float>(fz / 3.0);
-      for (int v = 0; v < 3; ++v) {
-        auto& acc = scratch.slot_force[tri[v]];
-        acc[0] += f3x;
-        acc[1] += f3y;
-        acc[2] += f3z;
-      }
-    }
+    kernels.add_pressure_forces(pm, q, gauge, positions, scratch);
   }
   for (std::size_t s = 0; s < pm.wall_voxel.size(); ++s) {
     const auto& f = scratch.slot_force[s];

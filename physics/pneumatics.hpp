@@ -51,8 +51,9 @@ struct PneumaticsModel {
 
   // ---- meshes (§3.1): quad (a,b,c,d) -> triangles (a,b,c), (c,d,a); normals point inwards ----
   // Triangle vertices as wall slots (index into wall_voxel), chamber by chamber, quad order.
-  std::vector<std::array<int, 3>> triangle_slots;  // (triangles)
-  std::vector<int> chamber_triangle_begin;         // CSR (chambers + 1) into triangle_slots
+  std::vector<std::array<int, 3>> triangle_slots;   // (triangles)
+  std::vector<std::array<int, 3>> triangle_voxels;  // the same vertices as voxel ids (triangles)
+  std::vector<int> chamber_triangle_begin;          // CSR (chambers + 1) into triangle_slots
   // Unique wall voxels over all chambers, in order of first use; a voxel shared by two chambers
   // has one slot and accumulates both chambers' forces (§3.6 step 1).
   std::vector<int> wall_voxel;  // voxel id (wall slots)
@@ -64,6 +65,9 @@ struct PneumaticsModel {
   float conductivity = 0.025f;  // conduit conductivity scale [m^3/(bar s)] (§3.5)
   float dt_f = 0.0f;            // physics time step as float [s]
   BiquadCoeffs filter;          // one section of the valve low-pass (f_c = valve_cutoff at 1/dt)
+  // SIMD width of the mesh passes (volumes, pressure forces): the model's, never `best`.
+  // Results do not depend on it.
+  Simd simd = Simd::sse2;
 
   // External reservoir pressure of conduit k (even = inlet/supply, odd = outlet/ambient) [bar].
   float reservoir_bar(int conduit) const { return (conduit & 1) == 0 ? supply_bar : ambient_bar; }

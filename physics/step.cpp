@@ -296,9 +296,8 @@ Simd best_simd() {
   return Simd::sse2;
 }
 
-namespace {
-
-const StepKernels& kernels_for(Simd simd) {
+const StepKernels& step_kernels(Simd simd) {
+  if (simd == Simd::best) simd = best_simd();
   switch (simd) {
 #if defined(SOFTEVO_HAVE_AVX2_KERNELS)
     case Simd::avx2:
@@ -313,8 +312,6 @@ const StepKernels& kernels_for(Simd simd) {
   }
 }
 
-}  // namespace
-
 StepStatus step(const Model& model, State& state, Scratch& scratch,
                 std::span<const Vec3> external_force) {
   if (!external_force.empty() &&
@@ -322,7 +319,7 @@ StepStatus step(const Model& model, State& state, Scratch& scratch,
     throw std::invalid_argument("physics::step: external_force has " +
                                 std::to_string(external_force.size()) + " entries, model has " +
                                 std::to_string(model.voxel_count) + " voxels");
-  const StepKernels& kernels = kernels_for(model.simd);
+  const StepKernels& kernels = step_kernels(model.simd);
   // 1. link pass; strain > 100 -> nothing else advances
   if (kernels.link_pass_forces(model, state, scratch)) {
     ++state.counters.diverged_steps;

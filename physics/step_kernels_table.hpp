@@ -6,6 +6,7 @@
 #include <span>
 
 #include "physics/model.hpp"
+#include "physics/pneumatics.hpp"
 #include "physics/state.hpp"
 #include "physics/step.hpp"
 
@@ -20,7 +21,16 @@ struct StepKernels {
   bool (*fork_voxel_passes)(const Model&, State&, Scratch&, std::span<const Vec3>);
   // §2.9 (symplectic); false if the state became non-finite
   bool (*symplectic_voxel_pass)(const Model&, State&, Scratch&, std::span<const Vec3>);
+  // §3.2 volume of one chamber (= chamber_volume) [m^3]
+  float (*chamber_volume)(const PneumaticsModel&, int chamber, std::span<const Vec3> positions);
+  // §3.4 pressure forces of one chamber at gauge pressure [bar], added to the wall slots' forces
+  void (*add_pressure_forces)(const PneumaticsModel&, int chamber, float gauge,
+                              std::span<const Vec3> positions, PneumaticsScratch&);
 };
+
+// The table of a width (`best` resolved to the widest this CPU runs; an unsupported width gives
+// the SSE2 table, but Model and PneumaticsModel only ever hold supported widths).
+const StepKernels& step_kernels(Simd simd);
 
 const StepKernels& step_kernels_sse2();
 #if defined(SOFTEVO_HAVE_AVX2_KERNELS)

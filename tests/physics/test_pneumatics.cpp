@@ -12,9 +12,11 @@
 
 #include "common/body_plan.hpp"
 #include "common/config.hpp"
+#include "common/rng.hpp"
 #include "physics/model.hpp"
 #include "physics/observables.hpp"
 #include "physics/pneumatics.hpp"
+#include "physics/pneumatics_triangle.hpp"
 #include "physics/state.hpp"
 #include "physics/step.hpp"
 
@@ -273,6 +275,63 @@ TEST(Pneumatics, PressureForcesPushWallsOutwardWithFThirdPerVertex) {
   EXPECT_NEAR(total.norm(), 0.0, 1e-5 * gauge_pa * s * s);  // closed mesh: no net force
   const int centre = model.cell_to_voxel[model.cell_index(1, 1, 2)];
   EXPECT_GT(force[centre].z(), 0.0);
+}
+
+// The mesh passes of pneumatics_update run W triangles at a time (volumes and pressure forces).
+// At every SIMD width this CPU runs they give the bits of the one-triangle-at-a-time reference
+// (chamber_volume and the §3.4 triangle formula summed in mesh order), on a randomly deformed
+// two-chamber body (108 and 6 triangles: full groups and a tail).
+TEST(Pneumatics, MeshPassesGiveTheReferenceBitsAtEverySimdWidth) {
+  BodyPlan plan = box_with_cavity({7, 4, 4}, {1, 1, 1}, {2, 2, 2});
+  plan.cells[plan.cell_index(6, 3, 3)] = kFirstChamberCell + 1;  // a corner cell: 3 quads
+  const Model model = build_model(plan, PhysicsConfig{});
+  PneumaticsModel pm = build_pneumatics(plan, model, PneumaticsConfig{});
+  ASSERT_EQ(pm.chamber_count, 2);
+  State st = initial_state(model);
+  Rng rng(7);
+  for (Vec3& p : st.pos)
+    p += Vec3(rng.normal(), rng.normal(), rng.normal()) * (0.1 * model.voxel_size);
+  const PneumaticsState start = initial_pneumatics_state(pm, st.pos);
+
+  // reference: per chamber, p = n / V with n = 1.15 V0 (gauge > 0), forces triangle by triangle
+  std::vector<float> ref_volume(2);
+  std::vector<std::array<float, 3>> ref_slot(pm.wall_voxel.size(), {0.0f, 0.0f, 0.0f});
+  for (int q = 0; q < 2; ++q) {
+    const int triangles = pm.chamber_triangle_begin[q + 1] - pm.chamber_triangle_begin[q];
+    EXPECT_EQ(triangles, q == 0 ? 108 : 6);  // 6: not a multiple of 4, the 4-lane pass has a tail
+    ref_volume[q] = chamber_volume(pm, q, st.pos);
+    const float gauge = (1.15f * start.volume[q]) / ref_volume[q] - 1.0f;
+    for (int t = pm.chamber_triangle_begin[q]; t < pm.chamber_triangle_begin[q + 1]; ++t) {
+      const auto& tri = pm.triangle_voxels[t];
+      const Point3<double> f3 = triangle_force_third<ScalarTriangleOps>(
+          to_point3(st.pos[tri[0]]), to_point3(st.pos[tri[1]]), to_point3(st.pos[tri[2]]),
+          static_cast<double>(gauge));
+      for (int v : pm.triangle_slots[t])
+        for (int c = 0; c < 3; ++c) ref_slot[v][c] += static_cast<float>((&f3.x)[c]);
+    }
+  }
+  int widths = 0;
+  for (Simd simd : {Simd::sse2, Simd::avx2, Simd::avx512}) {
+    if (!simd_supported(simd)) continue;
+    ++widths;
+    pm.simd = simd;
+    PneumaticsState ps = start;
+    for (int q = 0; q < 2; ++q) ps.quantity[q] = 1.15f * start.volume[q];
+    PneumaticsScratch scratch = make_pneumatics_scratch(pm);
+    std::vector<Vec3> force(static_cast<std::size_t>(model.voxel_count), Vec3::Zero());
+    pneumatics_update(pm, ps, scratch, st.pos, force);
+    for (int q = 0; q < 2; ++q) EXPECT_EQ(ps.volume[q], ref_volume[q]) << to_string(simd);
+    double largest = 0.0;
+    for (std::size_t w = 0; w < pm.wall_voxel.size(); ++w) {
+      const Vec3& f = force[pm.wall_voxel[w]];
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_EQ(f[c], static_cast<double>(ref_slot[w][c])) << to_string(simd) << " slot " << w;
+        largest = std::max(largest, std::fabs(f[c]));
+      }
+    }
+    EXPECT_GT(largest, 1.0) << "forces of a 0.15 bar gauge pressure on 1 cm^2 faces [N]";
+  }
+  EXPECT_GE(widths, 1);
 }
 
 TEST(Pneumatics, SensorNormalisation) {
