@@ -261,6 +261,11 @@ Model build_model(const BodyPlan& plan, const PhysicsConfig& cfg, const BuildOpt
       m.voxel_link_entry.push_back((m.axis_link_begin[axis] + index) * 2 + (d & 1));
     }
     m.voxel_link_begin[v + 1] = static_cast<int>(m.voxel_link_entry.size());
+    std::array<int, 6>& slots = m.voxel_load_slots.emplace_back();
+    for (int d = 0; d < 6; ++d) {
+      const auto [axis, index] = dir_link[v][d];
+      slots[d] = axis < 0 ? 2 * m.link_count : (m.axis_link_begin[axis] + index) * 2 + (d & 1);
+    }
     m.voxel_surface[v] = count < 6 ? 1 : 0;
     if (m.voxel_surface[v]) m.surface_voxels.push_back(v);
   }

@@ -120,6 +120,11 @@ struct Model {
   // end = entry & 1 (0: v is the negative end N, 1: v is the positive end P).
   std::vector<int> voxel_link_begin;  // (voxels + 1)
   std::vector<int> voxel_link_entry;  // (2 * links)
+  // The same entries in six fixed direction slots per voxel, a missing link given as
+  // 2 * link_count: Scratch keeps an always-zero end load there, so the voxel passes sum six
+  // loads per voxel without a data-dependent loop. Adding +0.0 never changes these sums: they
+  // start at +0.0, so a partial sum is never -0.0 (round to nearest), and x + 0.0 = x otherwise.
+  std::vector<std::array<int, 6>> voxel_load_slots;  // (voxels)
 
   // ---- self-collision (§2.10) ------------------------------------------------------------------
   std::vector<int> surface_voxels;  // ids of surface voxels, ascending

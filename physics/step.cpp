@@ -41,7 +41,7 @@ const char* to_string(StepStatus status) {
 Scratch make_scratch(const Model& model) {
   Scratch sc;
   const std::size_t nl = model.link_count, nv = model.voxel_count;
-  sc.link_end_load.assign(2 * nl, Scratch::EndLoad{Vec3::Zero(), Vec3::Zero()});
+  sc.link_end_load.assign(2 * nl + 1, Scratch::EndLoad{Vec3::Zero(), Vec3::Zero()});
   sc.link_damping.assign(nv, 0.0f);
   sc.collision_force.assign(nv, Vec3::Zero());
   sc.part2_force.assign(nv, Vec3::Zero());

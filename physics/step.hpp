@@ -36,7 +36,8 @@ struct Scratch {
     Vec3 force;   // [N]
     Vec3 moment;  // [N m]
   };
-  std::vector<EndLoad> link_end_load;  // (2 x links)
+  // Entry 2 x links is always zero: the end load of a missing link (Model::voxel_load_slots).
+  std::vector<EndLoad> link_end_load;  // (2 x links + 1)
   // §2.5 link damping multiplier c_V = damp_base_V / previous_dt (float) per voxel, refreshed at
   // the start of a force link pass when previous_dt changed (one division per voxel instead of
   // two per link)

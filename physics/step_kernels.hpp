@@ -788,9 +788,9 @@ struct LinkSums {
 inline LinkSums sum_links(const Model& m, const Scratch& sc, int v) {
   static_assert(sizeof(Scratch::EndLoad) == 6 * sizeof(double));
   LinkSums s{_mm_setzero_pd(), _mm_setzero_pd(), _mm_setzero_pd()};
-  const int end = m.voxel_link_begin[v + 1];
-  for (int e = m.voxel_link_begin[v]; e < end; ++e) {
-    const double* load = sc.link_end_load[m.voxel_link_entry[e]].force.data();
+  const Scratch::EndLoad* loads = sc.link_end_load.data();
+  for (int slot : m.voxel_load_slots[v]) {  // six slots, missing links read the zero load
+    const double* load = loads[slot].force.data();
     s.fxy = _mm_add_pd(s.fxy, _mm_loadu_pd(load));
     s.fz_mx = _mm_add_pd(s.fz_mx, _mm_loadu_pd(load + 2));
     s.myz = _mm_add_pd(s.myz, _mm_loadu_pd(load + 4));

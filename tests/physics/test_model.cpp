@@ -48,6 +48,8 @@ TEST(Model, VoxelOrderAndCellMap) {
   ASSERT_EQ(m.voxel_link_begin[6] - m.voxel_link_begin[5], 2);
   EXPECT_EQ(m.voxel_link_entry[m.voxel_link_begin[5]], 1 * 2 + 1);
   EXPECT_EQ(m.voxel_link_entry[m.voxel_link_begin[5] + 1], 5 * 2 + 1);
+  // the same in six direction slots, missing links at the zero end load 2 * link_count
+  EXPECT_EQ(m.voxel_load_slots[5], (std::array<int, 6>{12, 1 * 2 + 1, 12, 12, 12, 5 * 2 + 1}));
   EXPECT_NEAR(m.link_const[1].e_area, 2 * 1e4 * 1e5 / 1.1e5, 0.01);
 }
 
