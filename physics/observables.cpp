@@ -76,9 +76,9 @@ double elastic_energy(const Model& model, const State& state) {
   double e = 0.0;
   for (int i = 0; i < model.link_count; ++i) {
     const LinkConst& c = model.link_const[i];
-    const Vec3& p = state.link_pos2[i];
-    const Vec3& a1 = state.link_angle1v[i];
-    const Vec3& a2 = state.link_angle2v[i];
+    const Vec3 p = state.link_pos2[i];
+    const Vec3 a1 = state.link_angle1v[i];
+    const Vec3 a2 = state.link_angle2v[i];
     const double fx = c.e_area * (p.x() / model.rest_length) * c.area;
     const Vec3 fn(fx, c.b1 * p.y() - c.b2 * (a1.z() + a2.z()),
                   c.b1 * p.z() + c.b2 * (a1.y() + a2.y()));

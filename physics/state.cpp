@@ -19,9 +19,9 @@ State initial_state(const Model& model) {
   st.ang_mom.assign(nv, Vec3::Zero());
   st.static_friction.assign(nv, 1);  // §2.8: every voxel starts in static friction
   const int nl = model.link_count;
-  st.link_pos2.assign(nl, Vec3::Zero());
-  st.link_angle1v.assign(nl, Vec3::Zero());
-  st.link_angle2v.assign(nl, Vec3::Zero());
+  st.link_pos2.assign(nl, 0.0);
+  st.link_angle1v.assign(nl, 0.0);
+  st.link_angle2v.assign(nl, 0.0);
   st.link_strain.assign(nl, 0.0f);
   st.link_small_angle.assign(nl, 1);
   st.link_vel_valid.assign(nl, 0);
@@ -52,6 +52,14 @@ struct Fnv1a {
   void value(const T& v) {
     static_assert(std::is_trivially_copyable_v<T>);
     bytes(&v, sizeof(T));
+  }
+  void array(const LinkVec3Columns& c) {  // as the array of Vec3
+    value(static_cast<std::uint64_t>(c.size()));
+    for (std::size_t i = 0; i < c.size(); ++i) {
+      value(c.x[i]);
+      value(c.y[i]);
+      value(c.z[i]);
+    }
   }
   template <class T>
   void array(const std::vector<T>& v) {

@@ -16,6 +16,25 @@ struct CollisionPair {
   std::int32_t b;
 };
 
+// One 3-vector per link, stored by component (an x, a y and a z array): the link pass reads and
+// writes the components of W consecutive links with one vector access each.
+struct LinkVec3Columns {
+  std::vector<double> x, y, z;
+
+  std::size_t size() const { return x.size(); }
+  Vec3 operator[](std::size_t i) const { return {x[i], y[i], z[i]}; }
+  void set(std::size_t i, const Vec3& v) {
+    x[i] = v.x();
+    y[i] = v.y();
+    z[i] = v.z();
+  }
+  void assign(std::size_t n, double value) {
+    x.assign(n, value);
+    y.assign(n, value);
+    z.assign(n, value);
+  }
+};
+
 // Diagnostics counters (data, never asserts).
 struct StepCounters {
   std::uint64_t steps = 0;                   // steps performed (status ok)
@@ -39,9 +58,9 @@ struct State {
   std::vector<std::uint8_t> static_friction;  // §2.8 floor static-friction flag (voxels)
 
   // ---- links (index = link id): history used by damping (§2.5) and hysteresis (§2.3) -------
-  std::vector<Vec3> link_pos2;     // P relative to N in the link frame, minus rest length [m]
-  std::vector<Vec3> link_angle1v;  // rotation vector of end N in the link frame [rad]
-  std::vector<Vec3> link_angle2v;  // rotation vector of end P in the link frame [rad]
+  LinkVec3Columns link_pos2;       // P relative to N in the link frame, minus rest length [m]
+  LinkVec3Columns link_angle1v;    // rotation vector of end N in the link frame [rad]
+  LinkVec3Columns link_angle2v;    // rotation vector of end P in the link frame [rad]
   std::vector<float> link_strain;  // axial strain of the most recent link update [-]
   std::vector<std::uint8_t> link_small_angle;  // §2.3 small-angle mode flag (initially 1)
   std::vector<std::uint8_t> link_vel_valid;    // §2.5 "local velocity valid" (initially 0)
@@ -65,7 +84,8 @@ struct State {
 State initial_state(const Model& model);
 
 // 64-bit FNV-1a over the bytes of every field in declaration order (time, previous_dt, each
-// array's element count then its elements' bytes, collisions_stale, col pairs, counters).
+// array's element count then its elements' bytes, collisions_stale, col pairs, counters). A
+// LinkVec3Columns array is hashed as the array of its Vec3 (x, y, z per link).
 // Identical states give identical hashes in any process on the same platform.
 std::uint64_t state_hash(const State& state);
 

@@ -173,9 +173,9 @@ bool link_scalar(const Model& m, State& st, Scratch& sc, int i) {
   // §2.5 internal damping from the change since the previous link update; skipped (and the
   // flag set) after a mode switch or at the first update
   if (st.link_vel_valid[i] && !k.switched) {
-    const Vec3& old_pos2 = st.link_pos2[i];
-    const Vec3& old_a1 = st.link_angle1v[i];
-    const Vec3& old_a2 = st.link_angle2v[i];
+    const Vec3 old_pos2 = st.link_pos2[i];
+    const Vec3 old_a1 = st.link_angle1v[i];
+    const Vec3 old_a2 = st.link_angle2v[i];
     const double dpx = 0.5 * (pos2.x() - old_pos2.x()), dpy = 0.5 * (pos2.y() - old_pos2.y()),
                  dpz = 0.5 * (pos2.z() - old_pos2.z());
     const double d1x = 0.5 * (a1.x() - old_a1.x()), d1y = 0.5 * (a1.y() - old_a1.y()),
@@ -200,9 +200,9 @@ bool link_scalar(const Model& m, State& st, Scratch& sc, int i) {
   st.link_vel_valid[i] = 1;
   st.link_small_angle[i] = k.small;
   st.link_strain[i] = strain;
-  st.link_pos2[i] = pos2;
-  st.link_angle1v[i] = a1;
-  st.link_angle2v[i] = a2;
+  st.link_pos2.set(i, pos2);
+  st.link_angle1v.set(i, a1);
+  st.link_angle2v.set(i, a2);
 
   // §2.6 back to the end voxels' local frames
   if (!k.small) {
@@ -228,9 +228,9 @@ void link_scalar_state_only(const Model& m, State& st, int i) {
   st.link_strain[i] = static_cast<float>(k.pos2.x() / m.rest_length);
   st.link_vel_valid[i] = 1;
   st.link_small_angle[i] = k.small;
-  st.link_pos2[i] = k.pos2;
-  st.link_angle1v[i] = k.a1v;
-  st.link_angle2v[i] = k.a2v;
+  st.link_pos2.set(i, k.pos2);
+  st.link_angle1v.set(i, k.a1v);
+  st.link_angle2v.set(i, k.a2v);
 }
 
 // ---- lanes --------------------------------------------------------------------------------------
@@ -391,6 +391,41 @@ template <class L>
 [[gnu::always_inline]] inline void scatter(const QL<L>& q, std::vector<Quat>& a, const int* id) {
   for (int k = 0; k < L::W; ++k) a[id[k]] = Quat{q.w[k], q.x[k], q.y[k], q.z[k]};
 }
+// Links ids[0..W) of a LinkVec3Columns as lanes, and back for the lanes in `mask`. With kContig
+// the ids are consecutive: one vector load / store per component.
+template <class L>
+[[gnu::always_inline]] inline DV<L> load_lanes(const double* p) {
+  DV<L> v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+template <class L, bool kContig>
+[[gnu::always_inline]] inline VL<L> gather(const LinkVec3Columns& a, const int* id) {
+  if constexpr (kContig) {
+    return {load_lanes<L>(&a.x[id[0]]), load_lanes<L>(&a.y[id[0]]), load_lanes<L>(&a.z[id[0]])};
+  } else {
+    return {make_lanes<L>([&](int k) { return a.x[id[k]]; }),
+            make_lanes<L>([&](int k) { return a.y[id[k]]; }),
+            make_lanes<L>([&](int k) { return a.z[id[k]]; })};
+  }
+}
+template <class L, bool kContig>
+[[gnu::always_inline]] inline void scatter(const VL<L>& v, LinkVec3Columns& a, const int* id,
+                                           int mask) {
+  if (kContig && mask == kAllLanes<L>) {
+    std::memcpy(&a.x[id[0]], &v.x, sizeof v.x);
+    std::memcpy(&a.y[id[0]], &v.y, sizeof v.y);
+    std::memcpy(&a.z[id[0]], &v.z, sizeof v.z);
+    return;
+  }
+  for (int k = 0; k < L::W; ++k) {
+    if (!(mask >> k & 1)) continue;
+    a.x[id[k]] = v.x[k];
+    a.y[id[k]] = v.y[k];
+    a.z[id[k]] = v.z[k];
+  }
+}
+
 // The float constants of W links / voxels as double lanes (exact), indexed by member.
 template <class L>
 struct LinkConstL {
@@ -583,10 +618,10 @@ template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
     }
     const int damp = valid;
     if (damp) {
-      const VL<L> old_pos2 = gather<L>(st.link_pos2, ids);
+      const VL<L> old_pos2 = gather<L, kContig>(st.link_pos2, ids);
       VL<L> old_a1{zero, zero, zero};  // small-angle links: see the invariant above
-      if constexpr (kLarge) old_a1 = gather<L>(st.link_angle1v, ids);
-      const VL<L> old_a2 = gather<L>(st.link_angle2v, ids);
+      if constexpr (kLarge) old_a1 = gather<L, kContig>(st.link_angle1v, ids);
+      const VL<L> old_a2 = gather<L, kContig>(st.link_angle2v, ids);
       const D dpx = 0.5 * (pos2.x - old_pos2.x), dpy = 0.5 * (pos2.y - old_pos2.y),
               dpz = 0.5 * (pos2.z - old_pos2.z);
       const D d1x = 0.5 * (a1.x - old_a1.x), d1y = 0.5 * (a1.y - old_a1.y),
@@ -673,9 +708,9 @@ template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
         if (done >> k & 1) st.link_vel_valid[ids[k]] = 1;
     }
   }
-  scatter<L>(pos2, st.link_pos2, ids, done);
-  if constexpr (kLarge) scatter<L>(a1, st.link_angle1v, ids, done);  // else stays 0 (see above)
-  scatter<L>(a2, st.link_angle2v, ids, done);
+  scatter<L, kContig>(pos2, st.link_pos2, ids, done);
+  if constexpr (kLarge) scatter<L, kContig>(a1, st.link_angle1v, ids, done);  // else stays 0
+  scatter<L, kContig>(a2, st.link_angle2v, ids, done);
   return done;
 }
 
