@@ -57,6 +57,18 @@ struct LanesAvx2 {
     if (mask & 4) _mm256_maskstore_pd(p[2], m, _mm256_permute2f128_pd(t0, t2, 0x31));
     if (mask & 8) _mm256_maskstore_pd(p[3], m, _mm256_permute2f128_pd(t1, t3, 0x31));
   }
+  static void store_records12(const D (&c)[12], double* out) {
+    for (int b = 0; b < 3; ++b) {  // a 4 x 4 transpose per block of four members
+      const __m256d t0 = _mm256_unpacklo_pd(c[4 * b], c[4 * b + 1]);      // a0 b0 a2 b2
+      const __m256d t1 = _mm256_unpackhi_pd(c[4 * b], c[4 * b + 1]);      // a1 b1 a3 b3
+      const __m256d t2 = _mm256_unpacklo_pd(c[4 * b + 2], c[4 * b + 3]);  // c0 d0 c2 d2
+      const __m256d t3 = _mm256_unpackhi_pd(c[4 * b + 2], c[4 * b + 3]);  // c1 d1 c3 d3
+      _mm256_storeu_pd(out + 4 * b, _mm256_permute2f128_pd(t0, t2, 0x20));
+      _mm256_storeu_pd(out + 12 + 4 * b, _mm256_permute2f128_pd(t1, t3, 0x20));
+      _mm256_storeu_pd(out + 24 + 4 * b, _mm256_permute2f128_pd(t0, t2, 0x31));
+      _mm256_storeu_pd(out + 36 + 4 * b, _mm256_permute2f128_pd(t1, t3, 0x31));
+    }
+  }
   static void gather_f12(const float* const* p, D (&out)[12]) {
     for (int b = 0; b < 3; ++b) {
       __m128 r0 = _mm_loadu_ps(p[0] + 4 * b), r1 = _mm_loadu_ps(p[1] + 4 * b);

@@ -96,6 +96,12 @@ struct LanesSse2 {
       _mm_storeh_pd(p[1] + 2, z);
     }
   }
+  static void store_records12(const D (&c)[12], double* out) {
+    for (int j = 0; j < 6; ++j) {
+      _mm_storeu_pd(out + 2 * j, _mm_unpacklo_pd(c[2 * j], c[2 * j + 1]));
+      _mm_storeu_pd(out + 12 + 2 * j, _mm_unpackhi_pd(c[2 * j], c[2 * j + 1]));
+    }
+  }
   static void gather_f12(const float* const* p, D (&out)[12]) {
     for (int b = 0; b < 3; ++b) {
       const __m128 va = _mm_loadu_ps(p[0] + 4 * b), vb = _mm_loadu_ps(p[1] + 4 * b);

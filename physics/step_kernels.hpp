@@ -332,6 +332,16 @@ template <class L>
     }
   }
 }
+// W consecutive records of 12 doubles at out, record k = lane k of c[0..11].
+template <class L>
+[[gnu::always_inline]] inline void store_records12(const DV<L> (&c)[12], double* out) {
+  if constexpr (requires { L::store_records12(c, out); }) {
+    L::store_records12(c, out);
+  } else {
+    for (int k = 0; k < L::W; ++k)
+      for (int j = 0; j < 12; ++j) out[12 * k + j] = c[j][k];
+  }
+}
 // Member j of W records of 12 floats, as doubles (exact).
 template <class L>
 [[gnu::always_inline]] inline void gather_f12(const float* const* p, DV<L> (&out)[12]) {
@@ -677,19 +687,28 @@ template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
     rotate_c(q2.w, -q2.x, -q2.y, -q2.z, mp.x, mp.y, mp.z, mpl.x, mpl.y, mpl.z);
     const VL<L> fn_g = from_x_lanes<A, L>(fn), mn_g = from_x_lanes<A, L>(mn);
     const VL<L> fp_g = from_x_lanes<A, L>(fpl), mp_g = from_x_lanes<A, L>(mpl);
-    // end loads of the lanes in `done`: (force, moment) of end N, then of end P
-    double* out[4][W];
-    for (int k = 0; k < W; ++k) {
-      Scratch::EndLoad* load = &sc.link_end_load[2 * static_cast<std::size_t>(ids[k])];
-      out[0][k] = load[0].force.data();
-      out[1][k] = load[0].moment.data();
-      out[2][k] = load[1].force.data();
-      out[3][k] = load[1].moment.data();
+    // end loads of the lanes in `done`: (force, moment) of end N, then of end P; consecutive
+    // links have consecutive records (2 ends x 6 doubles each)
+    static_assert(sizeof(Scratch::EndLoad) == 6 * sizeof(double));
+    if (kContig && done == kAllLanes<L>) {
+      const DV<L> records[12] = {fn_g.x, fn_g.y, fn_g.z, mn_g.x, mn_g.y, mn_g.z,
+                                 fp_g.x, fp_g.y, fp_g.z, mp_g.x, mp_g.y, mp_g.z};
+      store_records12<L>(records,
+                         sc.link_end_load[2 * static_cast<std::size_t>(ids[0])].force.data());
+    } else {
+      double* out[4][W];
+      for (int k = 0; k < W; ++k) {
+        Scratch::EndLoad* load = &sc.link_end_load[2 * static_cast<std::size_t>(ids[k])];
+        out[0][k] = load[0].force.data();
+        out[1][k] = load[0].moment.data();
+        out[2][k] = load[1].force.data();
+        out[3][k] = load[1].moment.data();
+      }
+      scatter3<L>(out[0], fn_g.x, fn_g.y, fn_g.z, done);
+      scatter3<L>(out[1], mn_g.x, mn_g.y, mn_g.z, done);
+      scatter3<L>(out[2], fp_g.x, fp_g.y, fp_g.z, done);
+      scatter3<L>(out[3], mp_g.x, mp_g.y, mp_g.z, done);
     }
-    scatter3<L>(out[0], fn_g.x, fn_g.y, fn_g.z, done);
-    scatter3<L>(out[1], mn_g.x, mn_g.y, mn_g.z, done);
-    scatter3<L>(out[2], fp_g.x, fp_g.y, fp_g.z, done);
-    scatter3<L>(out[3], mp_g.x, mp_g.y, mp_g.z, done);
   }
   // float(strain) per lane (exact: strain is a float value)
   if (kContig && done == kAllLanes<L>) {
