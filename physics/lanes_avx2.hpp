@@ -57,16 +57,53 @@ struct LanesAvx2 {
     if (mask & 4) _mm256_maskstore_pd(p[2], m, _mm256_permute2f128_pd(t0, t2, 0x31));
     if (mask & 8) _mm256_maskstore_pd(p[3], m, _mm256_permute2f128_pd(t1, t3, 0x31));
   }
-  static void store_records12(const D (&c)[12], double* out) {
-    for (int b = 0; b < 3; ++b) {  // a 4 x 4 transpose per block of four members
-      const __m256d t0 = _mm256_unpacklo_pd(c[4 * b], c[4 * b + 1]);      // a0 b0 a2 b2
-      const __m256d t1 = _mm256_unpackhi_pd(c[4 * b], c[4 * b + 1]);      // a1 b1 a3 b3
-      const __m256d t2 = _mm256_unpacklo_pd(c[4 * b + 2], c[4 * b + 3]);  // c0 d0 c2 d2
-      const __m256d t3 = _mm256_unpackhi_pd(c[4 * b + 2], c[4 * b + 3]);  // c1 d1 c3 d3
-      _mm256_storeu_pd(out + 4 * b, _mm256_permute2f128_pd(t0, t2, 0x20));
-      _mm256_storeu_pd(out + 12 + 4 * b, _mm256_permute2f128_pd(t1, t3, 0x20));
-      _mm256_storeu_pd(out + 24 + 4 * b, _mm256_permute2f128_pd(t0, t2, 0x31));
-      _mm256_storeu_pd(out + 36 + 4 * b, _mm256_permute2f128_pd(t1, t3, 0x31));
+  // W = 4 consecutive records of N doubles at p <-> N lanes (lane k = record k).
+  template <int N>
+  static void load_records(const double* p, D (&c)[N]) {
+    if constexpr (N == 3) {  // x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3
+      const __m256d r0 = _mm256_loadu_pd(p), r1 = _mm256_loadu_pd(p + 4);
+      const __m256d r2 = _mm256_loadu_pd(p + 8);
+      const __m256d a = _mm256_blend_pd(r0, r1, 0b1100);       // x0 y0 x2 y2
+      const __m256d b = _mm256_permute2f128_pd(r0, r2, 0x21);  // z0 x1 z2 x3
+      const __m256d d = _mm256_blend_pd(r1, r2, 0b1100);       // y1 z1 y3 z3
+      c[0] = _mm256_shuffle_pd(a, b, 0b1010);
+      c[1] = _mm256_shuffle_pd(a, d, 0b0101);
+      c[2] = _mm256_shuffle_pd(b, d, 0b1010);
+    } else {
+      static_assert(N % 4 == 0);
+      for (int j = 0; j < N; j += 4) {  // a 4 x 4 transpose per block of four members
+        const __m256d r0 = _mm256_loadu_pd(p + j), r1 = _mm256_loadu_pd(p + N + j);
+        const __m256d r2 = _mm256_loadu_pd(p + 2 * N + j), r3 = _mm256_loadu_pd(p + 3 * N + j);
+        const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);
+        const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+        c[j] = _mm256_permute2f128_pd(t0, t2, 0x20);
+        c[j + 1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+        c[j + 2] = _mm256_permute2f128_pd(t0, t2, 0x31);
+        c[j + 3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+      }
+    }
+  }
+  template <int N>
+  static void store_records(const D (&c)[N], double* p) {
+    if constexpr (N == 3) {
+      const __m256d a = _mm256_unpacklo_pd(c[0], c[1]);         // x0 y0 x2 y2
+      const __m256d b = _mm256_shuffle_pd(c[2], c[0], 0b1010);  // z0 x1 z2 x3
+      const __m256d d = _mm256_unpackhi_pd(c[1], c[2]);         // y1 z1 y3 z3
+      _mm256_storeu_pd(p, _mm256_permute2f128_pd(a, b, 0x20));
+      _mm256_storeu_pd(p + 4, _mm256_blend_pd(d, a, 0b1100));
+      _mm256_storeu_pd(p + 8, _mm256_permute2f128_pd(b, d, 0x31));
+    } else {
+      static_assert(N % 4 == 0);
+      for (int j = 0; j < N; j += 4) {
+        const __m256d t0 = _mm256_unpacklo_pd(c[j], c[j + 1]);      // a0 b0 a2 b2
+        const __m256d t1 = _mm256_unpackhi_pd(c[j], c[j + 1]);      // a1 b1 a3 b3
+        const __m256d t2 = _mm256_unpacklo_pd(c[j + 2], c[j + 3]);  // c0 d0 c2 d2
+        const __m256d t3 = _mm256_unpackhi_pd(c[j + 2], c[j + 3]);  // c1 d1 c3 d3
+        _mm256_storeu_pd(p + j, _mm256_permute2f128_pd(t0, t2, 0x20));
+        _mm256_storeu_pd(p + N + j, _mm256_permute2f128_pd(t1, t3, 0x20));
+        _mm256_storeu_pd(p + 2 * N + j, _mm256_permute2f128_pd(t0, t2, 0x31));
+        _mm256_storeu_pd(p + 3 * N + j, _mm256_permute2f128_pd(t1, t3, 0x31));
+      }
     }
   }
   static void gather_f12(const float* const* p, D (&out)[12]) {

@@ -96,10 +96,35 @@ struct LanesSse2 {
       _mm_storeh_pd(p[1] + 2, z);
     }
   }
-  static void store_records12(const D (&c)[12], double* out) {
-    for (int j = 0; j < 6; ++j) {
-      _mm_storeu_pd(out + 2 * j, _mm_unpacklo_pd(c[2 * j], c[2 * j + 1]));
-      _mm_storeu_pd(out + 12 + 2 * j, _mm_unpackhi_pd(c[2 * j], c[2 * j + 1]));
+  // W = 2 consecutive records of N doubles at p <-> N lanes (lane k = record k).
+  template <int N>
+  static void load_records(const double* p, D (&c)[N]) {
+    if constexpr (N == 3) {  // x0 y0 | z0 x1 | y1 z1
+      const __m128d r0 = _mm_loadu_pd(p), r1 = _mm_loadu_pd(p + 2), r2 = _mm_loadu_pd(p + 4);
+      c[0] = _mm_shuffle_pd(r0, r1, 0b10);
+      c[1] = _mm_shuffle_pd(r0, r2, 0b01);
+      c[2] = _mm_shuffle_pd(r1, r2, 0b10);
+    } else {
+      static_assert(N % 2 == 0);
+      for (int j = 0; j < N; j += 2) {
+        const __m128d r0 = _mm_loadu_pd(p + j), r1 = _mm_loadu_pd(p + N + j);
+        c[j] = _mm_unpacklo_pd(r0, r1);
+        c[j + 1] = _mm_unpackhi_pd(r0, r1);
+      }
+    }
+  }
+  template <int N>
+  static void store_records(const D (&c)[N], double* p) {
+    if constexpr (N == 3) {
+      _mm_storeu_pd(p, _mm_unpacklo_pd(c[0], c[1]));
+      _mm_storeu_pd(p + 2, _mm_shuffle_pd(c[2], c[0], 0b10));
+      _mm_storeu_pd(p + 4, _mm_unpackhi_pd(c[1], c[2]));
+    } else {
+      static_assert(N % 2 == 0);
+      for (int j = 0; j < N; j += 2) {
+        _mm_storeu_pd(p + j, _mm_unpacklo_pd(c[j], c[j + 1]));
+        _mm_storeu_pd(p + N + j, _mm_unpackhi_pd(c[j], c[j + 1]));
+      }
     }
   }
   static void gather_f12(const float* const* p, D (&out)[12]) {

@@ -332,14 +332,23 @@ template <class L>
     }
   }
 }
-// W consecutive records of 12 doubles at out, record k = lane k of c[0..11].
-template <class L>
-[[gnu::always_inline]] inline void store_records12(const DV<L> (&c)[12], double* out) {
-  if constexpr (requires { L::store_records12(c, out); }) {
-    L::store_records12(c, out);
+// W consecutive records of N doubles at p <-> N lanes, lane k = record k (the link groups of
+// consecutive ids, the voxel groups).
+template <class L, int N>
+[[gnu::always_inline]] inline void load_records(const double* p, DV<L> (&c)[N]) {
+  if constexpr (requires { L::template load_records<N>(p, c); }) {
+    L::template load_records<N>(p, c);
+  } else {
+    for (int j = 0; j < N; ++j) c[j] = make_lanes<L>([&](int k) { return p[N * k + j]; });
+  }
+}
+template <class L, int N>
+[[gnu::always_inline]] inline void store_records(const DV<L> (&c)[N], double* p) {
+  if constexpr (requires { L::template store_records<N>(c, p); }) {
+    L::template store_records<N>(c, p);
   } else {
     for (int k = 0; k < L::W; ++k)
-      for (int j = 0; j < 12; ++j) out[12 * k + j] = c[j][k];
+      for (int j = 0; j < N; ++j) p[N * k + j] = c[j][k];
   }
 }
 // Member j of W records of 12 floats, as doubles (exact).
@@ -389,17 +398,28 @@ template <class L>
   }
   return q;
 }
-// Lane k -> a[id[k]] for the lanes in `mask` (bit k = lane k).
+// Records a[first .. first + W) as lanes, and back (the voxel groups: consecutive voxel ids).
 template <class L>
-[[gnu::always_inline]] inline void scatter(const VL<L>& v, std::vector<Vec3>& a, const int* id,
-                                           int mask = kAllLanes<L>) {
-  double* p[L::W];
-  for (int k = 0; k < L::W; ++k) p[k] = a[id[k]].data();
-  scatter3<L>(p, v.x, v.y, v.z, mask);
+[[gnu::always_inline]] inline VL<L> load_run(const std::vector<Vec3>& a, int first) {
+  DV<L> c[3];
+  load_records<L>(a[first].data(), c);
+  return {c[0], c[1], c[2]};
 }
 template <class L>
-[[gnu::always_inline]] inline void scatter(const QL<L>& q, std::vector<Quat>& a, const int* id) {
-  for (int k = 0; k < L::W; ++k) a[id[k]] = Quat{q.w[k], q.x[k], q.y[k], q.z[k]};
+[[gnu::always_inline]] inline QL<L> load_run(const std::vector<Quat>& a, int first) {
+  DV<L> c[4];
+  load_records<L>(&a[first].w, c);
+  return {c[0], c[1], c[2], c[3]};
+}
+template <class L>
+[[gnu::always_inline]] inline void store_run(const VL<L>& v, std::vector<Vec3>& a, int first) {
+  const DV<L> c[3] = {v.x, v.y, v.z};
+  store_records<L>(c, a[first].data());
+}
+template <class L>
+[[gnu::always_inline]] inline void store_run(const QL<L>& q, std::vector<Quat>& a, int first) {
+  const DV<L> c[4] = {q.w, q.x, q.y, q.z};
+  store_records<L>(c, &a[first].w);
 }
 // Links ids[0..W) of a LinkVec3Columns as lanes, and back for the lanes in `mask`. With kContig
 // the ids are consecutive: one vector load / store per component.
@@ -693,8 +713,8 @@ template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
     if (kContig && done == kAllLanes<L>) {
       const DV<L> records[12] = {fn_g.x, fn_g.y, fn_g.z, mn_g.x, mn_g.y, mn_g.z,
                                  fp_g.x, fp_g.y, fp_g.z, mp_g.x, mp_g.y, mp_g.z};
-      store_records12<L>(records,
-                         sc.link_end_load[2 * static_cast<std::size_t>(ids[0])].force.data());
+      store_records<L>(records,
+                       sc.link_end_load[2 * static_cast<std::size_t>(ids[0])].force.data());
     } else {
       double* out[4][W];
       for (int k = 0; k < W; ++k) {
@@ -953,7 +973,8 @@ inline void fork_part1_voxel(const Model& m, State& st, Scratch& sc, std::span<c
   lb = cross(pos - cog, mom) + am;
 }
 
-// The state and constants of W voxels as lanes.
+// The state and constants of W voxels as lanes. Voxel groups are W consecutive voxel ids v[k] =
+// v[0] + k (free_group), so their records are loaded and stored as runs.
 template <class L>
 struct VoxelLanes {
   VL<L> pos, mom, am;
@@ -963,16 +984,16 @@ struct VoxelLanes {
 template <class L>
 [[gnu::always_inline]] inline VoxelLanes<L> load_voxels(const Model& m, const State& st,
                                                         const int* v) {
-  return {gather<L>(st.pos, v), gather<L>(st.lin_mom, v), gather<L>(st.ang_mom, v),
-          gather<L>(st.orient, v), gather_voxel_const<L>(m, v)};
+  return {load_run<L>(st.pos, v[0]), load_run<L>(st.lin_mom, v[0]), load_run<L>(st.ang_mom, v[0]),
+          load_run<L>(st.orient, v[0]), gather_voxel_const<L>(m, v)};
 }
 template <class L>
 [[gnu::always_inline]] inline void store_voxels(const VL<L>& pos, const VL<L>& mom, const VL<L>& am,
                                                 const QL<L>& q, State& st, const int* v) {
-  scatter<L>(pos, st.pos, v);
-  scatter<L>(mom, st.lin_mom, v);
-  scatter<L>(am, st.ang_mom, v);
-  scatter<L>(q, st.orient, v);
+  store_run<L>(pos, st.pos, v[0]);
+  store_run<L>(mom, st.lin_mom, v[0]);
+  store_run<L>(am, st.ang_mom, v[0]);
+  store_run<L>(q, st.orient, v[0]);
 }
 // gather_links of W voxels as lanes: sums of link forces (lsum) and moments (msum), local frame.
 template <class L>
@@ -1006,7 +1027,7 @@ inline void fork_part1_group(const Model& m, State& st, Scratch& sc, std::span<c
     la = {(ry * mom.z - rz * mom.y) + am.x, (rz * mom.x - rx * mom.z) + am.y,
           (rx * mom.y - ry * mom.x) + am.z};
   }
-  for (int k = 0; k < W; ++k) sc.old_pos[v[k]] = st.pos[v[k]];
+  store_run<L>(pos, sc.old_pos, v[0]);
   VL<L> lsum, msum;
   gather_links_lanes<L>(m, sc, v, lsum, msum);
   const D inv_mass = c.inv_mass;
@@ -1026,7 +1047,7 @@ inline void fork_part1_group(const Model& m, State& st, Scratch& sc, std::span<c
                  [&](int k) { return static_cast<double>(static_cast<float>(ext[v[k]].z())); })};
   }
   const VL<L> grav_f{zero, zero, c.gravity_force};
-  const VL<L> col_f = gather<L>(sc.collision_force, v);
+  const VL<L> col_f = load_run<L>(sc.collision_force, v[0]);
   VL<L> fric{zero, zero, zero};
   if (m.floor) {
     const int contact = L::bits(L::round_to_float(0.0 - pos.z) >= 0.0);
@@ -1062,10 +1083,10 @@ inline void fork_part1_group(const Model& m, State& st, Scratch& sc, std::span<c
   mul_c(dq.w, dq.x, dq.y, dq.z, q.w, q.x, q.y, q.z, qn.w, qn.x, qn.y, qn.z);
   am = {am.x + cur_m.x * dt, am.y + cur_m.y * dt, am.z + cur_m.z * dt};
   store_voxels<L>(pos, mom, am, qn, st, v);
-  scatter<L>(VL<L>{(grav_f.x + col_f.x) + fric.x, (grav_f.y + col_f.y) + fric.y,
-                   (grav_f.z + col_f.z) + fric.z},
-             sc.part2_force, v);
-  scatter<L>(fric, sc.fric, v);
+  store_run<L>(VL<L>{(grav_f.x + col_f.x) + fric.x, (grav_f.y + col_f.y) + fric.y,
+                     (grav_f.z + col_f.z) + fric.z},
+               sc.part2_force, v[0]);
+  store_run<L>(fric, sc.fric, v[0]);
   {
     const D rx = pos.x - cgx, ry = pos.y - cgy, rz = pos.z - cgz;
     lb = {(ry * mom.z - rz * mom.y) + am.x, (rz * mom.x - rx * mom.z) + am.y,
@@ -1114,7 +1135,7 @@ inline void fork_part2_group(const Model& m, State& st, Scratch& sc, const int* 
   VL<L> pos = start.pos, mom = start.mom, am = start.am;
   const QL<L> q = start.q;
   const VoxelConstL<L>& c = start.c;
-  const VL<L> f2 = gather<L>(sc.part2_force, v);
+  const VL<L> f2 = load_run<L>(sc.part2_force, v[0]);
   const D inv_mass = c.inv_mass;
   const D dt_m = L::round_to_float(dt * inv_mass);  // float dt * (1/m)
   pos = {pos.x + f2.x * dt * dt_m, pos.y + f2.y * dt * dt_m, pos.z + f2.z * dt * dt_m};
@@ -1312,7 +1333,7 @@ inline void symplectic_group(const Model& m, State& st, Scratch& sc, std::span<c
   const D c_glob = c.c_glob;
   f = {f.x - vel.x * c_glob, f.y - vel.y * c_glob, f.z - vel.z * c_glob};
   f.z = f.z + c.gravity_force;
-  const VL<L> col = gather<L>(sc.collision_force, v);
+  const VL<L> col = load_run<L>(sc.collision_force, v[0]);
   f = {f.x + col.x, f.y + col.y, f.z + col.z};
   int contact = 0;  // lane bits
   if (m.floor) {
