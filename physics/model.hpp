@@ -13,8 +13,10 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <stdexcept>
+#include <string_view>
 #include <vector>
 
 #include "common/body_plan.hpp"
@@ -38,6 +40,8 @@ enum class Simd : std::uint8_t {
   avx512 = 3,  // 4 lanes, AVX-512VL encoding (32 vector registers)
 };
 const char* to_string(Simd simd);
+// The width named by to_string (best, sse2, avx2, avx512); nullopt for any other name.
+std::optional<Simd> parse_simd(std::string_view name);
 // True if this build contains the passes for `simd` and this CPU (and OS) can run them.
 bool simd_supported(Simd simd);
 // The widest supported width.

@@ -42,7 +42,8 @@ Scratch make_scratch(const Model& model) {
   Scratch sc;
   const std::size_t nl = model.link_count, nv = model.voxel_count;
   sc.link_end_load.assign(2 * nl + 1, Scratch::EndLoad{Vec3::Zero(), Vec3::Zero()});
-  sc.link_damping.assign(nv, 0.0f);
+  sc.link_damping_neg.assign(nl, 0.0);
+  sc.link_damping_pos.assign(nl, 0.0);
   sc.collision_force.assign(nv, Vec3::Zero());
   sc.part2_force.assign(nv, Vec3::Zero());
   sc.fric.assign(nv, Vec3::Zero());
@@ -297,6 +298,12 @@ const char* to_string(Simd simd) {
       return "avx512";
   }
   return "unknown";
+}
+
+std::optional<Simd> parse_simd(std::string_view name) {
+  for (Simd s : {Simd::best, Simd::sse2, Simd::avx2, Simd::avx512})
+    if (name == to_string(s)) return s;
+  return std::nullopt;
 }
 
 bool simd_supported(Simd simd) {

@@ -38,10 +38,12 @@ struct Scratch {
   };
   // Entry 2 x links is always zero: the end load of a missing link (Model::voxel_load_slots).
   std::vector<EndLoad> link_end_load;  // (2 x links + 1)
-  // §2.5 link damping multiplier c_V = damp_base_V / previous_dt (float) per voxel, refreshed at
-  // the start of a force link pass when previous_dt changed (one division per voxel instead of
-  // two per link)
-  std::vector<float> link_damping;  // [sqrt(kg)/s] (voxels)
+  // §2.5 link damping multiplier c_V = damp_base_V / previous_dt (a float, held as a double) of
+  // each link's end voxels N and P, refreshed at the start of a force link pass when previous_dt
+  // changed (instead of two divisions per link and step); per link, so that a group of
+  // consecutive links loads them as vectors.
+  std::vector<double> link_damping_neg;  // c_N [sqrt(kg)/s] (links)
+  std::vector<double> link_damping_pos;  // c_P [sqrt(kg)/s] (links)
   // previous_dt that link_damping was computed for (NaN: not yet); the division is redone only
   // when State::previous_dt changes (in practice once, after the first step)
   float link_damping_dt = std::numeric_limits<float>::quiet_NaN();  // [s]

@@ -187,8 +187,7 @@ bool link_scalar(const Model& m, State& st, Scratch& sc, int i) {
     const double vx = sq_a1 * dpx, vy = sq_b1 * dpy - sq_b2 * (d1z + d2z),
                  vz = sq_b1 * dpz + sq_b2 * (d1y + d2y);
     // c_V = 2 sqrt(m_V) zeta_int / previousDt_V (float)
-    const float cn = sc.link_damping[m.link_neg[i]];
-    const float cp = sc.link_damping[m.link_pos[i]];
+    const double cn = sc.link_damping_neg[i], cp = sc.link_damping_pos[i];  // float values
     fn += Vec3(cn * vx, cn * vy, cn * vz);
     fp -= Vec3(cp * vx, cp * vy, cp * vz);
     const double hn = 0.5 * cn, hp = 0.5 * cp;
@@ -665,8 +664,14 @@ template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
       const D sq_b3 = c.sq_b3xip;
       const D vx = sq_a1 * dpx, vy = sq_b1 * dpy - sq_b2 * (d1z + d2z),
               vz = sq_b1 * dpz + sq_b2 * (d1y + d2y);
-      const D cn = make_lanes<L>([&](int k) { return static_cast<double>(sc.link_damping[n[k]]); });
-      const D cp = make_lanes<L>([&](int k) { return static_cast<double>(sc.link_damping[p[k]]); });
+      D cn, cp;
+      if constexpr (kContig) {
+        cn = load_lanes<L>(&sc.link_damping_neg[ids[0]]);
+        cp = load_lanes<L>(&sc.link_damping_pos[ids[0]]);
+      } else {
+        cn = make_lanes<L>([&](int k) { return sc.link_damping_neg[ids[k]]; });
+        cp = make_lanes<L>([&](int k) { return sc.link_damping_pos[ids[k]]; });
+      }
       const D hn = 0.5 * cn, hp = 0.5 * cp;
       const VL<L> fn_d{fn.x + cn * vx, fn.y + cn * vy, fn.z + cn * vz};
       const VL<L> fp_d{fp.x - cp * vx, fp.y - cp * vy, fp.z - cp * vz};
@@ -835,8 +840,10 @@ template <class L>
   // local velocity, i.e. after a step has set previous_dt
   const float prev_dt = st.previous_dt;
   if (!(prev_dt == sc.link_damping_dt)) {  // a pure function of prev_dt: recompute on change only
-    for (int v = 0; v < m.voxel_count; ++v)
-      sc.link_damping[v] = m.voxel_const[v].damp_base / prev_dt;
+    for (int i = 0; i < m.link_count; ++i) {
+      sc.link_damping_neg[i] = m.voxel_const[m.link_neg[i]].damp_base / prev_dt;
+      sc.link_damping_pos[i] = m.voxel_const[m.link_pos[i]].damp_base / prev_dt;
+    }
     sc.link_damping_dt = prev_dt;
   }
   const bool dx = link_pass_axis<L, Axis::x, true>(m, st, sc);

@@ -81,12 +81,13 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
       ->check(CLI::IsMember({"best", "sse2", "avx2", "avx512", "all"}));
   cmd->callback([&exit_code, json, steps, runs, only, simd_name] {
     std::vector<physics::Simd> widths;
-    for (physics::Simd s : {physics::Simd::sse2, physics::Simd::avx2, physics::Simd::avx512}) {
-      if (*simd_name == physics::to_string(s) ||
-          (*simd_name == "all" && physics::simd_supported(s)))
-        widths.push_back(s);
+    if (*simd_name == "all") {
+      for (physics::Simd s : {physics::Simd::sse2, physics::Simd::avx2, physics::Simd::avx512})
+        if (physics::simd_supported(s)) widths.push_back(s);
+    } else {
+      const physics::Simd s = physics::parse_simd(*simd_name).value();  // checked by IsMember
+      widths.push_back(s == physics::Simd::best ? physics::best_simd() : s);
     }
-    if (*simd_name == "best") widths.push_back(physics::best_simd());
     for (physics::Simd s : widths) {
       if (!physics::simd_supported(s)) {
         std::fprintf(stderr,

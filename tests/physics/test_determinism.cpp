@@ -78,6 +78,15 @@ TEST(Determinism, SimdWidthIsResolvedAtBuild) {
   EXPECT_EQ(build_model(solid_block(2, 2, 2, 1e5), PhysicsConfig{}, options).simd, Simd::sse2);
 }
 
+// Width names (command lines, test helpers) round-trip through to_string / parse_simd.
+TEST(Determinism, SimdNamesRoundTrip) {
+  for (Simd simd : {Simd::best, Simd::sse2, Simd::avx2, Simd::avx512})
+    EXPECT_EQ(parse_simd(to_string(simd)), simd) << to_string(simd);
+  EXPECT_FALSE(parse_simd("avx"));
+  EXPECT_FALSE(parse_simd("AVX2"));
+  EXPECT_FALSE(parse_simd(""));
+}
+
 TEST(Determinism, SameHashInTwoOtherProcesses) {
   const std::string expected =
       "pneuvox " + hex(kGoldenPneuvox) + "\nsymplectic " + hex(kGoldenSymplectic) + "\n";

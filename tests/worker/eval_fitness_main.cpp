@@ -5,8 +5,8 @@
 // here).
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <exception>
+#include <optional>
 
 #include "common/config.hpp"
 #include "common/robot.hpp"
@@ -19,16 +19,12 @@ int main(int argc, char** argv) {
   }
   softevo::EvalOptions options;
   if (argc == 4) {
-    if (std::strcmp(argv[3], "sse2") == 0) {
-      options.simd = softevo::physics::Simd::sse2;
-    } else if (std::strcmp(argv[3], "avx2") == 0) {
-      options.simd = softevo::physics::Simd::avx2;
-    } else if (std::strcmp(argv[3], "avx512") == 0) {
-      options.simd = softevo::physics::Simd::avx512;
-    } else {
+    const std::optional<softevo::physics::Simd> simd = softevo::physics::parse_simd(argv[3]);
+    if (!simd) {
       std::fprintf(stderr, "unknown SIMD width '%s'\n", argv[3]);
       return 2;
     }
+    options.simd = *simd;
   }
   try {
     const softevo::RobotFile robot = softevo::read_robot_file(argv[1]);
