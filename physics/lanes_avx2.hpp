@@ -19,6 +19,7 @@ struct LanesAvx2 {
   static D sqrt(D x) { return _mm256_sqrt_pd(x); }
   static int bits(M m) { return _mm256_movemask_pd(reinterpret_cast<__m256d>(m)); }
   static void to_floats(D x, float* out) { _mm_storeu_ps(out, _mm256_cvtpd_ps(x)); }
+  static D load_floats(const float* p) { return _mm256_cvtps_pd(_mm_loadu_ps(p)); }
   // Transposing record loads / stores (see step_kernels.hpp). A Vec3 record is read and written
   // with a 3-lane mask, so nothing beyond it is touched.
   static __m256i mask3() { return _mm256_setr_epi64x(-1, -1, -1, 0); }

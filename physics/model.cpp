@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 namespace softevo::physics {
@@ -132,6 +134,24 @@ float recommended_time_step(const Model& model) {
   return 1.0f / (6.283185f * std::sqrt(max_freq2));
 }
 
+namespace {
+
+// Records of 12 floats (VoxelConst, LinkConst) by member: result[j][i] = member j of record i.
+template <class Record>
+std::array<std::vector<float>, 12> members_of(const std::vector<Record>& records) {
+  static_assert(sizeof(Record) == 12 * sizeof(float) && std::is_trivially_copyable_v<Record>);
+  std::array<std::vector<float>, 12> members;
+  for (auto& column : members) column.resize(records.size());
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    float floats[12];
+    std::memcpy(floats, &records[i], sizeof floats);
+    for (int j = 0; j < 12; ++j) members[j][i] = floats[j];
+  }
+  return members;
+}
+
+}  // namespace
+
 Model build_model(const BodyPlan& plan, const PhysicsConfig& cfg, const BuildOptions& options) {
   Model m;
   if (cfg.integrator == "pneuvox") {
@@ -249,6 +269,8 @@ Model build_model(const BodyPlan& plan, const PhysicsConfig& cfg, const BuildOpt
     }
   }
   m.axis_link_begin[3] = m.link_count;
+  m.voxel_const_members = members_of(m.voxel_const);
+  m.link_const_members = members_of(m.link_const);
   m.voxel_link_begin.assign(nv + 1, 0);
   m.voxel_surface.assign(nv, 0);
   for (int v = 0; v < nv; ++v) {

@@ -68,6 +68,7 @@ struct VoxelConst {
 };
 
 // Per-link beam constants (§2.1, link material of the two end materials, L = s, all float).
+// Twelve floats, as VoxelConst: Model also keeps both by member (see Model).
 struct LinkConst {
   float e_area;     // E_L (stress = E_L * strain, linear) [Pa]; sigma*A gives the axial force
   float area;       // A = s^2 (nu = 0) [m^2]
@@ -101,9 +102,12 @@ struct Model {
   std::vector<int> voxel_material;             // structural material id k = 1..K (voxels)
   std::vector<double> voxel_mass;              // [kg] (voxels), = VoxelConst::mass
   std::vector<VoxelConst> voxel_const;         // (voxels)
-  std::vector<std::uint8_t> voxel_fixed;       // 1 = all DOFs fixed (validation scenes) (voxels)
-  std::vector<std::uint8_t> voxel_surface;     // 1 = fewer than 6 links (§2.1 "surface") (voxels)
-  int free_voxel_count = 0;                    // voxels that are not fixed
+  // The same constants by member, for the lane passes (a group of consecutive voxels loads each
+  // member with one vector load): voxel_const_members[j][v] = float member j of voxel v.
+  std::array<std::vector<float>, 12> voxel_const_members;
+  std::vector<std::uint8_t> voxel_fixed;    // 1 = all DOFs fixed (validation scenes) (voxels)
+  std::vector<std::uint8_t> voxel_surface;  // 1 = fewer than 6 links (§2.1 "surface") (voxels)
+  int free_voxel_count = 0;                 // voxels that are not fixed
 
   // ---- links (index = link id) ---------------------------------------------------------------
   // Ids run axis by axis (the x links, then y, then z), each axis in the creation order of §2.1.
@@ -116,6 +120,9 @@ struct Model {
   std::vector<int> link_pos;  // positive-end voxel P
   std::vector<Axis> link_axis;
   std::vector<LinkConst> link_const;
+  // The same constants by member, for the lane passes: link_const_members[j][i] = float member j
+  // of link i.
+  std::array<std::vector<float>, 12> link_const_members;
   std::array<int, 4> axis_link_begin{0, 0, 0, 0};  // links of axis a: ids [begin[a], begin[a+1])
   double rest_length = 0.0;  // L = s for every link [m] (double, as Voxelyze's baseSize)
 

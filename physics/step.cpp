@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -72,6 +73,11 @@ struct LanesSse2 {
   static D round_to_float(D x) { return _mm_cvtps_pd(_mm_cvtpd_ps(x)); }
   static D sqrt(D x) { return _mm_sqrt_pd(x); }
   static int bits(M m) { return _mm_movemask_pd(reinterpret_cast<__m128d>(m)); }
+  static D load_floats(const float* p) {  // two floats (8 bytes, any alignment)
+    double two_floats;
+    std::memcpy(&two_floats, p, sizeof two_floats);
+    return _mm_cvtps_pd(_mm_castpd_ps(_mm_set_sd(two_floats)));
+  }
   // Transposing record loads / stores (see step_kernels.hpp).
   static void gather3(const double* const* p, D& x, D& y, D& z) {
     const __m128d r0 = _mm_loadu_pd(p[0]), r1 = _mm_loadu_pd(p[1]);

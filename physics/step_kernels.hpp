@@ -460,30 +460,43 @@ template <class L>
 struct LinkConstL {
   DV<L> e_area, area, a2, b1, b2, b3, sq_a1, sq_a2xip, sq_b1, sq_b2xfmp, sq_b3xip;
 };
+// W consecutive floats at p as doubles (exact).
 template <class L>
+[[gnu::always_inline]] inline DV<L> load_floats(const float* p) {
+  if constexpr (requires { L::load_floats(p); }) {
+    return L::load_floats(p);
+  } else {
+    return make_lanes<L>([&](int k) { return static_cast<double>(p[k]); });
+  }
+}
+template <class L, bool kContig>
 [[gnu::always_inline]] inline LinkConstL<L> gather_link_const(const Model& m, const int* id) {
   static_assert(offsetof(LinkConst, e_area) == 0 && offsetof(LinkConst, sq_b3xip) == 40);
-  const float* p[L::W];
-  for (int k = 0; k < L::W; ++k) p[k] = &m.link_const[id[k]].e_area;
-  DV<L> d[12];
-  gather_f12<L>(p, d);
+  DV<L> d[11];
+  if constexpr (kContig) {  // by member (Model::link_const_members)
+    for (int j = 0; j < 11; ++j) d[j] = load_floats<L>(&m.link_const_members[j][id[0]]);
+  } else {
+    const float* p[L::W];
+    for (int k = 0; k < L::W; ++k) p[k] = &m.link_const[id[k]].e_area;
+    DV<L> all[12];
+    gather_f12<L>(p, all);
+    for (int j = 0; j < 11; ++j) d[j] = all[j];
+  }
   return {d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8], d[9], d[10]};
 }
 template <class L>
 struct VoxelConstL {
   DV<L> inv_mass, inv_inertia, c_glob, c_glob_rot, gravity_force;
 };
+// The constants of the W consecutive voxels first .. first + W - 1 (Model::voxel_const_members).
 template <class L>
-[[gnu::always_inline]] inline VoxelConstL<L> gather_voxel_const(const Model& m, const int* id) {
+[[gnu::always_inline]] inline VoxelConstL<L> load_voxel_const_run(const Model& m, int first) {
   static_assert(offsetof(VoxelConst, mass) == 0 && offsetof(VoxelConst, inv_mass) == 4 &&
                 offsetof(VoxelConst, inv_inertia) == 8 && offsetof(VoxelConst, c_glob) == 12 &&
                 offsetof(VoxelConst, c_glob_rot) == 16 &&
                 offsetof(VoxelConst, gravity_force) == 28);
-  const float* p[L::W];
-  for (int k = 0; k < L::W; ++k) p[k] = &m.voxel_const[id[k]].mass;
-  DV<L> d[12];
-  gather_f12<L>(p, d);
-  return {d[1], d[2], d[3], d[4], d[7]};
+  const auto member = [&](int j) { return load_floats<L>(&m.voxel_const_members[j][first]); };
+  return {member(1), member(2), member(3), member(4), member(7)};
 }
 
 // quat_from_rotvec (§2.11) per lane: the Taylor branch in SIMD, the cos/sin branch per lane.
@@ -624,7 +637,7 @@ template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
   int valid = 0;  // lanes whose local velocity was valid (the forces pass reads it)
   if constexpr (kForces) {
     if (L::bits(strain > splat<L>(kStrainDiverged)) & done) diverged = true;
-    const LinkConstL<L> c = gather_link_const<L>(m, ids);
+    const LinkConstL<L> c = gather_link_const<L, kContig>(m, ids);
     // §2.4 (see link_scalar)
     const D stress = L::round_to_float(c.e_area * strain);
     const D b1 = c.b1;
@@ -992,7 +1005,7 @@ template <class L>
 [[gnu::always_inline]] inline VoxelLanes<L> load_voxels(const Model& m, const State& st,
                                                         const int* v) {
   return {load_run<L>(st.pos, v[0]), load_run<L>(st.lin_mom, v[0]), load_run<L>(st.ang_mom, v[0]),
-          load_run<L>(st.orient, v[0]), gather_voxel_const<L>(m, v)};
+          load_run<L>(st.orient, v[0]), load_voxel_const_run<L>(m, v[0])};
 }
 template <class L>
 [[gnu::always_inline]] inline void store_voxels(const VL<L>& pos, const VL<L>& mom, const VL<L>& am,
