@@ -24,7 +24,13 @@
 // vector of W lanes (comparison result, all ones = true); static D round_to_float(D);
 // static D sqrt(D) (IEEE, correctly rounded); static int bits(M) (bit k = lane k true);
 // optionally faster transposing loads / stores (gather3, gather4, scatter3, gather_f12,
-// to_floats; generic fallbacks below).
+// load_records, store_records, load_floats, to_floats; generic fallbacks below).
+//
+// Memory layout the groups rely on: link ids run axis by axis (Model), so the full groups of a
+// link pass are consecutive ids; voxel groups are consecutive voxel ids. Per-link state that the
+// groups read and write (mode and velocity flags, strains, pos2 / angle vectors by component),
+// the link damping multipliers and the constants by member (Model::*_const_members) are then
+// plain vector loads and stores; voxel and end-load records are runs of W records.
 #pragma once
 
 #include <emmintrin.h>
