@@ -54,6 +54,7 @@ struct EvalArgs {
   std::vector<std::string> overrides;
   double direction = 0.0;
   bool direction_set = false;
+  std::string simd = "best";
 };
 
 // Frames buffered in memory, written once at the end (a 10 s trace of an 800-voxel robot is
@@ -165,6 +166,12 @@ int run_eval(const EvalArgs& a) {
   if (a.seconds > 0.0) config.task.eval_seconds = a.seconds;
 
   EvalOptions opts;
+  opts.simd = physics::parse_simd(a.simd).value();  // checked by the option's IsMember
+  if (!physics::simd_supported(opts.simd))
+    throw std::invalid_argument("--simd " + a.simd + ": not supported by this CPU or build");
+  // the width the physics runs (Model::simd resolves `best` the same way)
+  const physics::Simd simd_used =
+      opts.simd == physics::Simd::best ? physics::best_simd() : opts.simd;
   for (const std::string& what : a.ablate) {
     if (what == "oscillator") opts.ablate_oscillator = true;
     if (what == "sensors") opts.ablate_sensors = true;
@@ -262,7 +269,7 @@ int run_eval(const EvalArgs& a) {
     s += ", \"chambers\": " + std::to_string(result.chambers);
     s += ", \"wall_seconds\": " + json_number(result.wall_seconds);
     s += ", \"cpu_seconds\": " + json_number(cpu_seconds);
-    s += ", \"simd\": " + json_string(physics::to_string(physics::best_simd()));
+    s += ", \"simd\": " + json_string(physics::to_string(simd_used));
     s += ", \"message\": " + json_string(result.message);
     s += "}";
     std::printf("%s\n", s.c_str());
@@ -289,7 +296,7 @@ int run_eval(const EvalArgs& a) {
                 static_cast<long long>(result.steps));
     std::printf("body         %d voxels, %d chambers\n", result.voxels, result.chambers);
     std::printf("time         %.3f s wall, %.3f s CPU (physics SIMD width %s)\n",
-                result.wall_seconds, cpu_seconds, physics::to_string(physics::best_simd()));
+                result.wall_seconds, cpu_seconds, physics::to_string(simd_used));
     if (!a.trace.empty())
       std::printf("trace        %s (%d frames)\n", a.trace.c_str(), trace.frames);
   }
@@ -316,6 +323,10 @@ void register_eval(CLI::App& app, int& exit_code) {
   cmd->add_option("--trace", a->trace, "record voxel poses, pressures and valves (HDF5)");
   cmd->add_option("--config", a->config_file, "TOML config (default: built-in thesis values)");
   cmd->add_option("--set", a->overrides, "override a config key: section.key=value");
+  cmd->add_option("--simd", a->simd,
+                  "SIMD width of the physics: best (default), sse2, avx2 or avx512 (the fitness "
+                  "is bit-identical at every width; only the speed differs)")
+      ->check(CLI::IsMember({"best", "sse2", "avx2", "avx512"}));
   cmd->callback([&exit_code, a, dir] {
     EvalArgs args = *a;
     args.direction_set = dir->count() > 0;

@@ -1,6 +1,7 @@
-// `softevo eval ROBOT.json [--task] [--seconds] [--json]` end to end (issue 4): the JSON object
-// carries the named fields with sensible values, the directed task reports five directions, and
-// a malformed robot file stops with an error naming the file and the key.
+// `softevo eval ROBOT.json [--task] [--seconds] [--simd] [--json]` end to end (issue 4): the JSON
+// object carries the named fields with sensible values, the directed task reports five
+// directions, --simd changes only the reported width, and a malformed robot file stops with an
+// error naming the file and the key.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -86,6 +87,25 @@ TEST_F(CmdEval, DirectedJsonReportsFiveDirections) {
   for (const auto& c : j["components"])
     for (const char* key : {"direction_deg", "fitness", "D", "L", "delta", "P", "status"})
       EXPECT_TRUE(c.contains(key)) << key;
+}
+
+// --simd picks the width of the physics passes: the same fitness bits at sse2 as at the best
+// width, the width used is reported, and an unknown width is a usage error.
+TEST_F(CmdEval, SimdWidthChangesNothingButTheReportedWidth) {
+  const std::string eval =
+      binary("softevo") + " eval '" + robot_.string() + "' --seconds 0.3 --json";
+  const auto best = run_command(eval);
+  const auto narrow = run_command(eval + " --simd sse2");
+  ASSERT_EQ(best.code, 0) << best.output;
+  ASSERT_EQ(narrow.code, 0) << narrow.output;
+  const nlohmann::json jb = nlohmann::json::parse(best.output);
+  const nlohmann::json jn = nlohmann::json::parse(narrow.output);
+  EXPECT_EQ(jn["simd"], "sse2");
+  EXPECT_EQ(jn["fitness"].get<double>(), jb["fitness"].get<double>()) << jb["simd"];
+  EXPECT_EQ(jn["steps"], jb["steps"]);
+  const auto bad = run_command(eval + " --simd avx");
+  EXPECT_EQ(bad.code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--simd"), std::string::npos) << bad.output;
 }
 
 TEST_F(CmdEval, MalformedRobotFileNamesFileAndKey) {
