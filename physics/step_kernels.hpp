@@ -777,13 +777,11 @@ template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
   return done;
 }
 
-// One group of links through link_group: `count` links group[0..count), padded to W lanes; the
-// lanes that switched mode go through link_scalar (or link_scalar_state_only if !kForces).
-template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
-[[gnu::noinline]] void run_link_group(const Model& m, State& st, Scratch& sc, const int* group,
-                                      int count, bool& diverged) {
-  const int done = link_group<L, A, kForces, kLarge, kContig>(m, st, sc, group, diverged);
-  if (done == kAllLanes<L>) return;  // the usual case: no link switched mode
+// The lanes of a group that link_group left undone (they switched mode) through link_scalar (or
+// link_scalar_state_only if !kForces). Out of line: rare.
+template <Axis A, bool kForces>
+[[gnu::noinline]] void links_switching_mode(const Model& m, State& st, Scratch& sc,
+                                            const int* group, int count, int done, bool& diverged) {
   for (int k = 0; k < count; ++k) {
     if (done >> k & 1) continue;
     if constexpr (kForces) {
@@ -794,12 +792,39 @@ template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
   }
 }
 
+// One group of links through link_group: `count` links group[0..count), padded to W lanes.
+template <class L, Axis A, bool kForces, bool kLarge>
+[[gnu::noinline]] void run_link_group(const Model& m, State& st, Scratch& sc, const int* group,
+                                      int count, bool& diverged) {
+  const int done = link_group<L, A, kForces, kLarge, false>(m, st, sc, group, diverged);
+  if (done != kAllLanes<L>)
+    links_switching_mode<A, kForces>(m, st, sc, group, count, done, diverged);
+}
+
+// Full groups of consecutive links from link j on, as long as all W links of the next group are
+// in small-angle mode (!kLarge) or all in large-angle mode (kLarge); returns the first link not
+// handled. One call runs a whole stretch of groups (the usual case: a solid body is one stretch
+// per axis), so the call and its register saves are paid once per stretch.
+template <class L, Axis A, bool kForces, bool kLarge>
+[[gnu::noinline]] int run_link_stretch(const Model& m, State& st, Scratch& sc, int j, int end,
+                                       bool& diverged) {
+  constexpr int W = L::W;
+  constexpr int kMode = kLarge ? 0 : kAllLanes<L>;  // small-angle flags of the whole group
+  for (; j + W <= end && nonzero_flags<L>(&st.link_small_angle[j]) == kMode; j += W) {
+    int group[W];
+    for (int k = 0; k < W; ++k) group[k] = j + k;
+    const int done = link_group<L, A, kForces, kLarge, true>(m, st, sc, group, diverged);
+    if (done != kAllLanes<L>) links_switching_mode<A, kForces>(m, st, sc, group, W, done, diverged);
+  }
+  return j;
+}
+
 // A collected group of `count` links (1..W): padded with its last link, run, emptied.
 template <class L, Axis A, bool kForces, bool kLarge>
 inline void flush_link_group(const Model& m, State& st, Scratch& sc, int* group, int& count,
                              bool& diverged) {
   for (int k = count; k < L::W; ++k) group[k] = group[count - 1];
-  run_link_group<L, A, kForces, kLarge, false>(m, st, sc, group, count, diverged);
+  run_link_group<L, A, kForces, kLarge>(m, st, sc, group, count, diverged);
   count = 0;
 }
 
@@ -831,16 +856,15 @@ bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
     }
   };
   int j = begin;
-  for (; j + W <= end; j += W) {
-    int chunk[W];
-    for (int k = 0; k < W; ++k) chunk[k] = j + k;
+  while (j + W <= end) {
     const int small_lanes = nonzero_flags<L>(&st.link_small_angle[j]);
     if (small_lanes == kAllLanes<L>) {
-      run_link_group<L, A, kForces, false, true>(m, st, sc, chunk, W, diverged);
+      j = run_link_stretch<L, A, kForces, false>(m, st, sc, j, end, diverged);
     } else if (small_lanes == 0) {
-      run_link_group<L, A, kForces, true, true>(m, st, sc, chunk, W, diverged);
+      j = run_link_stretch<L, A, kForces, true>(m, st, sc, j, end, diverged);
     } else {
       for (int k = 0; k < W; ++k) collect(j + k);
+      j += W;
     }
   }
   for (; j < end; ++j) collect(j);
