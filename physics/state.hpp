@@ -17,13 +17,15 @@ struct CollisionPair {
 };
 
 // One 3-vector per link, stored by component (an x, a y and a z array): the link pass reads and
-// writes the components of W consecutive links with one vector access each.
+// writes the components of W consecutive links with one vector access each. (The accessors are
+// always_inline: the step passes are also compiled for AVX2 / AVX-512, and an out-of-line copy
+// emitted there could be linked into the SSE2 code; see quat.hpp.)
 struct LinkVec3Columns {
   std::vector<double> x, y, z;
 
   std::size_t size() const { return x.size(); }
-  Vec3 operator[](std::size_t i) const { return {x[i], y[i], z[i]}; }
-  void set(std::size_t i, const Vec3& v) {
+  [[gnu::always_inline]] Vec3 operator[](std::size_t i) const { return {x[i], y[i], z[i]}; }
+  [[gnu::always_inline]] void set(std::size_t i, const Vec3& v) {
     x[i] = v.x();
     y[i] = v.y();
     z[i] = v.z();
