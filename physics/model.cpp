@@ -164,7 +164,7 @@ Model build_model(const BodyPlan& plan, const PhysicsConfig& cfg, const BuildOpt
   }
   if (!(cfg.dt_fraction > 0.0) || !std::isfinite(cfg.dt_fraction))
     fail("physics.dt_fraction must be > 0");
-  m.simd = options.simd == Simd::best ? best_simd() : options.simd;
+  m.simd = resolve_simd(options.simd);
   if (!simd_supported(m.simd))
     fail(std::string("SIMD width ") + to_string(m.simd) + " is not supported by this CPU or build");
   const int nx = plan.lattice[0], ny = plan.lattice[1], nz = plan.lattice[2];
@@ -271,22 +271,19 @@ Model build_model(const BodyPlan& plan, const PhysicsConfig& cfg, const BuildOpt
   m.axis_link_begin[3] = m.link_count;
   m.voxel_const_members = members_of(m.voxel_const);
   m.link_const_members = members_of(m.link_const);
-  m.voxel_link_begin.assign(nv + 1, 0);
   m.voxel_surface.assign(nv, 0);
   for (int v = 0; v < nv; ++v) {
     int count = 0;
-    for (int d = 0; d < 6; ++d) {
-      const auto [axis, index] = dir_link[v][d];
-      if (axis < 0) continue;
-      ++count;
-      // even directions (X+, Y+, Z+): v is the negative end of that link
-      m.voxel_link_entry.push_back((m.axis_link_begin[axis] + index) * 2 + (d & 1));
-    }
-    m.voxel_link_begin[v + 1] = static_cast<int>(m.voxel_link_entry.size());
     std::array<int, 6>& slots = m.voxel_load_slots.emplace_back();
     for (int d = 0; d < 6; ++d) {
       const auto [axis, index] = dir_link[v][d];
-      slots[d] = axis < 0 ? 2 * m.link_count : (m.axis_link_begin[axis] + index) * 2 + (d & 1);
+      if (axis < 0) {
+        slots[d] = m.missing_load_slot();
+        continue;
+      }
+      ++count;
+      // even directions (X+, Y+, Z+): v is the negative end of that link
+      slots[d] = (m.axis_link_begin[axis] + index) * 2 + (d & 1);
     }
     m.voxel_surface[v] = count < 6 ? 1 : 0;
     if (m.voxel_surface[v]) m.surface_voxels.push_back(v);
@@ -304,9 +301,10 @@ Model build_model(const BodyPlan& plan, const PhysicsConfig& cfg, const BuildOpt
       for (std::size_t head = 0; head < queue.size(); ++head) {
         const int u = queue[head];
         if (depth[u] == 5) continue;
-        for (int e = m.voxel_link_begin[u]; e < m.voxel_link_begin[u + 1]; ++e) {
-          const int l = m.voxel_link_entry[e] >> 1;
-          const int w = (m.voxel_link_entry[e] & 1) ? m.link_neg[l] : m.link_pos[l];
+        for (int slot : m.voxel_load_slots[u]) {
+          if (slot == m.missing_load_slot()) continue;
+          const int l = slot >> 1;
+          const int w = (slot & 1) ? m.link_neg[l] : m.link_pos[l];
           if (depth[w] >= 0) continue;
           depth[w] = depth[u] + 1;
           queue.push_back(w);

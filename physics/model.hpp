@@ -46,6 +46,8 @@ std::optional<Simd> parse_simd(std::string_view name);
 bool simd_supported(Simd simd);
 // The widest supported width.
 Simd best_simd();
+// The width `simd` runs at: best_simd() for `best`, any other width unchanged.
+Simd resolve_simd(Simd simd);
 
 // Link axis; also the order of the per-axis permutation of §2.2.
 enum class Axis : std::uint8_t { x = 0, y = 1, z = 2 };
@@ -126,16 +128,14 @@ struct Model {
   std::array<int, 4> axis_link_begin{0, 0, 0, 0};  // links of axis a: ids [begin[a], begin[a+1])
   double rest_length = 0.0;  // L = s for every link [m] (double, as Voxelyze's baseSize)
 
-  // ---- voxel -> links CSR, direction order X+, X-, Y+, Y-, Z+, Z- (§2.1) ---------------------
-  // Entry e in [voxel_link_begin[v], voxel_link_begin[v+1]): link id = entry >> 1,
-  // end = entry & 1 (0: v is the negative end N, 1: v is the positive end P).
-  std::vector<int> voxel_link_begin;  // (voxels + 1)
-  std::vector<int> voxel_link_entry;  // (2 * links)
-  // The same entries in six fixed direction slots per voxel, a missing link given as
-  // 2 * link_count: Scratch keeps an always-zero end load there, so the voxel passes sum six
-  // loads per voxel without a data-dependent loop. Adding +0.0 never changes these sums: they
-  // start at +0.0, so a partial sum is never -0.0 (round to nearest), and x + 0.0 = x otherwise.
+  // ---- voxel -> links, six direction slots X+, X-, Y+, Y-, Z+, Z- (§2.1) ----------------------
+  // Slot d of voxel v = 2 * link + end (0: v is the negative end N, 1: v is the positive end P),
+  // the index of that end's load in Scratch::link_end_load; a missing link is missing_load_slot(),
+  // where Scratch keeps an always-zero end load, so the voxel passes sum six loads per voxel
+  // without a data-dependent loop. Adding +0.0 never changes these sums: they start at +0.0, so a
+  // partial sum is never -0.0 (round to nearest), and x + 0.0 = x otherwise.
   std::vector<std::array<int, 6>> voxel_load_slots;  // (voxels)
+  int missing_load_slot() const { return 2 * link_count; }
 
   // ---- self-collision (§2.10) ------------------------------------------------------------------
   std::vector<int> surface_voxels;  // ids of surface voxels, ascending

@@ -51,8 +51,10 @@ struct PneumaticsModel {
 
   // ---- meshes (§3.1): quad (a,b,c,d) -> triangles (a,b,c), (c,d,a); normals point inwards ----
   // Triangle vertices as wall slots (index into wall_voxel), chamber by chamber, quad order.
-  std::vector<std::array<int, 3>> triangle_slots;   // (triangles)
-  std::vector<std::array<int, 3>> triangle_voxels;  // the same vertices as voxel ids (triangles)
+  std::vector<std::array<int, 3>> triangle_slots;  // (triangles)
+  // The same vertices as voxel ids (= wall_voxel of the slots), so the mesh passes read
+  // positions without a second indirection.
+  std::vector<std::array<int, 3>> triangle_voxels;  // (triangles)
   std::vector<int> chamber_triangle_begin;          // CSR (chambers + 1) into triangle_slots
   // Unique wall voxels over all chambers, in order of first use; a voxel shared by two chambers
   // has one slot and accumulates both chambers' forces (§3.6 step 1).

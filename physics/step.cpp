@@ -42,7 +42,8 @@ const char* to_string(StepStatus status) {
 Scratch make_scratch(const Model& model) {
   Scratch sc;
   const std::size_t nl = model.link_count, nv = model.voxel_count;
-  sc.link_end_load.assign(2 * nl + 1, Scratch::EndLoad{Vec3::Zero(), Vec3::Zero()});
+  sc.link_end_load.assign(model.missing_load_slot() + 1,
+                          Scratch::EndLoad{Vec3::Zero(), Vec3::Zero()});
   sc.link_damping_neg.assign(nl, 0.0);
   sc.link_damping_pos.assign(nl, 0.0);
   sc.collision_force.assign(nv, Vec3::Zero());
@@ -340,9 +341,12 @@ Simd best_simd() {
   return Simd::sse2;
 }
 
+Simd resolve_simd(Simd simd) {
+  return simd == Simd::best ? best_simd() : simd;
+}
+
 const StepKernels& step_kernels(Simd simd) {
-  if (simd == Simd::best) simd = best_simd();
-  switch (simd) {
+  switch (resolve_simd(simd)) {
 #if defined(SOFTEVO_HAVE_AVX2_KERNELS)
     case Simd::avx2:
       return step_kernels_avx2();

@@ -30,13 +30,13 @@ const char* to_string(StepStatus status);
 // reallocated by step() (except the documented pair-capacity growth, see State::col_pairs).
 struct Scratch {
   // link pass output: force/moment on each link end in that end voxel's local frame (§2.6),
-  // index = 2 * link + end (0 = N, 1 = P), i.e. exactly Model::voxel_link_entry, so the voxel
-  // pass gathers its loads without a branch.
+  // index = 2 * link + end (0 = N, 1 = P), i.e. exactly a Model::voxel_load_slots entry, so the
+  // voxel pass gathers its loads without a branch.
   struct EndLoad {
     Vec3 force;   // [N]
     Vec3 moment;  // [N m]
   };
-  // Entry 2 x links is always zero: the end load of a missing link (Model::voxel_load_slots).
+  // Entry Model::missing_load_slot() = 2 x links is always zero: the end load of a missing link.
   std::vector<EndLoad> link_end_load;  // (2 x links + 1)
   // §2.5 link damping multiplier c_V = damp_base_V / previous_dt (a float, held as a double) of
   // each link's end voxels N and P, refreshed at the start of a force link pass when previous_dt

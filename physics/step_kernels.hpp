@@ -578,12 +578,11 @@ inline QL<L> quat_to_pos_x_lanes(const VL<L>& d) {
 // Links ids[0..W) of axis A, all in the same mode at their last update: small-angle mode
 // (kLarge false) or large-angle mode (kLarge true), the caller's choice. With kContig the ids are
 // consecutive (ids[k] = ids[0] + k), so the per-link flags and strains are read and written as
-// runs. Each lane whose link
-// stays in that mode (§2.3 hysteresis) is updated like link_scalar (or link_scalar_state_only if
-// !kForces), its strain > 100 ORed into `diverged`; returns those lanes (bit k = lane k). Lanes
-// that switch mode are left unchanged for the caller's link_scalar. A link may fill several
-// lanes (padding of a partial group): all loads precede all stores, so its lanes compute and
-// store the same values.
+// runs. Each lane whose link stays in that mode (§2.3 hysteresis) is updated like link_scalar
+// (or link_scalar_state_only if !kForces), its strain > 100 ORed into `diverged`; returns those
+// lanes (bit k = lane k). Lanes that switch mode are left unchanged for the caller's link_scalar.
+// A link may fill several lanes (padding of a partial group): all loads precede all stores, so
+// its lanes compute and store the same values.
 // Invariant used for small-angle links: a link whose last update was in small-angle mode has
 // angle1v = (+0, +0, +0) stored (every small-angle update stores rotvec(identity) = 0, and so
 // does initial_state), so the old angle1v is the constant zero and the new one need not be
@@ -664,8 +663,7 @@ template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
     } else {
       for (int k = 0; k < W; ++k) valid |= st.link_vel_valid[ids[k]] != 0 ? 1 << k : 0;
     }
-    const int damp = valid;
-    if (damp) {
+    if (valid) {
       const VL<L> old_pos2 = gather<L, kContig>(st.link_pos2, ids);
       VL<L> old_a1{zero, zero, zero};  // small-angle links: see the invariant above
       if constexpr (kLarge) old_a1 = gather<L, kContig>(st.link_angle1v, ids);
@@ -700,13 +698,13 @@ template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
       const VL<L> mp_d{mp.x - hp * (sq_a2 * (d2x - d1x)),
                        mp.y - hp * (sq_b2 * dpz + sq_b3 * (d1y + 2.0 * d2y)),
                        mp.z - hp * (-sq_b2 * dpy + sq_b3 * (d1z + 2.0 * d2z))};
-      if (damp == kAllLanes<L>) {  // every lane (the usual case)
+      if (valid == kAllLanes<L>) {  // every lane (the usual case)
         fn = fn_d;
         fp = fp_d;
         mn = mn_d;
         mp = mp_d;
       } else {
-        const M on = mask_of<L>(damp);
+        const M on = mask_of<L>(valid);
         fn = {select<L>(on, fn_d.x, fn.x), select<L>(on, fn_d.y, fn.y),
               select<L>(on, fn_d.z, fn.z)};
         fp = {select<L>(on, fp_d.x, fp.x), select<L>(on, fp_d.y, fp.y),

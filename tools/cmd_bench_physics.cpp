@@ -85,8 +85,8 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
       for (physics::Simd s : {physics::Simd::sse2, physics::Simd::avx2, physics::Simd::avx512})
         if (physics::simd_supported(s)) widths.push_back(s);
     } else {
-      const physics::Simd s = physics::parse_simd(*simd_name).value();  // checked by IsMember
-      widths.push_back(s == physics::Simd::best ? physics::best_simd() : s);
+      // the name is checked by IsMember
+      widths.push_back(physics::resolve_simd(physics::parse_simd(*simd_name).value()));
     }
     for (physics::Simd s : widths) {
       if (!physics::simd_supported(s)) {

@@ -169,9 +169,7 @@ int run_eval(const EvalArgs& a) {
   opts.simd = physics::parse_simd(a.simd).value();  // checked by the option's IsMember
   if (!physics::simd_supported(opts.simd))
     throw std::invalid_argument("--simd " + a.simd + ": not supported by this CPU or build");
-  // the width the physics runs (Model::simd resolves `best` the same way)
-  const physics::Simd simd_used =
-      opts.simd == physics::Simd::best ? physics::best_simd() : opts.simd;
+  const physics::Simd simd_used = physics::resolve_simd(opts.simd);  // = the Model's width
   for (const std::string& what : a.ablate) {
     if (what == "oscillator") opts.ablate_oscillator = true;
     if (what == "sensors") opts.ablate_sensors = true;
