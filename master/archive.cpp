@@ -342,6 +342,7 @@ void write_run_info(hid_t file, const RunInfo& info, const std::string& path) {
   write_attr_string(file, "format", info.format, path);
   write_attr_string(file, "version", info.version, path);
   write_attr_string(file, "git_commit", info.git_commit, path);
+  write_attr<std::int32_t>(file, "physics_revision", info.physics_revision, path);
   write_attr<std::int64_t>(file, "seed", info.seed, path);
   write_attr<std::int32_t>(file, "ranks", info.ranks, path);
   write_attr_string(file, "host", info.host, path);
@@ -581,6 +582,9 @@ RunInfo Archive::info() const {
   r.format = read_attr_string(file_, "format", path_);
   r.version = read_attr_string(file_, "version", path_);
   r.git_commit = read_attr_string(file_, "git_commit", path_);
+  r.physics_revision = H5Aexists(file_, "physics_revision") > 0
+                           ? read_attr<std::int32_t>(file_, "physics_revision", path_)
+                           : 1;
   r.seed = read_attr<std::int64_t>(file_, "seed", path_);
   r.ranks = read_attr<std::int32_t>(file_, "ranks", path_);
   r.host = read_attr_string(file_, "host", path_);

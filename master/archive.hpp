@@ -36,6 +36,8 @@ struct RunInfo {
   std::string format = kArchiveFormat;
   std::string version;
   std::string git_commit;
+  // physics/revision.hpp; an archive written before the attribute existed reads as 1
+  std::int32_t physics_revision = 1;
   std::int64_t seed = 0;
   std::int32_t ranks = 1;         // (not part of the run's identity)
   std::string host;               // (not part of the run's identity)

@@ -12,6 +12,7 @@
 #include "common/version.hpp"
 #include "evo/genome.hpp"
 #include "master/signals.hpp"
+#include "physics/revision.hpp"
 
 namespace softevo::master {
 namespace {
@@ -69,6 +70,7 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
   RunInfo& info = run.info;
   info.version = kVersion;
   info.git_commit = kGitCommit;
+  info.physics_revision = physics::kPhysicsRevision;
   info.seed = config.run.seed;
   info.ranks = ranks;
   info.host = options.host.empty() ? host_name() : options.host;
@@ -92,6 +94,13 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
         throw StartupError(out + ": cannot resume: the archive was written with config hash " +
                            old.config_hash + ", this run has " + hash +
                            " (use the same config file, --set overrides and --seed)");
+      if (old.physics_revision != physics::kPhysicsRevision)
+        throw StartupError(
+            out + ": cannot resume: the archive was simulated with physics revision " +
+            std::to_string(old.physics_revision) + ", this build simulates revision " +
+            std::to_string(physics::kPhysicsRevision) +
+            " (physics/revision.hpp); finish it with a build of its revision or "
+            "start a new run");
       info.start_time = old.start_time;
       info.generations_done = old.generations_done;
       const std::vector<std::int64_t> gens = archive.generations();

@@ -4,11 +4,15 @@
 //
 // Vec3 is Eigen::Vector3d (three packed doubles, no alignment requirement). The hot loops use
 // .x()/.y()/.z() and spell every product out so that the operation order (and thus the rounding,
-// with -ffp-contract=off) is the one written in the comment.
+// with -ffp-contract=off) is the one written in the comment. acos, sin and cos are
+// physics/reproducible_math.hpp's (physics revision 2), not the C library's, so the SIMD passes
+// compute the same bits on their lanes.
 #pragma once
 
 #include <Eigen/Core>
 #include <cmath>
+
+#include "physics/reproducible_math.hpp"
 
 namespace softevo::physics {
 
@@ -88,8 +92,9 @@ inline Vec3 rotate_inv(const Quat& q, const Vec3& f) {
     s = 1.0 - t / 6;
   } else {
     const double mag = std::sqrt(t);
-    w = std::cos(mag);
-    s = std::sin(mag) / mag;
+    double sin_mag;
+    rmath::sincos(mag, sin_mag, w);
+    s = sin_mag / mag;
   }
   return {w, hx * s, hy * s, hz * s};
 }
@@ -102,26 +107,53 @@ inline Vec3 rotate_inv(const Quat& q, const Vec3& f) {
     const double k = std::sqrt((2 - 2 * q.w) / t);
     return {q.x * 2.0 * k, q.y * 2.0 * k, q.z * 2.0 * k};
   }
-  const double a = std::acos(q.w), rs = std::sqrt(t);
+  const double a = rmath::acos(q.w), rs = std::sqrt(t);
   return {q.x * 2.0 * a / rs, q.y * 2.0 * a / rs, q.z * 2.0 * a / rs};
 }
 
-// §2.11 "angle to +X": the rotation taking direction d onto +X; identity for d = 0.
-[[gnu::always_inline]] inline Quat quat_to_pos_x(const Vec3& d) {
-  if (d.x() == 0.0 && d.y() == 0.0 && d.z() == 0.0) return {};
+// §2.11 "angle to +X": q1, the rotation taking direction d onto +X (identity for d = 0), and its
+// rotation vector a1 = rotvec(q1), together (the large-angle link frame, §2.3).
+//
+// Physics revision 2 (physics/revision.hpp) evaluates the general branch in closed form. With
+// n = d / |d|, theta = acos(n_x) and s = sqrt(n_y^2 + n_z^2) = sin(theta):
+//   q1 = (cos(theta/2), 0, n_z k sin(theta/2), -n_y k sin(theta/2)),  k = 1 / s      (reference)
+//      = (c, 0, n_z h, -n_y h),  c = cos(theta/2) = sqrt((1 + n_x) / 2),  h = 1 / (2c)
+//        (half-angle identities: k sin(theta/2) = sin(theta/2) / sin(theta) = 1 / (2 cos(theta/2)))
+//   a1 = 2 acos(c) / sqrt(1 - c^2) (q1.x, q1.y, q1.z)                          (reference rotvec)
+//      = (0, theta n_z / s, -theta n_y / s)        (acos(c) = theta/2, sqrt(1 - c^2) = s / (2c))
+// The same numbers up to rounding, without sin, cos, a second acos and three divisions. The
+// near-+X Taylor branch, d = 0 and the reversed direction keep the reference's q1 and rotvec, and
+// so do bends small enough for rotvec's Taylor branch (1 - c^2 < 2.4e-3: that branch is only good
+// to ~1e-5 relative, and the gaits should see the reference's a1 there).
+constexpr double kReversedBelow = -0x1.fffffffffffd3p-1;  // cos(3.14159265358979 - 1e-7)
+[[gnu::always_inline]] inline void frame_to_pos_x(const Vec3& d, Quat& q1, Vec3& a1) {
+  if (d.x() == 0.0 && d.y() == 0.0 && d.z() == 0.0) {
+    q1 = {};
+    a1 = Vec3::Zero();  // rotvec(identity)
+    return;
+  }
   const double a = d.y() / d.x(), b = d.z() / d.x();
   if (std::fabs(a) < 1.732e-2 && std::fabs(b) < 1.732e-2) {
     const double y = b / 2, z = -a / 2;
-    return {1.0 - 0.5 * (y * y + z * z), 0.0, y, z};
+    q1 = {1.0 - 0.5 * (y * y + z * z), 0.0, y, z};
+    a1 = rotvec(q1);
+    return;
   }
   const double len = std::sqrt(d.x() * d.x() + d.y() * d.y() + d.z() * d.z());
   const double nx = d.x() / len, ny = d.y() / len, nz = d.z() / len;
-  const double theta = std::acos(nx);
-  if (theta > 3.14159265358979 - 1e-7) return {0.0, 0.0, 1.0, 0.0};
-  const double k = 1.0 / std::sqrt(ny * ny + nz * nz);
-  const double half = theta / 2;
-  const double sh = std::sin(half);
-  return {std::cos(half), 0.0, nz * k * sh, -ny * k * sh};
+  if (nx < kReversedBelow) {  // theta > 3.14159265358979 - 1e-7
+    q1 = {0.0, 0.0, 1.0, 0.0};
+    a1 = rotvec(q1);
+    return;
+  }
+  const double c = std::sqrt((1.0 + nx) * 0.5), h = 0.5 / c;
+  q1 = {c, 0.0, nz * h, -ny * h};
+  if (1.0 - c * c < 2.4e-3) {  // rotvec's Taylor branch, kept as the reference has it
+    a1 = rotvec(q1);
+    return;
+  }
+  const double f = rmath::acos(nx) / std::sqrt(ny * ny + nz * nz);
+  a1 = {0.0, nz * f, -ny * f};
 }
 
 }  // namespace softevo::physics

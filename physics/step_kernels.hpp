@@ -17,8 +17,9 @@
 // float x float products and float / float quotients are formed in double and rounded to float,
 // which gives the float result exactly since 53 >= 2 x 24 + 2), so every width gives results
 // bit-identical to the scalar reference path (link_scalar, fork_part1_voxel, ...), and thus to
-// each other. Rare branches (a link switching mode, acos / sin / cos in rotvec and
-// quat_to_pos_x, large voxel rotations, floor contact) run per lane in the scalar code.
+// each other. The acos / sin / cos branches of rotvec, frame_to_pos_x and quat_from_rotvec run on
+// the lanes too (physics/reproducible_math.hpp: the scalar functions' bits); rare branches (a link
+// switching mode, floor contact) run per lane in the scalar code.
 //
 // Lane traits L: static constexpr int W; using D = double vector of W lanes; using M = long long
 // vector of W lanes (comparison result, all ones = true); static D round_to_float(D);
@@ -45,6 +46,7 @@
 #include "physics/model.hpp"
 #include "physics/pneumatics.hpp"
 #include "physics/pneumatics_triangle.hpp"
+#include "physics/reproducible_math.hpp"
 #include "physics/state.hpp"
 #include "physics/step.hpp"
 #include "physics/step_kernels_table.hpp"
@@ -143,10 +145,9 @@ inline void orient_link(const Model& m, const State& st, int i, LinkKinematics& 
     k.pos2 = Vec3(d.x() - l, d.y(), d.z());
     k.a1v = Vec3::Zero();  // rotvec(identity) = 0
   } else {
-    k.q1 = quat_to_pos_x(d);
+    frame_to_pos_x(d, k.q1, k.a1v);
     k.q2 = mul(k.q1, k.q2);
     k.pos2 = Vec3(std::sqrt(d.x() * d.x() + d.y() * d.y() + d.z() * d.z()) - l, 0.0, 0.0);
-    k.a1v = rotvec(k.q1);
   }
   k.a2v = rotvec(k.q2);
 }
@@ -505,19 +506,52 @@ template <class L>
   return {member(1), member(2), member(3), member(4), member(7)};
 }
 
-// quat_from_rotvec (§2.11) per lane: the Taylor branch in SIMD, the cos/sin branch per lane.
+// The reproducible acos / sin / cos (physics/reproducible_math.hpp) on lane vectors.
+template <class L>
+struct LaneMathOps {
+  [[gnu::always_inline]] static DV<L> sqrt(DV<L> x) { return L::sqrt(x); }
+  [[gnu::always_inline]] static DV<L> abs(DV<L> x) { return abs_lanes<L>(x); }
+  template <class Mask>  // a comparison of DV<L> (long or long long lanes)
+  [[gnu::always_inline]] static DV<L> select(Mask mask, DV<L> a, DV<L> b) {
+    return physics::select<L>(reinterpret_cast<MV<L>>(mask), a, b);
+  }
+};
+template <class L>
+[[gnu::always_inline]] inline DV<L> acos_lanes(DV<L> x) {
+  return rmath::acos<LaneMathOps<L>>(x);
+}
+// rmath::sincos on lanes: lanes beyond the reduction's range (only an exploded voxel) per lane.
+template <class L>
+[[gnu::always_inline]] inline void sincos_lanes(DV<L> x, DV<L>& sin_x, DV<L>& cos_x) {
+  rmath::sincos_reduced<LaneMathOps<L>>(x, sin_x, cos_x);
+  const int far = ~L::bits(abs_lanes<L>(x) <= rmath::kSinCosReducedLimit) & kAllLanes<L>;
+  if (far) [[unlikely]] {
+    for (int k = 0; k < L::W; ++k) {
+      if (!(far >> k & 1)) continue;
+      double s, c;
+      rmath::sincos(x[k], s, c);
+      sin_x[k] = s;
+      cos_x[k] = c;
+    }
+  }
+}
+
+// quat_from_rotvec (§2.11) on lanes, both branches in SIMD (the sin / cos one only when a lane
+// needs it).
 template <class L>
 inline QL<L> quat_from_rotvec_lanes(const VL<L>& r) {
   const DV<L> hx = r.x / 2.0, hy = r.y / 2.0, hz = r.z / 2.0;
   const DV<L> t = hx * hx + hy * hy + hz * hz;
-  const DV<L> w = 1.0 - t / 2.0, s = 1.0 - t / 6.0;
-  QL<L> q{w, hx * s, hy * s, hz * s};
-  const int wide = ~L::bits(t * t < 5.328e-15) & kAllLanes<L>;
-  for (int k = 0; k < L::W; ++k) {
-    if (!(wide >> k & 1)) continue;
-    set_lane<L>(q, k, quat_from_rotvec(Vec3(r.x[k], r.y[k], r.z[k])));
+  DV<L> w = 1.0 - t / 2.0, s = 1.0 - t / 6.0;
+  const MV<L> taylor = t * t < 5.328e-15;
+  if (L::bits(taylor) != kAllLanes<L>) {
+    const DV<L> mag = L::sqrt(t);
+    DV<L> sin_mag, cos_mag;
+    sincos_lanes<L>(mag, sin_mag, cos_mag);
+    w = select<L>(taylor, w, cos_mag);
+    s = select<L>(taylor, s, sin_mag / mag);
   }
-  return q;
+  return {w, hx * s, hy * s, hz * s};
 }
 // §2.2 permutations on lanes (to_x_c / from_x_c, as the scalar to_x / from_x)
 template <Axis A, class L>
@@ -540,39 +574,61 @@ template <Axis A, class L>
   return r;
 }
 
-// rotvec (§2.11) per lane: the unit and Taylor branches in SIMD, the acos branch per lane.
+// rotvec (§2.11) on lanes, every branch in SIMD (the acos one only when a lane needs it).
 template <class L>
 inline VL<L> rotvec_lanes(const QL<L>& q) {
   using D = DV<L>;
   const D zero = splat<L>(0.0);
   const MV<L> unit = (q.w >= 1.0) | (q.w <= -1.0);
   const D t = 1.0 - q.w * q.w;
-  const D k = L::sqrt((2.0 - 2.0 * q.w) / t);
-  VL<L> v{select<L>(unit, zero, q.x * 2.0 * k), select<L>(unit, zero, q.y * 2.0 * k),
-          select<L>(unit, zero, q.z * 2.0 * k)};
-  const int wide = ~L::bits(unit) & ~L::bits(t < 2.4e-3) & kAllLanes<L>;
-  for (int lane = 0; lane < L::W; ++lane) {
-    if (!(wide >> lane & 1)) continue;
-    set_lane<L>(v, lane, rotvec(Quat{q.w[lane], q.x[lane], q.y[lane], q.z[lane]}));
+  const MV<L> taylor = t < 2.4e-3;
+  D k = L::sqrt((2.0 - 2.0 * q.w) / t);
+  VL<L> v{q.x * 2.0 * k, q.y * 2.0 * k, q.z * 2.0 * k};
+  if (L::bits(unit | taylor) != kAllLanes<L>) {
+    const D a = acos_lanes<L>(q.w), rs = L::sqrt(t);
+    v.x = select<L>(taylor, v.x, q.x * 2.0 * a / rs);
+    v.y = select<L>(taylor, v.y, q.y * 2.0 * a / rs);
+    v.z = select<L>(taylor, v.z, q.z * 2.0 * a / rs);
   }
-  return v;
+  return {select<L>(unit, zero, v.x), select<L>(unit, zero, v.y), select<L>(unit, zero, v.z)};
 }
 
-// quat_to_pos_x (§2.11) per lane: the near-+X Taylor branch in SIMD, the others (acos, sin,
-// cos; zero or reversed direction) per lane.
+// frame_to_pos_x (§2.11, quat.hpp) on lanes, every branch in SIMD (the closed-form one only when
+// a lane needs it).
 template <class L>
-inline QL<L> quat_to_pos_x_lanes(const VL<L>& d) {
+inline void frame_to_pos_x_lanes(const VL<L>& d, QL<L>& q1, VL<L>& a1) {
   using D = DV<L>;
+  const D zero = splat<L>(0.0), one = splat<L>(1.0);
   const D a = d.y / d.x, b = d.z / d.x;
+  const MV<L> taylor = (abs_lanes<L>(a) < 1.732e-2) & (abs_lanes<L>(b) < 1.732e-2);
+  const MV<L> null = (d.x == 0.0) & (d.y == 0.0) & (d.z == 0.0);
   const D y = b / 2.0, z = -a / 2.0;
-  QL<L> q{1.0 - 0.5 * (y * y + z * z), splat<L>(0.0), y, z};
-  const int taylor = L::bits((abs_lanes<L>(a) < 1.732e-2) & (abs_lanes<L>(b) < 1.732e-2)) &
-                     ~L::bits((d.x == 0.0) & (d.y == 0.0) & (d.z == 0.0));
-  for (int lane = 0; lane < L::W; ++lane) {
-    if (taylor >> lane & 1) continue;
-    set_lane<L>(q, lane, quat_to_pos_x(Vec3(d.x[lane], d.y[lane], d.z[lane])));
+  QL<L> q{1.0 - 0.5 * (y * y + z * z), zero, y, z};
+  MV<L> closed = mask_of<L>(0);  // lanes of the closed-form branch
+  VL<L> a_closed;
+  if (L::bits(taylor | null) != kAllLanes<L>) {
+    const D len = L::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    const D nx = d.x / len, ny = d.y / len, nz = d.z / len;
+    const MV<L> reversed = nx < kReversedBelow;
+    const D c = L::sqrt((1.0 + nx) * 0.5), h = 0.5 / c;
+    closed = ~(taylor | null | reversed | (1.0 - c * c < 2.4e-3));
+    q.w = select<L>(taylor, q.w, select<L>(reversed, zero, c));
+    q.y = select<L>(taylor, q.y, select<L>(reversed, one, nz * h));
+    q.z = select<L>(taylor, q.z, select<L>(reversed, zero, -ny * h));
+    const D f = acos_lanes<L>(nx) / L::sqrt(ny * ny + nz * nz);
+    a_closed = {zero, nz * f, -ny * f};
   }
-  return q;
+  q1 = {select<L>(null, one, q.w), q.x, select<L>(null, zero, q.y), select<L>(null, zero, q.z)};
+  if (L::bits(closed) == kAllLanes<L>) {
+    a1 = a_closed;
+  } else {
+    a1 = rotvec_lanes<L>(q1);  // the reference rotvec of the other branches' q1
+    if (L::bits(closed)) {
+      a1.x = select<L>(closed, a_closed.x, a1.x);
+      a1.y = select<L>(closed, a_closed.y, a1.y);
+      a1.z = select<L>(closed, a_closed.z, a1.z);
+    }
+  }
 }
 
 // Links ids[0..W) of axis A, all in the same mode at their last update: small-angle mode
@@ -626,12 +682,11 @@ template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
   VL<L> pos2, a1;
   QL<L> q1;  // large-angle mode: rotation of the link frame onto +X
   if constexpr (kLarge) {
-    q1 = quat_to_pos_x_lanes<L>(d);
+    frame_to_pos_x_lanes<L>(d, q1, a1);
     QL<L> q12;
     mul_c(q1.w, q1.x, q1.y, q1.z, q2.w, q2.x, q2.y, q2.z, q12.w, q12.x, q12.y, q12.z);
     q2 = q12;
     pos2 = {L::sqrt(d.x * d.x + d.y * d.y + d.z * d.z) - l, zero, zero};
-    a1 = rotvec_lanes<L>(q1);
   } else {
     pos2 = {d.x - l, d.y, d.z};
     a1 = {zero, zero, zero};  // rotvec(identity)

@@ -32,6 +32,7 @@ void register_info(CLI::App& app, int& exit_code) {
       j["format"] = info.format;
       j["version"] = info.version;
       j["git_commit"] = info.git_commit;
+      j["physics_revision"] = info.physics_revision;
       j["seed"] = info.seed;
       j["ranks"] = info.ranks;
       j["host"] = info.host;
@@ -63,6 +64,7 @@ void register_info(CLI::App& app, int& exit_code) {
                   static_cast<long long>(info.generations_done));
       std::printf("written by       softevo %s (commit %s), %d ranks on %s\n", info.version.c_str(),
                   info.git_commit.c_str(), info.ranks, info.host.c_str());
+      std::printf("physics revision %d\n", info.physics_revision);
       std::printf("time             %s .. %s\n", info.start_time.c_str(),
                   info.end_time.empty() ? "(running)" : info.end_time.c_str());
       std::printf("fitness_digest   %s\n", fitness.c_str());

@@ -20,6 +20,7 @@
 #include "common/eval_types.hpp"
 #include "master/archive.hpp"
 #include "master/scheduler.hpp"
+#include "physics/revision.hpp"
 #include "tools/commands.hpp"
 #include "tools/robot_source.hpp"
 #include "worker/evaluate_unit.hpp"
@@ -125,6 +126,19 @@ int run_replay(const ReplayArgs& args) {
       throw std::runtime_error(args.archive + ": config_hash attribute " + recorded +
                                " does not match the archived config text (hash " + hash_hex(hash) +
                                ")");
+    }
+    // Bits are only comparable within one physics revision (physics/revision.hpp).
+    const int revision = archive.info().physics_revision;
+    if (revision != physics::kPhysicsRevision) {
+      const std::string what = args.archive + ": simulated with physics revision " +
+                               std::to_string(revision) + ", this build simulates revision " +
+                               std::to_string(physics::kPhysicsRevision) +
+                               " (physics/revision.hpp)";
+      if (args.verify)
+        throw std::runtime_error(what +
+                                 ": fitness bits cannot match; --verify needs a build of the "
+                                 "archive's revision");
+      std::fprintf(stderr, "note: %s; fitness values will differ slightly\n", what.c_str());
     }
   }
   int identical = 0, mismatched = 0, unverifiable = 0;

@@ -3,6 +3,7 @@
 #include "master/archive.hpp"
 
 #include <gtest/gtest.h>
+#include <hdf5.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -38,6 +39,7 @@ RunInfo sample_info() {
   RunInfo i;
   i.version = "0.1.0";
   i.git_commit = "abc";
+  i.physics_revision = 7;
   i.seed = 3;
   i.ranks = 2;
   i.host = "h";
@@ -88,6 +90,7 @@ TEST(Archive, RoundTripsEveryField) {
   const Archive a(p);
   const RunInfo got = a.info();
   EXPECT_EQ(got.format, "softevo.run/1");
+  EXPECT_EQ(got.physics_revision, 7);
   EXPECT_EQ(got.seed, 3);
   EXPECT_EQ(got.ranks, 2);
   EXPECT_EQ(got.experiment, "dir-open");
@@ -182,6 +185,19 @@ TEST(Archive, RejectsForeignAndMissingFiles) {
   EXPECT_THROW(check_output_path(d.path), ArchiveError);
   EXPECT_NO_THROW(check_output_path(d.path + "/fine.h5"));
   EXPECT_FALSE(fs::exists(d.path + "/fine.h5"));
+}
+
+// Archives written before the physics_revision attribute existed were simulated with revision 1
+// (physics/revision.hpp).
+TEST(Archive, MissingPhysicsRevisionReadsAsRevisionOne) {
+  TmpDir d;
+  const std::string p = d.path + "/old.h5";
+  create_archive(p, sample_info(), "[run]\nseed = 3\n");
+  const hid_t file = H5Fopen(p.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  ASSERT_GE(H5Adelete(file, "physics_revision"), 0);
+  H5Fclose(file);
+  EXPECT_EQ(Archive(p).info().physics_revision, 1);
 }
 
 TEST(Archive, StaleTemporaryCopiesOfDeadProcessesAreRemoved) {

@@ -5,6 +5,7 @@
 // Expectations depend only on the outcome, never on rank count or timing.
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <hdf5.h>
 #include <mpi.h>
 #include <signal.h>
 #include <spawn.h>
@@ -27,6 +28,7 @@
 #include "master/archive.hpp"
 #include "master/mpi_driver.hpp"
 #include "master/signals.hpp"
+#include "physics/revision.hpp"
 #include "tests/build_tree.hpp"
 #include "worker/evaluate_robot.hpp"
 #include "worker/worker_loop.hpp"
@@ -406,7 +408,22 @@ TEST(SoftevoMpi, StartupErrorsFailFastAndTouchNothing) {
     std::vector<std::string> args;
     const char* expect;  // part of the one message printed by rank 0
   };
+  // The same archive marked as simulated with another physics revision (physics/revision.hpp).
+  const std::string other_revision = dir.file("other_revision.h5");
+  if (world_rank() == 0) {
+    std::filesystem::copy_file(out, other_revision);
+    const hid_t file = H5Fopen(other_revision.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    const hid_t attr = H5Aopen(file, "physics_revision", H5P_DEFAULT);
+    const std::int32_t revision = physics::kPhysicsRevision - 1;
+    EXPECT_GE(H5Awrite(attr, H5T_NATIVE_INT32, &revision), 0);
+    H5Aclose(attr);
+    H5Fclose(file);
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  const std::string other_before = world_rank() == 0 ? file_bytes(other_revision) : "";
   const std::vector<Case> cases = {
+      {{"--config", cfg, "--out", other_revision, "--generations", "1", "--resume"},
+       "physics revision"},
       {{"--config", dir.file("missing.toml"), "--out", out}, "missing.toml"},
       {{"--config", unknown_key, "--out", out}, "bogus_key"},
       {{"--config", broken, "--out", out}, "broken.toml"},
@@ -427,6 +444,8 @@ TEST(SoftevoMpi, StartupErrorsFailFastAndTouchNothing) {
       EXPECT_NE(err.find(c.expect), std::string::npos) << "stderr: " << err;
       EXPECT_LT(seconds, 30.0) << "start-up errors must not wait for anything";
       EXPECT_TRUE(file_bytes(out) == before) << "existing archive touched by: " << c.expect;
+      EXPECT_TRUE(file_bytes(other_revision) == other_before)
+          << "existing archive touched by: " << c.expect;
     } else {
       EXPECT_EQ(rc, 2);
     }

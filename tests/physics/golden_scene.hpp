@@ -15,11 +15,20 @@ namespace softevo::physics::golden {
 
 inline constexpr int kSteps = 1500;
 
+// How hard the scene is shaken. `gentle`: links bend by less than a degree and voxels turn
+// slowly, so every rotation takes the Taylor branches of §2.11. `tumbling`: 1000x the initial
+// spin and 10x the external force, so links bend far (frame_to_pos_x and rotvec take their acos /
+// sin / cos branches) and voxels turn fast (quat_from_rotvec takes its sin / cos branch).
+enum class Motion { gentle, tumbling };
+
 // A 5x4x3 body of two materials (30 kPa / 100 kPa checkerboard) with a hole, lifted 0.3 s,
 // random initial momenta (Rng seed 2024) and a time-varying external force on four voxels:
 // exercises links in both angle modes, damping, floor contact, friction and self-collision.
 // `simd` picks the width of the step passes (results must not depend on it).
-inline std::uint64_t run_scene(const std::string& integrator, Simd simd = Simd::best) {
+inline std::uint64_t run_scene(const std::string& integrator, Simd simd = Simd::best,
+                               Motion motion = Motion::gentle) {
+  const double spin = motion == Motion::tumbling ? 1000.0 : 1.0;
+  const double push = motion == Motion::tumbling ? 10.0 : 1.0;
   BodyPlan plan = solid_block(5, 4, 3, 3.0e4);
   plan.materials.push_back(StructuralMaterial{1.0e5, 1000.0});
   for (int x = 0; x < 5; ++x)
@@ -39,13 +48,13 @@ inline std::uint64_t run_scene(const std::string& integrator, Simd simd = Simd::
   for (int v = 0; v < m.voxel_count; ++v) {
     st.pos[v].z() += 0.3 * m.voxel_size;
     st.lin_mom[v] = Vec3(rng.normal(), rng.normal(), rng.normal()) * 2e-5;
-    st.ang_mom[v] = Vec3(rng.normal(), rng.normal(), rng.normal()) * 2e-10;
+    st.ang_mom[v] = Vec3(rng.normal(), rng.normal(), rng.normal()) * (2e-10 * spin);
   }
   std::vector<Vec3> ext(m.voxel_count, Vec3::Zero());
   for (int i = 0; i < kSteps; ++i) {
     const double phase = (i % 200) < 100 ? 1.0 : -1.0;
     for (int v = 0; v < m.voxel_count; v += m.voxel_count / 4)
-      ext[v] = Vec3(0.0, 0.0, 0.02 * phase);
+      ext[v] = Vec3(0.0, 0.0, 0.02 * push * phase);
     step(m, st, sc, ext);
   }
   return state_hash(st);

@@ -22,6 +22,13 @@ namespace {
 // to the previous values 53ca669c0db8f32e / 15a3cba1ef756df6.)
 constexpr std::uint64_t kGoldenPneuvox = 0xc666c90e92f598a2ull;
 constexpr std::uint64_t kGoldenSymplectic = 0x3ca746cb6f4158eeull;
+// The tumbling scene (golden::Motion::tumbling) takes the acos / sin / cos branches of §2.11,
+// which the gentle one never reaches; so these two also pin physics/reproducible_math.hpp and
+// the closed-form link frame. Added with physics revision 2 (physics/revision.hpp). For the
+// record, revision 1 (glibc acos / sin / cos, the reference's frame formulas) gave
+// 661437050f2ec086 / e8a7695359095d9b for the same scene.
+constexpr std::uint64_t kGoldenTumblingPneuvox = 0x05f074049ccebca6ull;
+constexpr std::uint64_t kGoldenTumblingSymplectic = 0x425667aea039081aull;
 
 std::string hex(std::uint64_t h) {
   char buf[32];
@@ -48,6 +55,11 @@ TEST(Determinism, GoldenHashInProcess) {
   EXPECT_EQ(hex(hp), hex(kGoldenPneuvox));
   EXPECT_EQ(hex(hs), hex(kGoldenSymplectic));
   EXPECT_NE(hp, hs);
+  const std::uint64_t tp = golden::run_scene("pneuvox", Simd::best, golden::Motion::tumbling);
+  const std::uint64_t ts = golden::run_scene("symplectic", Simd::best, golden::Motion::tumbling);
+  std::printf("tumbling: pneuvox %s, symplectic %s\n", hex(tp).c_str(), hex(ts).c_str());
+  EXPECT_EQ(hex(tp), hex(kGoldenTumblingPneuvox));
+  EXPECT_EQ(hex(ts), hex(kGoldenTumblingSymplectic));
 }
 
 // Every SIMD width of the step passes this build and CPU can run gives the same bits (the
@@ -62,6 +74,12 @@ TEST(Determinism, GoldenHashAtEverySimdWidth) {
     ++widths;
     EXPECT_EQ(hex(golden::run_scene("pneuvox", simd)), hex(kGoldenPneuvox)) << to_string(simd);
     EXPECT_EQ(hex(golden::run_scene("symplectic", simd)), hex(kGoldenSymplectic))
+        << to_string(simd);
+    EXPECT_EQ(hex(golden::run_scene("pneuvox", simd, golden::Motion::tumbling)),
+              hex(kGoldenTumblingPneuvox))
+        << to_string(simd);
+    EXPECT_EQ(hex(golden::run_scene("symplectic", simd, golden::Motion::tumbling)),
+              hex(kGoldenTumblingSymplectic))
         << to_string(simd);
   }
   EXPECT_GE(widths, 1);
@@ -88,8 +106,10 @@ TEST(Determinism, SimdNamesRoundTrip) {
 }
 
 TEST(Determinism, SameHashInTwoOtherProcesses) {
-  const std::string expected =
-      "pneuvox " + hex(kGoldenPneuvox) + "\nsymplectic " + hex(kGoldenSymplectic) + "\n";
+  const std::string expected = "pneuvox " + hex(kGoldenPneuvox) + "\nsymplectic " +
+                               hex(kGoldenSymplectic) + "\npneuvox tumbling " +
+                               hex(kGoldenTumblingPneuvox) + "\nsymplectic tumbling " +
+                               hex(kGoldenTumblingSymplectic) + "\n";
   const std::string first = run_helper();
   const std::string second = run_helper();
   EXPECT_EQ(first, expected);

@@ -2,6 +2,8 @@
 // utilities of §2.11.
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include <cmath>
 #include <stdexcept>
 
@@ -154,18 +156,46 @@ TEST(Quat, RotationVectorRoundTripAndBranches) {
   EXPECT_LT((rotate(mul(qx, qz), v) - rotate(qx, rotate(qz, v))).norm(), 1e-15);
 }
 
+// §2.11 angle to +X (frame_to_pos_x): q1 rotates d onto +X, and a1 is its rotation vector. The
+// general branch is in closed form (physics revision 2); it must agree with the reference
+// formulas (q1 from sin / cos of theta / 2, a1 = rotvec(q1)) to rounding.
 TEST(Quat, AngleToPosX) {
-  for (const Vec3& d : {Vec3(1, 0.5, -0.3), Vec3(1, 1e-3, 2e-3), Vec3(-1, 0.2, 0.1)}) {
-    const Quat q = quat_to_pos_x(d);
+  std::mt19937_64 gen(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<Vec3> dirs = {Vec3(1, 0.5, -0.3),    Vec3(1, 1e-3, 2e-3),  Vec3(-1, 0.2, 0.1),
+                            Vec3(0.01, 0.0, -2.0), Vec3(1, 0.0173, 0.0), Vec3(-0.3, 0.0, 1.0)};
+  for (int i = 0; i < 2000; ++i) dirs.emplace_back(u(gen), u(gen), u(gen));
+  for (const Vec3& d : dirs) {
+    Quat q;
+    Vec3 a1;
+    frame_to_pos_x(d, q, a1);
     const Vec3 r = rotate(q, d);
-    EXPECT_NEAR(r.x(), d.norm(), 1e-6 * d.norm()) << d.transpose();
-    EXPECT_NEAR(r.y(), 0.0, 1e-6);
-    EXPECT_NEAR(r.z(), 0.0, 1e-6);
+    // the reference's near-+X Taylor branch is good to ~|d_y / d_x|^3 < 6e-6
+    EXPECT_NEAR(r.x(), d.norm(), 1e-5 * d.norm()) << d.transpose();
+    EXPECT_NEAR(r.y(), 0.0, 1e-5 * d.norm()) << d.transpose();
+    EXPECT_NEAR(r.z(), 0.0, 1e-5 * d.norm()) << d.transpose();
+    EXPECT_LT((a1 - rotvec(q)).norm(), 1e-12) << d.transpose();
+    const Vec3 n = d.normalized();
+    if (std::fabs(d.y() / d.x()) >= 1.732e-2 || std::fabs(d.z() / d.x()) >= 1.732e-2) {
+      const double theta = std::acos(n.x()), k = 1.0 / std::hypot(n.y(), n.z());
+      const Quat ref{std::cos(theta / 2), 0.0, n.z() * k * std::sin(theta / 2),
+                     -n.y() * k * std::sin(theta / 2)};
+      // to rounding: both forms lose digits as theta -> pi (1 + n_x and acos(n_x) cancel)
+      EXPECT_NEAR(q.w, ref.w, 1e-13) << d.transpose();
+      EXPECT_NEAR(q.y, ref.y, 1e-13) << d.transpose();
+      EXPECT_NEAR(q.z, ref.z, 1e-13) << d.transpose();
+      EXPECT_NEAR(q.w * q.w + q.y * q.y + q.z * q.z, 1.0, 1e-13);
+      EXPECT_EQ(q.x, 0.0);
+    }
   }
-  const Quat id = quat_to_pos_x(Vec3::Zero());
+  Quat id;
+  Vec3 a0;
+  frame_to_pos_x(Vec3::Zero(), id, a0);
   EXPECT_EQ(id.w, 1.0);
+  EXPECT_EQ(a0, Vec3::Zero());
   // the small-ratio branch looks at y/x and z/x only, as the reference: -X counts as aligned
-  const Quat back = quat_to_pos_x(Vec3(-1, 0, 0));
+  Quat back;
+  frame_to_pos_x(Vec3(-1, 0, 0), back, a0);
   EXPECT_EQ(back.w, 1.0);
 }
 

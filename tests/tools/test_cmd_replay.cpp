@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -124,6 +125,21 @@ TEST_F(CmdReplay, ForeignConfigHashIsRefused) {
   const Result r = run(binary("softevo") + " replay " + path + " --verify");
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("config_hash"), std::string::npos) << r.output;
+}
+
+// Bits are only comparable within one physics revision (physics/revision.hpp): --verify of an
+// archive of another revision is refused with both revisions named; a plain replay still runs.
+TEST_F(CmdReplay, OtherPhysicsRevisionIsRefusedByVerify) {
+  const std::string path = tampered_copy("revision.h5", [](H5::H5File& file) {
+    file.openAttribute("physics_revision")
+        .write(H5::PredType::NATIVE_INT32, std::array<std::int32_t, 1>{1}.data());
+  });
+  const Result r = run(binary("softevo") + " replay " + path + " --best --verify");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("physics revision 1"), std::string::npos) << r.output;
+  const Result plain = run(binary("softevo") + " replay " + path + " --best");
+  EXPECT_EQ(plain.code, 0) << plain.output;
+  EXPECT_NE(plain.output.find("physics revision 1"), std::string::npos) << plain.output;
 }
 
 TEST_F(CmdReplay, UnknownIdOrGenerationIsAUsageError) {
