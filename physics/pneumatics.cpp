@@ -141,7 +141,7 @@ PneumaticsState initial_pneumatics_state(const PneumaticsModel& pm,
 
 PneumaticsScratch make_pneumatics_scratch(const PneumaticsModel& pm) {
   PneumaticsScratch s;
-  s.slot_force.assign(pm.wall_voxel.size(), {0.0f, 0.0f, 0.0f});
+  s.slot_force.assign(pm.wall_voxel.size(), {0.0f, 0.0f, 0.0f, 0.0f});
   return s;
 }
 
@@ -155,7 +155,7 @@ void pneumatics_update(const PneumaticsModel& pm, PneumaticsState& ps, Pneumatic
   // 1. Clear the wall voxels' forces (all chambers first) and recompute every volume.
   const StepKernels& kernels = step_kernels(pm.simd);
   std::fill(scratch.slot_force.begin(), scratch.slot_force.end(),
-            std::array<float, 3>{0.0f, 0.0f, 0.0f});
+            std::array<float, 4>{0.0f, 0.0f, 0.0f, 0.0f});
   for (int q = 0; q < pm.chamber_count; ++q)
     ps.volume[q] = kernels.chamber_volume(pm, q, positions);
 

@@ -88,9 +88,10 @@ struct PneumaticsState {
 };
 
 // Float accumulator of the pressure forces per wall slot [N] (the reference's External force is
-// a float vector, §3.4). Allocated once.
+// a float vector, §3.4): x, y, z and a fourth float that stays 0, so that one 4-float vector add
+// performs the three float additions of a triangle's share. Allocated once.
 struct PneumaticsScratch {
-  std::vector<std::array<float, 3>> slot_force;  // [N] (wall slots)
+  std::vector<std::array<float, 4>> slot_force;  // [N] (wall slots); [3] unused, 0
 };
 
 // Build the chamber meshes of `plan` (quads of §6.7 from common/chamber_quads.hpp) on the voxels

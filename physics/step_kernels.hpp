@@ -1567,12 +1567,13 @@ template <class L>
 void add_pressure_forces_lanes(const PneumaticsModel& pm, int chamber, float gauge,
                                std::span<const Vec3> positions, PneumaticsScratch& scratch) {
   constexpr int W = L::W;
-  auto add = [&](int t, double fx, double fy, double fz) {
+  // acc += float(f) for the triangle's three wall slots, in triangle order: the float sums of the
+  // reference, x y z (and 0 + 0) in one 4-float add per slot.
+  auto add = [&](int t, float fx, float fy, float fz) {
+    const __m128 f = _mm_setr_ps(fx, fy, fz, 0.0f);
     for (int v : pm.triangle_slots[t]) {
-      auto& acc = scratch.slot_force[v];
-      acc[0] += static_cast<float>(fx);
-      acc[1] += static_cast<float>(fy);
-      acc[2] += static_cast<float>(fz);
+      float* acc = scratch.slot_force[v].data();
+      _mm_storeu_ps(acc, _mm_add_ps(_mm_loadu_ps(acc), f));
     }
   };
   const int end = pm.chamber_triangle_begin[chamber + 1];
@@ -1581,14 +1582,18 @@ void add_pressure_forces_lanes(const PneumaticsModel& pm, int chamber, float gau
     const Point3<DV<L>> f3 = triangle_force_third<TriangleLaneOps<L>>(
         triangle_corner<L>(pm, positions, t, 0), triangle_corner<L>(pm, positions, t, 1),
         triangle_corner<L>(pm, positions, t, 2), splat<L>(gauge));
-    for (int k = 0; k < W; ++k) add(t + k, f3.x[k], f3.y[k], f3.z[k]);
+    float fx[W], fy[W], fz[W];
+    to_floats<L>(f3.x, fx);
+    to_floats<L>(f3.y, fy);
+    to_floats<L>(f3.z, fz);
+    for (int k = 0; k < W; ++k) add(t + k, fx[k], fy[k], fz[k]);
   }
   for (; t < end; ++t) {
     const auto& tri = pm.triangle_voxels[t];
     const Point3<double> f3 = triangle_force_third<ScalarTriangleOps>(
         to_point3(positions[tri[0]]), to_point3(positions[tri[1]]), to_point3(positions[tri[2]]),
         static_cast<double>(gauge));
-    add(t, f3.x, f3.y, f3.z);
+    add(t, static_cast<float>(f3.x), static_cast<float>(f3.y), static_cast<float>(f3.z));
   }
 }
 
