@@ -82,12 +82,20 @@ inline Vec3 rotate_inv(const Quat& q, const Vec3& f) {
   return rotate(conj(q), f);
 }
 
+// Branch thresholds of §2.11, shared by the scalar functions below and their lane versions in
+// step_kernels.hpp, which must branch exactly alike:
+constexpr double kRotvecToQuatTaylorBelow =
+    5.328e-15;                                       // quat_from_rotvec: Taylor if |r/2|^4 < this
+constexpr double kQuatToRotvecTaylorBelow = 2.4e-3;  // rotvec: Taylor if 1 - w^2 < this
+constexpr double kNearPosXBelow =
+    1.732e-2;  // frame_to_pos_x: Taylor if |d_y/d_x|, |d_z/d_x| < this
+
 // §2.11: quaternion from rotation vector r (Taylor branch for half-angles below ~2.7e-4 rad).
 [[gnu::always_inline]] inline Quat quat_from_rotvec(const Vec3& r) {
   const double hx = r.x() / 2, hy = r.y() / 2, hz = r.z() / 2;  // theta = r/2
   const double t = hx * hx + hy * hy + hz * hz;                 // |theta|^2
   double w, s;
-  if (t * t < 5.328e-15) {
+  if (t * t < kRotvecToQuatTaylorBelow) {
     w = 1.0 - t / 2;
     s = 1.0 - t / 6;
   } else {
@@ -103,7 +111,7 @@ inline Vec3 rotate_inv(const Quat& q, const Vec3& f) {
 [[gnu::always_inline]] inline Vec3 rotvec(const Quat& q) {
   if (q.w >= 1.0 || q.w <= -1.0) return Vec3::Zero();
   const double t = 1.0 - q.w * q.w;
-  if (t < 2.4e-3) {
+  if (t < kQuatToRotvecTaylorBelow) {
     const double k = std::sqrt((2 - 2 * q.w) / t);
     return {q.x * 2.0 * k, q.y * 2.0 * k, q.z * 2.0 * k};
   }
@@ -133,7 +141,7 @@ constexpr double kReversedBelow = -0x1.fffffffffffd3p-1;  // cos(3.1415926535897
     return;
   }
   const double a = d.y() / d.x(), b = d.z() / d.x();
-  if (std::fabs(a) < 1.732e-2 && std::fabs(b) < 1.732e-2) {
+  if (std::fabs(a) < kNearPosXBelow && std::fabs(b) < kNearPosXBelow) {
     const double y = b / 2, z = -a / 2;
     q1 = {1.0 - 0.5 * (y * y + z * z), 0.0, y, z};
     a1 = rotvec(q1);
@@ -148,7 +156,7 @@ constexpr double kReversedBelow = -0x1.fffffffffffd3p-1;  // cos(3.1415926535897
   }
   const double c = std::sqrt((1.0 + nx) * 0.5), h = 0.5 / c;
   q1 = {c, 0.0, nz * h, -ny * h};
-  if (1.0 - c * c < 2.4e-3) {  // rotvec's Taylor branch, kept as the reference has it
+  if (1.0 - c * c < kQuatToRotvecTaylorBelow) {  // rotvec's Taylor branch, as the reference
     a1 = rotvec(q1);
     return;
   }

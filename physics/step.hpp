@@ -44,8 +44,8 @@ struct Scratch {
   // consecutive links loads them as vectors.
   std::vector<double> link_damping_neg;  // c_N [sqrt(kg)/s] (links)
   std::vector<double> link_damping_pos;  // c_P [sqrt(kg)/s] (links)
-  // previous_dt that link_damping was computed for (NaN: not yet); the division is redone only
-  // when State::previous_dt changes (in practice once, after the first step)
+  // previous_dt that link_damping_neg / _pos were computed for (NaN: not yet); the division is
+  // redone only when State::previous_dt changes (in practice once, after the first step)
   float link_damping_dt = std::numeric_limits<float>::quiet_NaN();  // [s]
   // voxel pass (pneuvox part 1 -> part 2 carry-over, §2.1 "fork-only per-voxel scratch")
   std::vector<Vec3> collision_force;             // collisionF [N] (voxels)

@@ -296,19 +296,12 @@ template <class L>
 struct QL {  // W Quat
   DV<L> w, x, y, z;
 };
-// Lane k of v / q = a scalar value (the per-lane fallbacks of rare branches).
+// Lane k of v = a scalar value (the per-lane fallback of a rare branch: floor friction).
 template <class L>
 [[gnu::always_inline]] inline void set_lane(VL<L>& v, int k, const Vec3& value) {
   v.x[k] = value.x();
   v.y[k] = value.y();
   v.z[k] = value.z();
-}
-template <class L>
-[[gnu::always_inline]] inline void set_lane(QL<L>& q, int k, const Quat& value) {
-  q.w[k] = value.w;
-  q.x[k] = value.x;
-  q.y[k] = value.y;
-  q.z[k] = value.z;
 }
 
 // Transposing loads and stores between W records and lanes. Lane traits may supply faster
@@ -543,7 +536,7 @@ inline QL<L> quat_from_rotvec_lanes(const VL<L>& r) {
   const DV<L> hx = r.x / 2.0, hy = r.y / 2.0, hz = r.z / 2.0;
   const DV<L> t = hx * hx + hy * hy + hz * hz;
   DV<L> w = 1.0 - t / 2.0, s = 1.0 - t / 6.0;
-  const MV<L> taylor = t * t < 5.328e-15;
+  const MV<L> taylor = t * t < kRotvecToQuatTaylorBelow;
   if (L::bits(taylor) != kAllLanes<L>) {
     const DV<L> mag = L::sqrt(t);
     DV<L> sin_mag, cos_mag;
@@ -581,8 +574,8 @@ inline VL<L> rotvec_lanes(const QL<L>& q) {
   const D zero = splat<L>(0.0);
   const MV<L> unit = (q.w >= 1.0) | (q.w <= -1.0);
   const D t = 1.0 - q.w * q.w;
-  const MV<L> taylor = t < 2.4e-3;
-  D k = L::sqrt((2.0 - 2.0 * q.w) / t);
+  const MV<L> taylor = t < kQuatToRotvecTaylorBelow;
+  const D k = L::sqrt((2.0 - 2.0 * q.w) / t);
   VL<L> v{q.x * 2.0 * k, q.y * 2.0 * k, q.z * 2.0 * k};
   if (L::bits(unit | taylor) != kAllLanes<L>) {
     const D a = acos_lanes<L>(q.w), rs = L::sqrt(t);
@@ -600,7 +593,7 @@ inline void frame_to_pos_x_lanes(const VL<L>& d, QL<L>& q1, VL<L>& a1) {
   using D = DV<L>;
   const D zero = splat<L>(0.0), one = splat<L>(1.0);
   const D a = d.y / d.x, b = d.z / d.x;
-  const MV<L> taylor = (abs_lanes<L>(a) < 1.732e-2) & (abs_lanes<L>(b) < 1.732e-2);
+  const MV<L> taylor = (abs_lanes<L>(a) < kNearPosXBelow) & (abs_lanes<L>(b) < kNearPosXBelow);
   const MV<L> null = (d.x == 0.0) & (d.y == 0.0) & (d.z == 0.0);
   const D y = b / 2.0, z = -a / 2.0;
   QL<L> q{1.0 - 0.5 * (y * y + z * z), zero, y, z};
@@ -611,7 +604,7 @@ inline void frame_to_pos_x_lanes(const VL<L>& d, QL<L>& q1, VL<L>& a1) {
     const D nx = d.x / len, ny = d.y / len, nz = d.z / len;
     const MV<L> reversed = nx < kReversedBelow;
     const D c = L::sqrt((1.0 + nx) * 0.5), h = 0.5 / c;
-    closed = ~(taylor | null | reversed | (1.0 - c * c < 2.4e-3));
+    closed = ~(taylor | null | reversed | (1.0 - c * c < kQuatToRotvecTaylorBelow));
     q.w = select<L>(taylor, q.w, select<L>(reversed, zero, c));
     q.y = select<L>(taylor, q.y, select<L>(reversed, one, nz * h));
     q.z = select<L>(taylor, q.z, select<L>(reversed, zero, -ny * h));
