@@ -16,6 +16,7 @@
 #include <optional>
 #include <span>
 #include <stdexcept>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -42,6 +43,8 @@ enum class Simd : std::uint8_t {
 const char* to_string(Simd simd);
 // The width named by to_string (best, sse2, avx2, avx512); nullopt for any other name.
 std::optional<Simd> parse_simd(std::string_view name);
+// Every name parse_simd accepts, in enum order (the choices of the CLIs' --simd options).
+std::vector<std::string> simd_names();
 // True if this build contains the passes for `simd` and this CPU (and OS) can run them.
 bool simd_supported(Simd simd);
 // The widest supported width.

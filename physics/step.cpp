@@ -307,10 +307,20 @@ const char* to_string(Simd simd) {
   return "unknown";
 }
 
+namespace {
+constexpr Simd kEverySimd[] = {Simd::best, Simd::sse2, Simd::avx2, Simd::avx512};
+}
+
 std::optional<Simd> parse_simd(std::string_view name) {
-  for (Simd s : {Simd::best, Simd::sse2, Simd::avx2, Simd::avx512})
+  for (Simd s : kEverySimd)
     if (name == to_string(s)) return s;
   return std::nullopt;
+}
+
+std::vector<std::string> simd_names() {
+  std::vector<std::string> names;
+  for (Simd s : kEverySimd) names.emplace_back(to_string(s));
+  return names;
 }
 
 bool simd_supported(Simd simd) {

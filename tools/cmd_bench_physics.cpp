@@ -78,7 +78,11 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
   cmd->add_option("--simd", *simd_name,
                   "SIMD width of the step passes: best (default), sse2, avx2, avx512 or all "
                   "(results are bit-identical; only the speed differs)")
-      ->check(CLI::IsMember({"best", "sse2", "avx2", "avx512", "all"}));
+      ->check(CLI::IsMember([] {
+        std::vector<std::string> names = physics::simd_names();
+        names.emplace_back("all");
+        return names;
+      }()));
   cmd->callback([&exit_code, json, steps, runs, only, simd_name] {
     std::vector<physics::Simd> widths;
     if (*simd_name == "all") {

@@ -324,7 +324,7 @@ void register_eval(CLI::App& app, int& exit_code) {
   cmd->add_option("--simd", a->simd,
                   "SIMD width of the physics: best (default), sse2, avx2 or avx512 (the fitness "
                   "is bit-identical at every width; only the speed differs)")
-      ->check(CLI::IsMember({"best", "sse2", "avx2", "avx512"}));
+      ->check(CLI::IsMember(physics::simd_names()));
   cmd->callback([&exit_code, a, dir] {
     EvalArgs args = *a;
     args.direction_set = dir->count() > 0;

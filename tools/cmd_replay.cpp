@@ -121,14 +121,15 @@ int run_replay(const ReplayArgs& args) {
     // The archive's recorded hash must belong to its config text, or we would replay another
     // experiment than the one that ran.
     const master::Archive archive(args.archive);
-    const std::string recorded = archive.info().config_hash;
+    const master::RunInfo info = archive.info();
+    const std::string& recorded = info.config_hash;
     if (recorded != hash_hex(hash)) {
       throw std::runtime_error(args.archive + ": config_hash attribute " + recorded +
                                " does not match the archived config text (hash " + hash_hex(hash) +
                                ")");
     }
     // Bits are only comparable within one physics revision (physics/revision.hpp).
-    const int revision = archive.info().physics_revision;
+    const int revision = info.physics_revision;
     if (revision != physics::kPhysicsRevision) {
       const std::string what = args.archive + ": simulated with physics revision " +
                                std::to_string(revision) + ", this build simulates revision " +
