@@ -75,42 +75,11 @@ LinkConst make_link_const(float e1, float e2, double s) {
   return k;
 }
 
-struct OffsetTable {
-  std::array<int, 11 * 11 * 11> bit{};
-  OffsetTable() {
-    int next = 0;
-    for (int di = -5; di <= 5; ++di)
-      for (int dj = -5; dj <= 5; ++dj)
-        for (int dk = -5; dk <= 5; ++dk) {
-          const int idx = ((di + 5) * 11 + (dj + 5)) * 11 + (dk + 5);
-          bit[idx] = (std::abs(di) + std::abs(dj) + std::abs(dk) <= 5) ? next++ : -1;
-        }
-  }
-};
-
-const OffsetTable& offset_table() {
-  static const OffsetTable table;  // immutable lookup table, built once (no mutable global state)
-  return table;
-}
-
 [[noreturn]] void fail(const std::string& what) {
   throw std::invalid_argument("physics::build_model: " + what);
 }
 
 }  // namespace
-
-int nearby_bit_of_offset(int di, int dj, int dk) {
-  if (di < -5 || di > 5 || dj < -5 || dj > 5 || dk < -5 || dk > 5) return -1;
-  return offset_table().bit[((di + 5) * 11 + (dj + 5)) * 11 + (dk + 5)];
-}
-
-bool is_nearby(const Model& model, int a, int b) {
-  const auto& ca = model.voxel_cell[a];
-  const auto& cb = model.voxel_cell[b];
-  const int bit = nearby_bit_of_offset(cb[0] - ca[0], cb[1] - ca[1], cb[2] - ca[2]);
-  if (bit < 0) return false;
-  return (model.nearby_mask[static_cast<std::size_t>(a) * 4 + (bit >> 6)] >> (bit & 63)) & 1u;
-}
 
 float recommended_time_step(const Model& model) {
   // §2.14: omega^2_max = max over links of a1 / min(m_N, m_P) (float); without links, max over

@@ -151,10 +151,37 @@ struct Model {
   int cell_index(int x, int y, int z) const { return (x * lattice[1] + y) * lattice[2] + z; }
 };
 
+// Lattice offset (di, dj, dk), each in -5..5, -> bit index 0..230 in Model::nearby_mask, or -1
+// if |di|+|dj|+|dk| > 5; a compile-time constant table (the pair rebuild of §2.10 looks it up
+// for every candidate pair, so it is inline here rather than behind a call).
+struct NearbyOffsetTable {
+  std::array<std::int16_t, 11 * 11 * 11> bit{};
+  constexpr NearbyOffsetTable() {
+    int next = 0;
+    for (int di = -5; di <= 5; ++di)
+      for (int dj = -5; dj <= 5; ++dj)
+        for (int dk = -5; dk <= 5; ++dk) {
+          const int hops = (di < 0 ? -di : di) + (dj < 0 ? -dj : dj) + (dk < 0 ? -dk : dk);
+          bit[((di + 5) * 11 + (dj + 5)) * 11 + (dk + 5)] =
+              static_cast<std::int16_t>(hops <= 5 ? next++ : -1);
+        }
+  }
+};
+inline constexpr NearbyOffsetTable kNearbyOffsetTable{};
+
 // Lattice offset -> bit index 0..230 in Model::nearby_mask, or -1 if |di|+|dj|+|dk| > 5.
-int nearby_bit_of_offset(int di, int dj, int dk);
+inline int nearby_bit_of_offset(int di, int dj, int dk) {
+  if (di < -5 || di > 5 || dj < -5 || dj > 5 || dk < -5 || dk > 5) return -1;
+  return kNearbyOffsetTable.bit[((di + 5) * 11 + (dj + 5)) * 11 + (dk + 5)];
+}
 // True if surface voxel b is in the "nearby" list of voxel a (within 5 link hops).
-bool is_nearby(const Model& model, int a, int b);
+inline bool is_nearby(const Model& model, int a, int b) {
+  const auto& ca = model.voxel_cell[a];
+  const auto& cb = model.voxel_cell[b];
+  const int bit = nearby_bit_of_offset(cb[0] - ca[0], cb[1] - ca[1], cb[2] - ca[2]);
+  if (bit < 0) return false;
+  return (model.nearby_mask[static_cast<std::size_t>(a) * 4 + (bit >> 6)] >> (bit & 63)) & 1u;
+}
 
 struct BuildOptions {
   // Lattice cells (x, y, z) whose voxel is fixed in place (all 6 DOFs; validation scenes).

@@ -55,10 +55,21 @@ struct Scratch {
   std::vector<std::array<float, 3>> ext_moment;  // §2.12 correction moment [N m] (voxels)
   // self-collision: per-pair force (float, §2.10) and the broadphase grid
   std::vector<std::array<float, 3>> pair_force;  // [N] (pairs; sized to pair capacity)
-  std::vector<int> grid_head;   // spatial hash bucket -> first surface voxel, -1 = empty
-  std::vector<int> grid_next;   // surface voxel slot -> next in bucket
-  std::vector<int> grid_cell;   // surface voxel slot -> bucket
-  std::vector<int> candidates;  // partner buffer of one voxel during a rebuild
+  // Broadphase grid of a rebuild: the surface voxels with their grid cell and a copy of their
+  // position, in slot order (grid_entries) and sorted by hash bucket of the cell (grid_sorted,
+  // counting sort; within a bucket by cell, then ascending slot), so that the surface voxels of
+  // one cell are one contiguous run.
+  struct GridEntry {
+    double x, y, z;  // position [m]
+    int slot;        // index into Model::surface_voxels
+    int cx, cy, cz;  // grid cell
+  };
+  std::vector<GridEntry> grid_entries;  // (surface voxels)
+  std::vector<GridEntry> grid_sorted;   // (surface voxels)
+  std::vector<int>
+      grid_bucket_begin;         // bucket b = grid_sorted [begin[b], begin[b + 1]) (buckets + 1)
+  std::vector<int> grid_bucket;  // surface voxel slot -> bucket
+  std::vector<int> candidates;   // grid_sorted indices within the radius (surface voxels)
 };
 
 Scratch make_scratch(const Model& model);

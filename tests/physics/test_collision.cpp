@@ -114,7 +114,9 @@ INSTANTIATE_TEST_SUITE_P(Integrators, SelfCollision, ::testing::Values("pneuvox"
                          [](const auto& info) { return info.param; });
 
 // The grid broadphase gives the same pairs in the same order as the O(N^2) scan, on a randomly
-// deformed body (a 6x5x4 block with two holes, positions jittered by up to 0.8 s).
+// deformed body (a 6x5x4 block with two holes, positions jittered by up to 0.8 s), and with the
+// voxels scattered at random over a 15 s cube: about one voxel per grid cell, so that several
+// cells share a hash bucket of the grid and the pairs cross between many cells.
 TEST(SelfCollisionPairs, GridMatchesBruteForce) {
   BodyPlan plan = solid_block(6, 5, 4, 5.0e4);
   plan.cells[plan.cell_index(2, 2, 1)] = kEmptyCell;
@@ -122,25 +124,34 @@ TEST(SelfCollisionPairs, GridMatchesBruteForce) {
   PhysicsConfig cfg;
   const Model m = build_model(plan, cfg);
   Rng rng(7);
-  int total = 0;
-  for (int trial = 0; trial < 5; ++trial) {
-    State st = initial_state(m);
-    Scratch sc = make_scratch(m);
-    for (auto& p : st.pos)
-      p += Vec3(rng.uniform(-0.8, 0.8), rng.uniform(-0.8, 0.8), rng.uniform(-0.8, 0.8)) *
-           m.voxel_size;
-    const std::vector<Vec3> before = st.pos;
-    step(m, st, sc);  // rebuilds (stale at start) from `before`, then moves the voxels
-    const auto expected = brute_force_pairs(m, before);
-    ASSERT_EQ(st.col_pair_count, static_cast<int>(expected.size()));
-    for (int k = 0; k < st.col_pair_count; ++k) {
-      EXPECT_EQ(st.col_pairs[k].a, expected[k].first) << "pair " << k;
-      EXPECT_EQ(st.col_pairs[k].b, expected[k].second) << "pair " << k;
+  for (const bool scattered : {false, true}) {
+    int total = 0;
+    for (int trial = 0; trial < 5; ++trial) {
+      State st = initial_state(m);
+      Scratch sc = make_scratch(m);
+      for (auto& p : st.pos) {
+        if (scattered) {
+          p = Vec3(rng.uniform(0.0, 15.0), rng.uniform(0.0, 15.0), rng.uniform(0.0, 15.0)) *
+              m.voxel_size;
+        } else {
+          p += Vec3(rng.uniform(-0.8, 0.8), rng.uniform(-0.8, 0.8), rng.uniform(-0.8, 0.8)) *
+               m.voxel_size;
+        }
+      }
+      const std::vector<Vec3> before = st.pos;
+      step(m, st, sc);  // rebuilds (stale at start) from `before`, then moves the voxels
+      const auto expected = brute_force_pairs(m, before);
+      ASSERT_EQ(st.col_pair_count, static_cast<int>(expected.size()));
+      for (int k = 0; k < st.col_pair_count; ++k) {
+        EXPECT_EQ(st.col_pairs[k].a, expected[k].first) << "pair " << k;
+        EXPECT_EQ(st.col_pairs[k].b, expected[k].second) << "pair " << k;
+      }
+      total += st.col_pair_count;
     }
-    total += st.col_pair_count;
+    std::printf("grid broadphase (%s): %d pairs over 5 trials identical to the O(N^2) scan\n",
+                scattered ? "scattered" : "jittered", total);
+    EXPECT_GT(total, 0);
   }
-  std::printf("grid broadphase: %d pairs over 5 trials identical to the O(N^2) scan\n", total);
-  EXPECT_GT(total, 0);
 }
 
 // Staleness (§2.10): no rebuild while every surface voxel stays within 0.5 s of its position at
