@@ -147,6 +147,7 @@ Model build_model(const BodyPlan& plan, const PhysicsConfig& cfg, const BuildOpt
   // §1: the voxel size passes through a float (0.01 -> 0.009999999776482582).
   m.voxel_size = static_cast<double>(static_cast<float>(plan.voxel_size));
   m.rest_length = 0.5 * (m.voxel_size + m.voxel_size);
+  m.inv_rest_length = 1.0 / m.rest_length;
   m.floor = cfg.floor;
   m.self_collision = cfg.self_collision;
   const double s = m.voxel_size;

@@ -43,6 +43,7 @@
 #include <span>
 #include <utility>
 
+#include "physics/link_mode.hpp"
 #include "physics/model.hpp"
 #include "physics/pneumatics.hpp"
 #include "physics/pneumatics_triangle.hpp"
@@ -98,10 +99,6 @@ inline Vec3 from_x(const Vec3& v) {
   return r;
 }
 
-// §2.3 small-angle hysteresis thresholds (float, as the reference's static float constants).
-constexpr float kSmallBend = 0.05f;        // turn below this -> small angle
-constexpr float kSmallExt = 0.5f;          // extension below this -> small angle
-constexpr float kHysteresis = 1.2f;        // leave small angle above 1.2x the thresholds
 constexpr float kStrainDiverged = 100.0f;  // §2.12 item 1
 
 // Result of the link kinematics (§2.3): the new link state and the frame quaternions. Kept in
@@ -659,15 +656,22 @@ template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
   QL<L> q2;
   mul_c(r.w, r.x, r.y, r.z, qp.w, qp.x, qp.y, qp.z, q2.w, q2.x, q2.y, q2.z);
   const D l = splat<L>(m.rest_length);
-  const D turn = L::round_to_float((abs_lanes<L>(d.z) + abs_lanes<L>(d.y)) / d.x);
-  const D ext = L::round_to_float(abs_lanes<L>(1.0 - d.x / l));
+  // §2.3 mode test (see orient_link), from products where they decide it (link_mode.hpp)
+  const auto mode =
+      link_mode::test_without_division<kLarge, LaneMathOps<L>>(d.x, d.y, d.z, m.inv_rest_length);
   int done;  // lanes that stay in their mode
-  if constexpr (kLarge) {
-    done = ~L::bits((turn < splat<L>(kSmallBend)) & (ext < splat<L>(kSmallExt))) & kAllLanes<L>;
+  if (L::bits(reinterpret_cast<M>(mode.decided)) == kAllLanes<L>) [[likely]] {
+    done = ~L::bits(reinterpret_cast<M>(mode.switches)) & kAllLanes<L>;
   } else {
-    done = ~L::bits((turn > splat<L>(kHysteresis * kSmallBend)) |
-                    (ext > splat<L>(kHysteresis * kSmallExt))) &
-           kAllLanes<L>;
+    const D turn = L::round_to_float((abs_lanes<L>(d.z) + abs_lanes<L>(d.y)) / d.x);
+    const D ext = L::round_to_float(abs_lanes<L>(1.0 - d.x / l));
+    if constexpr (kLarge) {
+      done = ~L::bits((turn < splat<L>(kSmallBend)) & (ext < splat<L>(kSmallExt))) & kAllLanes<L>;
+    } else {
+      done = ~L::bits((turn > splat<L>(kHysteresis * kSmallBend)) |
+                      (ext > splat<L>(kHysteresis * kSmallExt))) &
+             kAllLanes<L>;
+    }
   }
   if (!done) return 0;
 
