@@ -19,6 +19,16 @@ struct LanesAvx2 {
   static D sqrt(D x) { return _mm256_sqrt_pd(x); }
   static int bits(M m) { return _mm256_movemask_pd(reinterpret_cast<__m256d>(m)); }
   static void to_floats(D x, float* out) { _mm_storeu_ps(out, _mm256_cvtpd_ps(x)); }
+  // Lane k of (x, y, z) as the floats (x_k, y_k, z_k, 0), k = 0..3 (round to nearest).
+  static void float_rows(D x, D y, D z, __m128 (&rows)[4]) {
+    __m128 r0 = _mm256_cvtpd_ps(x), r1 = _mm256_cvtpd_ps(y), r2 = _mm256_cvtpd_ps(z);
+    __m128 r3 = _mm_setzero_ps();
+    _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
+    rows[0] = r0;
+    rows[1] = r1;
+    rows[2] = r2;
+    rows[3] = r3;
+  }
   static D load_floats(const float* p) { return _mm256_cvtps_pd(_mm_loadu_ps(p)); }
   // Transposing record loads / stores (see step_kernels.hpp). A Vec3 record is read and written
   // with a 3-lane mask, so nothing beyond it is touched.

@@ -130,8 +130,8 @@ struct Model {
   std::array<std::vector<float>, 12> link_const_members;
   std::array<int, 4> axis_link_begin{0, 0, 0, 0};  // links of axis a: ids [begin[a], begin[a+1])
   double rest_length = 0.0;  // L = s for every link [m] (double, as Voxelyze's baseSize)
-  double inv_rest_length =
-      0.0;  // 1 / L [1/m] (only for the division-free mode test, link_mode.hpp)
+  // 1 / L [1/m], for the division-free mode test of the link passes (link_mode.hpp)
+  double inv_rest_length = 0.0;
 
   // ---- voxel -> links, six direction slots X+, X-, Y+, Y-, Z+, Z- (§2.1) ----------------------
   // Slot d of voxel v = 2 * link + end (0: v is the negative end N, 1: v is the positive end P),

@@ -80,6 +80,13 @@ struct LanesSse2 {
     std::memcpy(&two_floats, p, sizeof two_floats);
     return _mm_cvtps_pd(_mm_castpd_ps(_mm_set_sd(two_floats)));
   }
+  // Lane k of (x, y, z) as the floats (x_k, y_k, z_k, 0), k = 0..1 (round to nearest).
+  static void float_rows(D x, D y, D z, __m128 (&rows)[2]) {
+    const __m128 xy = _mm_unpacklo_ps(_mm_cvtpd_ps(x), _mm_cvtpd_ps(y));   // x0 y0 x1 y1
+    const __m128 z0 = _mm_unpacklo_ps(_mm_cvtpd_ps(z), _mm_setzero_ps());  // z0 0 z1 0
+    rows[0] = _mm_movelh_ps(xy, z0);
+    rows[1] = _mm_movehl_ps(z0, xy);
+  }
   // Transposing record loads / stores (see step_kernels.hpp).
   static void gather3(const double* const* p, D& x, D& y, D& z) {
     const __m128d r0 = _mm_loadu_pd(p[0]), r1 = _mm_loadu_pd(p[1]);

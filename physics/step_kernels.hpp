@@ -358,6 +358,17 @@ template <class L>
   }
 }
 
+// Lane k of (x, y, z) as the floats (x_k, y_k, z_k, 0) (round to nearest).
+template <class L>
+[[gnu::always_inline]] inline void float_rows(DV<L> x, DV<L> y, DV<L> z, __m128 (&rows)[L::W]) {
+  if constexpr (requires { L::float_rows(x, y, z, rows); }) {
+    L::float_rows(x, y, z, rows);
+  } else {
+    for (int k = 0; k < L::W; ++k)
+      rows[k] = _mm_setr_ps(static_cast<float>(x[k]), static_cast<float>(y[k]),
+                            static_cast<float>(z[k]), 0.0f);
+  }
+}
 // Lane k of x as a float (round to nearest).
 template <class L>
 [[gnu::always_inline]] inline void to_floats(DV<L> x, float* out) {
@@ -1566,8 +1577,7 @@ void add_pressure_forces_lanes(const PneumaticsModel& pm, int chamber, float gau
   constexpr int W = L::W;
   // acc += float(f) for the triangle's three wall slots, in triangle order: the float sums of the
   // reference, x y z (and 0 + 0) in one 4-float add per slot.
-  auto add = [&](int t, float fx, float fy, float fz) {
-    const __m128 f = _mm_setr_ps(fx, fy, fz, 0.0f);
+  auto add = [&](int t, __m128 f) {
     for (int v : pm.triangle_slots[t]) {
       float* acc = scratch.slot_force[v].data();
       _mm_storeu_ps(acc, _mm_add_ps(_mm_loadu_ps(acc), f));
@@ -1579,18 +1589,17 @@ void add_pressure_forces_lanes(const PneumaticsModel& pm, int chamber, float gau
     const Point3<DV<L>> f3 = triangle_force_third<TriangleLaneOps<L>>(
         triangle_corner<L>(pm, positions, t, 0), triangle_corner<L>(pm, positions, t, 1),
         triangle_corner<L>(pm, positions, t, 2), splat<L>(gauge));
-    float fx[W], fy[W], fz[W];
-    to_floats<L>(f3.x, fx);
-    to_floats<L>(f3.y, fy);
-    to_floats<L>(f3.z, fz);
-    for (int k = 0; k < W; ++k) add(t + k, fx[k], fy[k], fz[k]);
+    __m128 rows[W];  // (fx, fy, fz, 0) of each triangle
+    float_rows<L>(f3.x, f3.y, f3.z, rows);
+    for (int k = 0; k < W; ++k) add(t + k, rows[k]);
   }
   for (; t < end; ++t) {
     const auto& tri = pm.triangle_voxels[t];
     const Point3<double> f3 = triangle_force_third<ScalarTriangleOps>(
         to_point3(positions[tri[0]]), to_point3(positions[tri[1]]), to_point3(positions[tri[2]]),
         static_cast<double>(gauge));
-    add(t, static_cast<float>(f3.x), static_cast<float>(f3.y), static_cast<float>(f3.z));
+    add(t, _mm_setr_ps(static_cast<float>(f3.x), static_cast<float>(f3.y), static_cast<float>(f3.z),
+                       0.0f));
   }
 }
 
