@@ -1084,6 +1084,15 @@ inline void fork_part1_voxel(const Model& m, State& st, Scratch& sc, std::span<c
   lb = cross(pos - cog, mom) + am;
 }
 
+// External forces of the W consecutive voxels first .. first + W - 1, each component rounded to
+// float (the reference's External stores float), as lanes.
+template <class L>
+[[gnu::always_inline]] inline VL<L> load_external_force(std::span<const Vec3> ext, int first) {
+  DV<L> c[3];
+  load_records<L>(ext[first].data(), c);
+  return {L::round_to_float(c[0]), L::round_to_float(c[1]), L::round_to_float(c[2])};
+}
+
 // The state and constants of W voxels as lanes. Voxel groups are W consecutive voxel ids v[k] =
 // v[0] + k (free_group), so their records are loaded and stored as runs.
 template <class L>
@@ -1150,12 +1159,7 @@ inline void fork_part1_group(const Model& m, State& st, Scratch& sc, std::span<c
   const D zero = splat<L>(0.0);
   VL<L> ext_f{zero, zero, zero};
   if (!ext.empty()) {  // the reference's External stores float
-    ext_f = {make_lanes<L>(
-                 [&](int k) { return static_cast<double>(static_cast<float>(ext[v[k]].x())); }),
-             make_lanes<L>(
-                 [&](int k) { return static_cast<double>(static_cast<float>(ext[v[k]].y())); }),
-             make_lanes<L>(
-                 [&](int k) { return static_cast<double>(static_cast<float>(ext[v[k]].z())); })};
+    ext_f = load_external_force<L>(ext, v[0]);
   }
   const VL<L> grav_f{zero, zero, c.gravity_force};
   const VL<L> col_f = load_run<L>(sc.collision_force, v[0]);
@@ -1434,12 +1438,8 @@ inline void symplectic_group(const Model& m, State& st, Scratch& sc, std::span<c
   VL<L> f;
   rotate_c(q.w, q.x, q.y, q.z, lsum.x, lsum.y, lsum.z, f.x, f.y, f.z);
   if (!ext.empty()) {  // the reference's External stores float
-    f.x = f.x + make_lanes<L>(
-                    [&](int k) { return static_cast<double>(static_cast<float>(ext[v[k]].x())); });
-    f.y = f.y + make_lanes<L>(
-                    [&](int k) { return static_cast<double>(static_cast<float>(ext[v[k]].y())); });
-    f.z = f.z + make_lanes<L>(
-                    [&](int k) { return static_cast<double>(static_cast<float>(ext[v[k]].z())); });
+    const VL<L> ext_f = load_external_force<L>(ext, v[0]);
+    f = {f.x + ext_f.x, f.y + ext_f.y, f.z + ext_f.z};
   }
   const D c_glob = c.c_glob;
   f = {f.x - vel.x * c_glob, f.y - vel.y * c_glob, f.z - vel.z * c_glob};
