@@ -440,14 +440,19 @@ StepStatus step(const Model& model, State& state, Scratch& scratch,
                                 std::to_string(external_force.size()) + " entries, model has " +
                                 std::to_string(model.voxel_count) + " voxels");
   const StepKernels& kernels = step_kernels(model.simd);
-  // 1. link pass; strain > 100 -> nothing else advances
-  if (kernels.link_pass_forces(model, state, scratch)) {
+  // 1. link pass; strain > 100 -> nothing else advances. The pneuvox step's mid-step link pass
+  //    (§2.12 step 6) overwrites pos2, the angles and the strain before anything reads them, so
+  //    its first pass leaves them out, and stores them only for a refused step.
+  const bool pneuvox = model.integrator == Integrator::pneuvox;
+  if (pneuvox ? kernels.link_pass_forces_only(model, state, scratch)
+              : kernels.link_pass_forces(model, state, scratch)) {
+    if (pneuvox) kernels.link_pass_restore_state(model, state, scratch);
     ++state.counters.diverged_steps;
     return StepStatus::diverged;
   }
   // 2. collisions
   if (model.self_collision) update_collisions(model, state, scratch);
-  const bool finite = model.integrator == Integrator::pneuvox
+  const bool finite = pneuvox
                           ? kernels.fork_voxel_passes(model, state, scratch, external_force)
                           : kernels.symplectic_voxel_pass(model, state, scratch, external_force);
   state.time += model.dt_f;  // 9.

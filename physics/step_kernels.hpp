@@ -101,6 +101,32 @@ inline Vec3 from_x(const Vec3& v) {
 
 constexpr float kStrainDiverged = 100.0f;  // §2.12 item 1
 
+// What a link pass computes and stores (the link kernels' template argument).
+enum class LinkPass {
+  // end loads and the new link state (pos2, angles, strain, mode, local-velocity validity): the
+  // reference's link pass, as the symplectic integrator runs it
+  forces_and_state,
+  // end loads, mode and validity only: the pneuvox step's first pass, whose pos2, angles and
+  // strain its mid-step pass (§2.12 step 6) overwrites before anything reads them
+  forces,
+  // the link state without loads: the pneuvox mid-step pass (§2.9 item 6)
+  state,
+  // pos2, angles and strain only, after a pneuvox step refused by its `forces` pass (§2.12 item
+  // 1): the state that pass left out. Mode and validity are as that pass left them; every link
+  // stays in the mode that pass gave it (it decided on the same positions), so each link's values
+  // are those of the reference's pass.
+  restore_state,
+};
+constexpr bool computes_forces(LinkPass k) {
+  return k == LinkPass::forces_and_state || k == LinkPass::forces;
+}
+constexpr bool stores_link_state(LinkPass k) {
+  return k != LinkPass::forces;
+}
+constexpr bool marks_velocity_valid(LinkPass k) {
+  return k != LinkPass::restore_state;
+}
+
 // Result of the link kinematics (§2.3): the new link state and the frame quaternions. Kept in
 // locals (not written through State references) so the force code reads registers.
 struct LinkKinematics {
@@ -636,7 +662,7 @@ inline void frame_to_pos_x_lanes(const VL<L>& d, QL<L>& q1, VL<L>& a1) {
 // (kLarge false) or large-angle mode (kLarge true), the caller's choice. With kContig the ids are
 // consecutive (ids[k] = ids[0] + k), so the per-link flags and strains are read and written as
 // runs. Each lane whose link stays in that mode (§2.3 hysteresis) is updated like link_scalar
-// (or link_scalar_state_only if !kForces), its strain > 100 ORed into `diverged`; returns those
+// (or link_scalar_state_only without forces), its strain > 100 ORed into `diverged`; returns those
 // lanes (bit k = lane k). Lanes that switch mode are left unchanged for the caller's link_scalar.
 // A link may fill several lanes (padding of a partial group): all loads precede all stores, so
 // its lanes compute and store the same values.
@@ -644,7 +670,7 @@ inline void frame_to_pos_x_lanes(const VL<L>& d, QL<L>& q1, VL<L>& a1) {
 // angle1v = (+0, +0, +0) stored (every small-angle update stores rotvec(identity) = 0, and so
 // does initial_state), so the old angle1v is the constant zero and the new one need not be
 // stored again. The mode flag of a lane that stays in its mode need not be stored either.
-template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
+template <class L, Axis A, LinkPass K, bool kLarge, bool kContig>
 [[gnu::always_inline]] inline int link_group(const Model& m, State& st, Scratch& sc, const int* ids,
                                              bool& diverged) {
   constexpr int W = L::W;
@@ -703,7 +729,7 @@ template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
   const D strain = L::round_to_float(pos2.x / l);
 
   int valid = 0;  // lanes whose local velocity was valid (the forces pass reads it)
-  if constexpr (kForces) {
+  if constexpr (computes_forces(K)) {
     if (L::bits(strain > splat<L>(kStrainDiverged)) & done) diverged = true;
     const LinkConstL<L> c = gather_link_const<L, kContig>(m, ids);
     // §2.4 (see link_scalar)
@@ -815,37 +841,42 @@ template <class L, Axis A, bool kForces, bool kLarge, bool kContig>
       scatter3<L>(out[3], mp_g.x, mp_g.y, mp_g.z, done);
     }
   }
-  // float(strain) per lane (exact: strain is a float value)
+  // float(strain) per lane (exact: strain is a float value); the local velocity becomes valid
+  // (already is, after a step)
   if (kContig && done == kAllLanes<L>) {
-    to_floats<L>(strain, &st.link_strain[ids[0]]);
-    if (valid != kAllLanes<L>)  // the local velocity becomes valid (already is, after a step)
+    if constexpr (stores_link_state(K)) to_floats<L>(strain, &st.link_strain[ids[0]]);
+    if (marks_velocity_valid(K) && valid != kAllLanes<L>)
       std::memset(&st.link_vel_valid[ids[0]], 1, W);
   } else {
-    float strain_f[W];
-    to_floats<L>(strain, strain_f);
-    for (int k = 0; k < W; ++k) {
-      if (!(done >> k & 1)) continue;
-      st.link_strain[ids[k]] = strain_f[k];
+    if constexpr (stores_link_state(K)) {
+      float strain_f[W];
+      to_floats<L>(strain, strain_f);
+      for (int k = 0; k < W; ++k) {
+        if (!(done >> k & 1)) continue;
+        st.link_strain[ids[k]] = strain_f[k];
+      }
     }
-    if ((valid & done) != done) {
+    if (marks_velocity_valid(K) && (valid & done) != done) {
       for (int k = 0; k < W; ++k)
         if (done >> k & 1) st.link_vel_valid[ids[k]] = 1;
     }
   }
-  scatter<L, kContig>(pos2, st.link_pos2, ids, done);
-  if constexpr (kLarge) scatter<L, kContig>(a1, st.link_angle1v, ids, done);  // else stays 0
-  scatter<L, kContig>(a2, st.link_angle2v, ids, done);
+  if constexpr (stores_link_state(K)) {
+    scatter<L, kContig>(pos2, st.link_pos2, ids, done);
+    if constexpr (kLarge) scatter<L, kContig>(a1, st.link_angle1v, ids, done);  // else stays 0
+    scatter<L, kContig>(a2, st.link_angle2v, ids, done);
+  }
   return done;
 }
 
 // The lanes of a group that link_group left undone (they switched mode) through link_scalar (or
-// link_scalar_state_only if !kForces). Out of line: rare.
-template <Axis A, bool kForces>
+// link_scalar_state_only without forces). Out of line: rare.
+template <Axis A, LinkPass K>
 [[gnu::noinline]] void links_switching_mode(const Model& m, State& st, Scratch& sc,
                                             const int* group, int count, int done, bool& diverged) {
   for (int k = 0; k < count; ++k) {
     if (done >> k & 1) continue;
-    if constexpr (kForces) {
+    if constexpr (computes_forces(K)) {
       if (link_scalar<A>(m, st, sc, group[k])) diverged = true;
     } else {
       link_scalar_state_only<A>(m, st, group[k]);
@@ -854,19 +885,18 @@ template <Axis A, bool kForces>
 }
 
 // One group of links through link_group: `count` links group[0..count), padded to W lanes.
-template <class L, Axis A, bool kForces, bool kLarge>
+template <class L, Axis A, LinkPass K, bool kLarge>
 [[gnu::noinline]] void run_link_group(const Model& m, State& st, Scratch& sc, const int* group,
                                       int count, bool& diverged) {
-  const int done = link_group<L, A, kForces, kLarge, false>(m, st, sc, group, diverged);
-  if (done != kAllLanes<L>)
-    links_switching_mode<A, kForces>(m, st, sc, group, count, done, diverged);
+  const int done = link_group<L, A, K, kLarge, false>(m, st, sc, group, diverged);
+  if (done != kAllLanes<L>) links_switching_mode<A, K>(m, st, sc, group, count, done, diverged);
 }
 
 // Full groups of consecutive links from link j on, as long as all W links of the next group are
 // in small-angle mode (!kLarge) or all in large-angle mode (kLarge); returns the first link not
 // handled. One call runs a whole stretch of groups (the usual case: a solid body is one stretch
 // per axis), so the call and its register saves are paid once per stretch.
-template <class L, Axis A, bool kForces, bool kLarge>
+template <class L, Axis A, LinkPass K, bool kLarge>
 [[gnu::noinline]] int run_link_stretch(const Model& m, State& st, Scratch& sc, int j, int end,
                                        bool& diverged) {
   constexpr int W = L::W;
@@ -874,18 +904,18 @@ template <class L, Axis A, bool kForces, bool kLarge>
   for (; j + W <= end && nonzero_flags<L>(&st.link_small_angle[j]) == kMode; j += W) {
     int group[W];
     for (int k = 0; k < W; ++k) group[k] = j + k;
-    const int done = link_group<L, A, kForces, kLarge, true>(m, st, sc, group, diverged);
-    if (done != kAllLanes<L>) links_switching_mode<A, kForces>(m, st, sc, group, W, done, diverged);
+    const int done = link_group<L, A, K, kLarge, true>(m, st, sc, group, diverged);
+    if (done != kAllLanes<L>) links_switching_mode<A, K>(m, st, sc, group, W, done, diverged);
   }
   return j;
 }
 
 // A collected group of `count` links (1..W): padded with its last link, run, emptied.
-template <class L, Axis A, bool kForces, bool kLarge>
+template <class L, Axis A, LinkPass K, bool kLarge>
 inline void flush_link_group(const Model& m, State& st, Scratch& sc, int* group, int& count,
                              bool& diverged) {
   for (int k = count; k < L::W; ++k) group[k] = group[count - 1];
-  run_link_group<L, A, kForces, kLarge>(m, st, sc, group, count, diverged);
+  run_link_group<L, A, K, kLarge>(m, st, sc, group, count, diverged);
   count = 0;
 }
 
@@ -895,9 +925,10 @@ inline void flush_link_group(const Model& m, State& st, Scratch& sc, int* group,
 // contiguous per axis, see Model) that share a mode, the usual case, form a group as they are;
 // the others are collected per mode.
 // Links are independent within a pass, so this order gives the same results as list order.
-// With kForces the end loads are computed and the return value is true if any strain > 100;
+// With forces (computes_forces(K)) the end loads are computed and the return value is true if any
+// strain > 100;
 // without, the state-only mid-step pass of the fork (§2.9 item 6).
-template <class L, Axis A, bool kForces>
+template <class L, Axis A, LinkPass K>
 bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
   constexpr int W = L::W;
   bool diverged = false;
@@ -909,37 +940,37 @@ bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
     if (st.link_small_angle[i]) {
       small[small_count++] = i;
       if (small_count == W)
-        flush_link_group<L, A, kForces, false>(m, st, sc, small, small_count, diverged);
+        flush_link_group<L, A, K, false>(m, st, sc, small, small_count, diverged);
     } else {
       large[large_count++] = i;
       if (large_count == W)
-        flush_link_group<L, A, kForces, true>(m, st, sc, large, large_count, diverged);
+        flush_link_group<L, A, K, true>(m, st, sc, large, large_count, diverged);
     }
   };
   int j = begin;
   while (j + W <= end) {
     const int small_lanes = nonzero_flags<L>(&st.link_small_angle[j]);
     if (small_lanes == kAllLanes<L>) {
-      j = run_link_stretch<L, A, kForces, false>(m, st, sc, j, end, diverged);
+      j = run_link_stretch<L, A, K, false>(m, st, sc, j, end, diverged);
     } else if (small_lanes == 0) {
-      j = run_link_stretch<L, A, kForces, true>(m, st, sc, j, end, diverged);
+      j = run_link_stretch<L, A, K, true>(m, st, sc, j, end, diverged);
     } else {
       for (int k = 0; k < W; ++k) collect(j + k);
       j += W;
     }
   }
   for (; j < end; ++j) collect(j);
-  if (small_count > 0)
-    flush_link_group<L, A, kForces, false>(m, st, sc, small, small_count, diverged);
-  if (large_count > 0)
-    flush_link_group<L, A, kForces, true>(m, st, sc, large, large_count, diverged);
+  if (small_count > 0) flush_link_group<L, A, K, false>(m, st, sc, small, small_count, diverged);
+  if (large_count > 0) flush_link_group<L, A, K, true>(m, st, sc, large, large_count, diverged);
   return diverged;
 }
 
-// Full link pass (§2.3-2.6) over all links. Returns true if any strain > 100. (The passes are
-// kept out of line, once per step, so that profiles attribute their cost.)
-template <class L>
+// Full link pass (§2.3-2.6) over all links with forces (K = forces_and_state or forces). Returns
+// true if any strain > 100. (The passes are kept out of line, once per step, so that profiles
+// attribute their cost.)
+template <class L, LinkPass K>
 [[gnu::noinline]] bool link_pass_forces(const Model& m, State& st, Scratch& sc) {
+  static_assert(computes_forces(K));
   // c_V = 2 sqrt(m_V) zeta_int / previousDt_V (float, §2.5); only read by links with a valid
   // local velocity, i.e. after a step has set previous_dt
   const float prev_dt = st.previous_dt;
@@ -950,18 +981,20 @@ template <class L>
     }
     sc.link_damping_dt = prev_dt;
   }
-  const bool dx = link_pass_axis<L, Axis::x, true>(m, st, sc);
-  const bool dy = link_pass_axis<L, Axis::y, true>(m, st, sc);
-  const bool dz = link_pass_axis<L, Axis::z, true>(m, st, sc);
+  const bool dx = link_pass_axis<L, Axis::x, K>(m, st, sc);
+  const bool dy = link_pass_axis<L, Axis::y, K>(m, st, sc);
+  const bool dz = link_pass_axis<L, Axis::z, K>(m, st, sc);
   return dx || dy || dz;
 }
 
-// Mid-step link pass of the fork (§2.9 item 6), state only.
-template <class L>
-[[gnu::noinline]] void link_pass_state_only(const Model& m, State& st, Scratch& sc) {
-  link_pass_axis<L, Axis::x, false>(m, st, sc);
-  link_pass_axis<L, Axis::y, false>(m, st, sc);
-  link_pass_axis<L, Axis::z, false>(m, st, sc);
+// Link pass without forces (K = state: the mid-step pass of the fork, §2.9 item 6; K =
+// restore_state: the link state a refused pneuvox step's `forces` pass left out).
+template <class L, LinkPass K>
+[[gnu::noinline]] void link_pass_state(const Model& m, State& st, Scratch& sc) {
+  static_assert(!computes_forces(K));
+  link_pass_axis<L, Axis::x, K>(m, st, sc);
+  link_pass_axis<L, Axis::y, K>(m, st, sc);
+  link_pass_axis<L, Axis::z, K>(m, st, sc);
 }
 
 // Sum of the link forces and moments acting on voxel v (local frame), direction order 0..5.
@@ -1337,7 +1370,7 @@ template <class L>
     if (!m.voxel_fixed[v]) part1(v);
 
   // 6. mid-step link update (state only)
-  link_pass_state_only<L>(m, st, sc);
+  link_pass_state<L, LinkPass::state>(m, st, sc);
 
   // 7. correction moment -dL / dt / N_all (float), same for every non-fixed voxel
   const Vec3 dl = lb - la;
@@ -1608,7 +1641,9 @@ template <class L>
 constexpr StepKernels make_step_kernels(Simd simd) {
   return StepKernels{simd,
                      L::W,
-                     &link_pass_forces<L>,
+                     &link_pass_forces<L, LinkPass::forces_and_state>,
+                     &link_pass_forces<L, LinkPass::forces>,
+                     &link_pass_state<L, LinkPass::restore_state>,
                      &fork_voxel_passes<L>,
                      &symplectic_voxel_pass<L>,
                      &chamber_volume_lanes<L>,

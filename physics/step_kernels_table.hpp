@@ -15,8 +15,12 @@ namespace softevo::physics {
 struct StepKernels {
   Simd simd;
   int lanes;  // links / voxels per SIMD group
-  // §2.3-2.6 link pass with forces; true if some strain > 100
+  // §2.3-2.6 link pass with forces and the new link state; true if some strain > 100
   bool (*link_pass_forces)(const Model&, State&, Scratch&);
+  // the same without storing pos2, angles and strain (pneuvox: its mid-step pass stores them)
+  bool (*link_pass_forces_only)(const Model&, State&, Scratch&);
+  // after link_pass_forces_only reported a strain > 100: stores what it left out
+  void (*link_pass_restore_state)(const Model&, State&, Scratch&);
   // §2.12 steps 3-9 (pneuvox); false if the state became non-finite
   bool (*fork_voxel_passes)(const Model&, State&, Scratch&, std::span<const Vec3>);
   // §2.9 (symplectic); false if the state became non-finite

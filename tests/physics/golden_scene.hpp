@@ -25,8 +25,10 @@ enum class Motion { gentle, tumbling };
 // random initial momenta (Rng seed 2024) and a time-varying external force on four voxels:
 // exercises links in both angle modes, damping, floor contact, friction and self-collision.
 // `simd` picks the width of the step passes (results must not depend on it).
+// `diverge` adds a last step that diverges (one voxel moved 2 m away, a strain of about 200): the
+// state after a refused step keeps the link state of its link pass (§2.12 item 1).
 inline std::uint64_t run_scene(const std::string& integrator, Simd simd = Simd::best,
-                               Motion motion = Motion::gentle) {
+                               Motion motion = Motion::gentle, bool diverge = false) {
   const double spin = motion == Motion::tumbling ? 1000.0 : 1.0;
   const double push = motion == Motion::tumbling ? 10.0 : 1.0;
   BodyPlan plan = solid_block(5, 4, 3, 3.0e4);
@@ -56,6 +58,10 @@ inline std::uint64_t run_scene(const std::string& integrator, Simd simd = Simd::
     for (int v = 0; v < m.voxel_count; v += m.voxel_count / 4)
       ext[v] = Vec3(0.0, 0.0, 0.02 * push * phase);
     step(m, st, sc, ext);
+  }
+  if (diverge) {
+    st.pos[m.voxel_count / 2].x() += 2.0;
+    if (step(m, st, sc, ext) != StepStatus::diverged) return 0;
   }
   return state_hash(st);
 }

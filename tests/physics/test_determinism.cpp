@@ -29,6 +29,10 @@ constexpr std::uint64_t kGoldenSymplectic = 0x3ca746cb6f4158eeull;
 // 661437050f2ec086 / e8a7695359095d9b for the same scene.
 constexpr std::uint64_t kGoldenTumblingPneuvox = 0x05f074049ccebca6ull;
 constexpr std::uint64_t kGoldenTumblingSymplectic = 0x425667aea039081aull;
+// The tumbling scene with a last, diverged step: the hashes pinned before the pneuvox link pass
+// stopped storing the link state that its mid-step pass overwrites (restored on divergence).
+constexpr std::uint64_t kGoldenDivergedPneuvox = 0x975122d5b01e2e5eull;
+constexpr std::uint64_t kGoldenDivergedSymplectic = 0x5e9c5dd20e51fabbull;
 
 std::string hex(std::uint64_t h) {
   char buf[32];
@@ -84,6 +88,19 @@ TEST(Determinism, GoldenHashAtEverySimdWidth) {
   }
   EXPECT_GE(widths, 1);
   std::printf("best SIMD width here: %s\n", to_string(best_simd()));
+}
+
+// A refused (diverged) step leaves the link state its link pass computed, at every width.
+TEST(Determinism, DivergedStepKeepsItsLinkPassState) {
+  for (Simd simd : {Simd::sse2, Simd::avx2, Simd::avx512}) {
+    if (!simd_supported(simd)) continue;
+    const std::uint64_t hp = golden::run_scene("pneuvox", simd, golden::Motion::tumbling, true);
+    const std::uint64_t hs = golden::run_scene("symplectic", simd, golden::Motion::tumbling, true);
+    std::printf("diverged %s: pneuvox %s, symplectic %s\n", to_string(simd), hex(hp).c_str(),
+                hex(hs).c_str());
+    EXPECT_EQ(hex(hp), hex(kGoldenDivergedPneuvox)) << to_string(simd);
+    EXPECT_EQ(hex(hs), hex(kGoldenDivergedSymplectic)) << to_string(simd);
+  }
 }
 
 // The default width is resolved to the widest supported one; an explicit width is kept.
