@@ -50,7 +50,6 @@ Scratch make_scratch(const Model& model) {
   sc.part2_force.assign(nv, Vec3::Zero());
   sc.fric.assign(nv, Vec3::Zero());
   sc.old_pos.assign(nv, Vec3::Zero());
-  sc.ext_moment.assign(nv, {0.0f, 0.0f, 0.0f});
   const std::size_t ns = model.surface_voxels.size();
   std::size_t cap = ns * 128;
   if (ns > 1 && cap > ns * (ns - 1) / 2) cap = ns * (ns - 1) / 2;

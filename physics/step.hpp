@@ -48,11 +48,10 @@ struct Scratch {
   // redone only when State::previous_dt changes (in practice once, after the first step)
   float link_damping_dt = std::numeric_limits<float>::quiet_NaN();  // [s]
   // voxel pass (pneuvox part 1 -> part 2 carry-over, §2.1 "fork-only per-voxel scratch")
-  std::vector<Vec3> collision_force;             // collisionF [N] (voxels)
-  std::vector<Vec3> part2_force;                 // gravityF + collisionF + fric [N] (voxels)
-  std::vector<Vec3> fric;                        // floor normal + friction force [N] (voxels)
-  std::vector<Vec3> old_pos;                     // position at the start of the step [m] (voxels)
-  std::vector<std::array<float, 3>> ext_moment;  // §2.12 correction moment [N m] (voxels)
+  std::vector<Vec3> collision_force;  // collisionF [N] (voxels)
+  std::vector<Vec3> part2_force;      // gravityF + collisionF + fric [N] (voxels)
+  std::vector<Vec3> fric;             // floor normal + friction force [N] (voxels)
+  std::vector<Vec3> old_pos;          // position at the start of the step [m] (voxels)
   // self-collision: per-pair force (float, §2.10) and the broadphase grid
   std::vector<std::array<float, 3>> pair_force;  // [N] (pairs; sized to pair capacity)
   // Broadphase grid of a rebuild: the surface voxels with their grid cell and a copy of their

@@ -1265,7 +1265,6 @@ inline void fork_part2_voxel(const Model& m, State& st, Scratch& sc, int v, floa
   q = mul(quat_from_rotvec(Vec3(am.x() * c.inv_inertia * dt, am.y() * c.inv_inertia * dt,
                                 am.z() * c.inv_inertia * dt)),
           q);
-  sc.ext_moment[v] = {me_x, me_y, me_z};
   // NaN/inf anywhere makes the running sum non-finite (checked once after the loop; finite
   // values beyond ~1e307 that overflow the sum are reported as non-finite too)
   check +=
@@ -1314,7 +1313,6 @@ inline void fork_part2_group(const Model& m, State& st, Scratch& sc, const int* 
   QL<L> qn;
   mul_c(dq.w, dq.x, dq.y, dq.z, q.w, q.x, q.y, q.z, qn.w, qn.x, qn.y, qn.z);
   store_voxels<L>(pos, mom, am, qn, st, v);
-  for (int k = 0; k < W; ++k) sc.ext_moment[v[k]] = {me_x, me_y, me_z};
   const D sum = pos.x + pos.y + pos.z + mom.x + mom.y + mom.z + am.x + am.y + am.z + qn.w;
   for (int k = 0; k < W; ++k) check += sum[k];
 }
