@@ -621,9 +621,9 @@ inline VL<L> rotvec_lanes(const QL<L>& q) {
 }
 
 // frame_to_pos_x (§2.11, quat.hpp) on lanes, every branch in SIMD (the closed-form one only when
-// a lane needs it).
+// a lane needs it); len = |d| = sqrt(d.x^2 + d.y^2 + d.z^2), which the caller also needs.
 template <class L>
-inline void frame_to_pos_x_lanes(const VL<L>& d, QL<L>& q1, VL<L>& a1) {
+inline void frame_to_pos_x_lanes(const VL<L>& d, const DV<L>& len, QL<L>& q1, VL<L>& a1) {
   using D = DV<L>;
   const D zero = splat<L>(0.0), one = splat<L>(1.0);
   const D a = d.y / d.x, b = d.z / d.x;
@@ -634,7 +634,6 @@ inline void frame_to_pos_x_lanes(const VL<L>& d, QL<L>& q1, VL<L>& a1) {
   MV<L> closed = mask_of<L>(0);  // lanes of the closed-form branch
   VL<L> a_closed;
   if (L::bits(taylor | null) != kAllLanes<L>) {
-    const D len = L::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
     const D nx = d.x / len, ny = d.y / len, nz = d.z / len;
     const MV<L> reversed = nx < kReversedBelow;
     const D c = L::sqrt((1.0 + nx) * 0.5), h = 0.5 / c;
@@ -716,11 +715,12 @@ template <class L, Axis A, LinkPass K, bool kLarge, bool kContig>
   VL<L> pos2, a1;
   QL<L> q1;  // large-angle mode: rotation of the link frame onto +X
   if constexpr (kLarge) {
-    frame_to_pos_x_lanes<L>(d, q1, a1);
+    const D len = L::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);  // |d|
+    frame_to_pos_x_lanes<L>(d, len, q1, a1);
     QL<L> q12;
     mul_c(q1.w, q1.x, q1.y, q1.z, q2.w, q2.x, q2.y, q2.z, q12.w, q12.x, q12.y, q12.z);
     q2 = q12;
-    pos2 = {L::sqrt(d.x * d.x + d.y * d.y + d.z * d.z) - l, zero, zero};
+    pos2 = {len - l, zero, zero};
   } else {
     pos2 = {d.x - l, d.y, d.z};
     a1 = {zero, zero, zero};  // rotvec(identity)
