@@ -44,6 +44,8 @@ Scratch make_scratch(const Model& model) {
   const std::size_t nl = model.link_count, nv = model.voxel_count;
   sc.link_end_load.assign(model.missing_load_slot() + 1,
                           Scratch::EndLoad{Vec3::Zero(), Vec3::Zero()});
+  sc.link_list_small.assign(nl, 0);
+  sc.link_list_large.assign(nl, 0);
   sc.link_damping_neg.assign(nl, 0.0);
   sc.link_damping_pos.assign(nl, 0.0);
   sc.collision_force.assign(nv, Vec3::Zero());

@@ -42,6 +42,9 @@ struct Scratch {
   // each link's end voxels N and P, refreshed at the start of a force link pass when previous_dt
   // changed (instead of two divisions per link and step); per link, so that a group of
   // consecutive links loads them as vectors.
+  // link ids of the link pass's mixed groups, collected per mode (links)
+  std::vector<int> link_list_small;
+  std::vector<int> link_list_large;
   std::vector<double> link_damping_neg;  // c_N [sqrt(kg)/s] (links)
   std::vector<double> link_damping_pos;  // c_P [sqrt(kg)/s] (links)
   // previous_dt that link_damping_neg / _pos were computed for (NaN: not yet); the division is

@@ -36,6 +36,7 @@
 
 #include <emmintrin.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -885,11 +886,24 @@ template <Axis A, LinkPass K>
 }
 
 // One group of links through link_group: `count` links group[0..count), padded to W lanes.
+// The links list[0..count) of axis A, all in small-angle (!kLarge) or large-angle (kLarge) mode at
+// their last update, W at a time (the last group padded with its last link).
 template <class L, Axis A, LinkPass K, bool kLarge>
-[[gnu::noinline]] void run_link_group(const Model& m, State& st, Scratch& sc, const int* group,
-                                      int count, bool& diverged) {
-  const int done = link_group<L, A, K, kLarge, false>(m, st, sc, group, diverged);
-  if (done != kAllLanes<L>) links_switching_mode<A, K>(m, st, sc, group, count, done, diverged);
+[[gnu::noinline]] void run_link_list(const Model& m, State& st, Scratch& sc, const int* list,
+                                     int count, bool& diverged) {
+  constexpr int W = L::W;
+  int j = 0;
+  for (; j + W <= count; j += W) {
+    const int done = link_group<L, A, K, kLarge, false>(m, st, sc, list + j, diverged);
+    if (done != kAllLanes<L>) links_switching_mode<A, K>(m, st, sc, list + j, W, done, diverged);
+  }
+  if (j < count) {
+    int group[W];
+    for (int k = 0; k < W; ++k) group[k] = list[std::min(j + k, count - 1)];
+    const int done = link_group<L, A, K, kLarge, false>(m, st, sc, group, diverged);
+    if (done != kAllLanes<L>)
+      links_switching_mode<A, K>(m, st, sc, group, count - j, done, diverged);
+  }
 }
 
 // Full groups of consecutive links from link j on, as long as all W links of the next group are
@@ -910,20 +924,11 @@ template <class L, Axis A, LinkPass K, bool kLarge>
   return j;
 }
 
-// A collected group of `count` links (1..W): padded with its last link, run, emptied.
-template <class L, Axis A, LinkPass K, bool kLarge>
-inline void flush_link_group(const Model& m, State& st, Scratch& sc, int* group, int& count,
-                             bool& diverged) {
-  for (int k = count; k < L::W; ++k) group[k] = group[count - 1];
-  run_link_group<L, A, K, kLarge>(m, st, sc, group, count, diverged);
-  count = 0;
-}
-
 // Link pass (§2.3-2.6) over the links of axis A: links go through link_group W at a time, those
 // in small-angle mode at their last update and those in large-angle mode in separate groups (a
 // lane that switches mode falls back to link_scalar). W consecutive links of the axis (ids are
 // contiguous per axis, see Model) that share a mode, the usual case, form a group as they are;
-// the others are collected per mode.
+// the others are collected per mode into lists (Scratch) and run after the axis's stretches.
 // Links are independent within a pass, so this order gives the same results as list order.
 // With forces (computes_forces(K)) the end loads are computed and the return value is true if any
 // strain > 100;
@@ -934,18 +939,16 @@ bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
   bool diverged = false;
   const int begin = m.axis_link_begin[static_cast<int>(A)];
   const int end = m.axis_link_begin[static_cast<int>(A) + 1];
-  int small[W], large[W];  // collected links waiting for a full group
+  // links of mixed groups, collected per mode (without a branch: mixed groups have no pattern)
+  int* small = sc.link_list_small.data();
+  int* large = sc.link_list_large.data();
   int small_count = 0, large_count = 0;
   auto collect = [&](int i) {
-    if (st.link_small_angle[i]) {
-      small[small_count++] = i;
-      if (small_count == W)
-        flush_link_group<L, A, K, false>(m, st, sc, small, small_count, diverged);
-    } else {
-      large[large_count++] = i;
-      if (large_count == W)
-        flush_link_group<L, A, K, true>(m, st, sc, large, large_count, diverged);
-    }
+    const int is_small = st.link_small_angle[i] != 0;
+    small[small_count] = i;
+    large[large_count] = i;
+    small_count += is_small;
+    large_count += 1 - is_small;
   };
   int j = begin;
   while (j + W <= end) {
@@ -960,8 +963,8 @@ bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
     }
   }
   for (; j < end; ++j) collect(j);
-  if (small_count > 0) flush_link_group<L, A, K, false>(m, st, sc, small, small_count, diverged);
-  if (large_count > 0) flush_link_group<L, A, K, true>(m, st, sc, large, large_count, diverged);
+  if (small_count > 0) run_link_list<L, A, K, false>(m, st, sc, small, small_count, diverged);
+  if (large_count > 0) run_link_list<L, A, K, true>(m, st, sc, large, large_count, diverged);
   return diverged;
 }
 
