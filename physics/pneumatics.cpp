@@ -1,6 +1,8 @@
 // Pneumatic chambers, conduits and valves (pneuvox-model.md §3). See pneumatics.hpp.
 #include "physics/pneumatics.hpp"
 
+#include <xmmintrin.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -85,6 +87,16 @@ PneumaticsModel build_pneumatics(const BodyPlan& plan, const Model& model,
     }
     pm.chamber_triangle_begin.push_back(static_cast<int>(pm.triangle_slots.size()));
   }
+  // slot -> its triangles in ascending order (counting sort over the triangles in order)
+  pm.slot_triangle_begin.assign(pm.wall_voxel.size() + 1, 0);
+  for (const auto& tri : pm.triangle_slots)
+    for (int s : tri) ++pm.slot_triangle_begin[static_cast<std::size_t>(s) + 1];
+  for (std::size_t s = 0; s < pm.wall_voxel.size(); ++s)
+    pm.slot_triangle_begin[s + 1] += pm.slot_triangle_begin[s];
+  pm.slot_triangles.resize(pm.triangle_slots.size() * 3);
+  std::vector<int> next(pm.slot_triangle_begin.begin(), pm.slot_triangle_begin.end() - 1);
+  for (std::size_t t = 0; t < pm.triangle_slots.size(); ++t)
+    for (int s : pm.triangle_slots[t]) pm.slot_triangles[next[s]++] = static_cast<int>(t);
 
   // Reference units: bar (config Pa / 1e5, then float as the reference stores it).
   pm.supply_bar = static_cast<float>(cfg.supply_pressure / kPascalPerBar);
@@ -141,7 +153,7 @@ PneumaticsState initial_pneumatics_state(const PneumaticsModel& pm,
 
 PneumaticsScratch make_pneumatics_scratch(const PneumaticsModel& pm) {
   PneumaticsScratch s;
-  s.slot_force.assign(pm.wall_voxel.size(), {0.0f, 0.0f, 0.0f, 0.0f});
+  s.triangle_force.assign(pm.triangle_slots.size(), {0.0f, 0.0f, 0.0f, 0.0f});
   return s;
 }
 
@@ -152,10 +164,8 @@ void set_valve_commands(PneumaticsState& ps, std::span<const float> commands) {
 
 void pneumatics_update(const PneumaticsModel& pm, PneumaticsState& ps, PneumaticsScratch& scratch,
                        std::span<const Vec3> positions, std::span<Vec3> external_force) {
-  // 1. Clear the wall voxels' forces (all chambers first) and recompute every volume.
+  // 1. Recompute every volume (all chambers first).
   const StepKernels& kernels = step_kernels(pm.simd);
-  std::fill(scratch.slot_force.begin(), scratch.slot_force.end(),
-            std::array<float, 4>{0.0f, 0.0f, 0.0f, 0.0f});
   for (int q = 0; q < pm.chamber_count; ++q)
     ps.volume[q] = kernels.chamber_volume(pm, q, positions);
 
@@ -172,10 +182,17 @@ void pneumatics_update(const PneumaticsModel& pm, PneumaticsState& ps, Pneumatic
     const float p = ps.quantity[q] / ps.volume[q];  // p = n/V [bar] (float)
     ps.pressure[q] = p;
     const float gauge = p - 1.0f;  // [bar] relative to 1 bar ambient
-    kernels.add_pressure_forces(pm, q, gauge, positions, scratch);
+    kernels.pressure_forces(pm, q, gauge, positions, scratch);
   }
+  // Each wall voxel's force: the float sum, from 0, of its triangles' shares in triangle order
+  // (chamber by chamber, mesh order: the order of the reference's additions). Summed per slot, so
+  // that the slots' sums are independent chains.
   for (std::size_t s = 0; s < pm.wall_voxel.size(); ++s) {
-    const auto& f = scratch.slot_force[s];
+    __m128 sum = _mm_setzero_ps();
+    for (int k = pm.slot_triangle_begin[s]; k < pm.slot_triangle_begin[s + 1]; ++k)
+      sum = _mm_add_ps(sum, _mm_loadu_ps(scratch.triangle_force[pm.slot_triangles[k]].data()));
+    alignas(16) float f[4];
+    _mm_store_ps(f, sum);
     external_force[pm.wall_voxel[s]] = Vec3(f[0], f[1], f[2]);
   }
 

@@ -59,7 +59,12 @@ struct PneumaticsModel {
   // Unique wall voxels over all chambers, in order of first use; a voxel shared by two chambers
   // has one slot and accumulates both chambers' forces (§3.6 step 1).
   std::vector<int> wall_voxel;  // voxel id (wall slots)
-  int skipped_quads = 0;        // quads with a corner that is not a voxel (§3.1: skipped)
+  // The triangles with a vertex at each wall slot, ascending (the order in which the reference
+  // adds their forces to the slot): CSR, slot s = slot_triangles[slot_triangle_begin[s] ..
+  // slot_triangle_begin[s + 1]).
+  std::vector<int> slot_triangle_begin;  // (wall slots + 1)
+  std::vector<int> slot_triangles;       // (3 x triangles)
+  int skipped_quads = 0;                 // quads with a corner that is not a voxel (§3.1: skipped)
 
   // ---- gas and conduits (reference units: bar, m^3 "at 1 bar", s) ----------------------------
   float supply_bar = 1.2f;      // inlet reservoir, absolute [bar]
@@ -87,11 +92,11 @@ struct PneumaticsState {
   std::uint64_t updates = 0;         // pneumatic updates performed (= physics steps)
 };
 
-// Float accumulator of the pressure forces per wall slot [N] (the reference's External force is
-// a float vector, §3.4): x, y, z and a fourth float that stays 0, so that one 4-float vector add
-// performs the three float additions of a triangle's share. Allocated once.
+// The pressure force share F/3 of each triangle [N], as the floats (x, y, z, 0) (the reference's
+// External force is a float vector, §3.4), so that one 4-float vector add performs the three
+// float additions of a share to a wall slot. Allocated once.
 struct PneumaticsScratch {
-  std::vector<std::array<float, 4>> slot_force;  // [N] (wall slots); [3] unused, 0
+  std::vector<std::array<float, 4>> triangle_force;  // [N] (triangles); [3] unused, 0
 };
 
 // Build the chamber meshes of `plan` (quads of §6.7 from common/chamber_quads.hpp) on the voxels

@@ -1603,20 +1603,12 @@ float chamber_volume_lanes(const PneumaticsModel& pm, int chamber,
   return volume < 1e-12f ? 1e-12f : volume;  // §3.2: V = max(V, 1e-12), as std::max (NaN kept)
 }
 
-// §3.4 pressure forces of one chamber, W triangles at a time: F/3 (float) added to the float
-// force of each vertex's wall slot, triangle by triangle in mesh order.
+// §3.4 pressure forces of one chamber, W triangles at a time: each triangle's share F/3 as the
+// floats (x, y, z, 0) in PneumaticsScratch::triangle_force.
 template <class L>
-void add_pressure_forces_lanes(const PneumaticsModel& pm, int chamber, float gauge,
-                               std::span<const Vec3> positions, PneumaticsScratch& scratch) {
+void pressure_forces_lanes(const PneumaticsModel& pm, int chamber, float gauge,
+                           std::span<const Vec3> positions, PneumaticsScratch& scratch) {
   constexpr int W = L::W;
-  // acc += float(f) for the triangle's three wall slots, in triangle order: the float sums of the
-  // reference, x y z (and 0 + 0) in one 4-float add per slot.
-  auto add = [&](int t, __m128 f) {
-    for (int v : pm.triangle_slots[t]) {
-      float* acc = scratch.slot_force[v].data();
-      _mm_storeu_ps(acc, _mm_add_ps(_mm_loadu_ps(acc), f));
-    }
-  };
   const int end = pm.chamber_triangle_begin[chamber + 1];
   int t = pm.chamber_triangle_begin[chamber];
   for (; t + W <= end; t += W) {
@@ -1625,15 +1617,15 @@ void add_pressure_forces_lanes(const PneumaticsModel& pm, int chamber, float gau
         triangle_corner<L>(pm, positions, t, 2), splat<L>(gauge));
     __m128 rows[W];  // (fx, fy, fz, 0) of each triangle
     float_rows<L>(f3.x, f3.y, f3.z, rows);
-    for (int k = 0; k < W; ++k) add(t + k, rows[k]);
+    for (int k = 0; k < W; ++k) _mm_storeu_ps(scratch.triangle_force[t + k].data(), rows[k]);
   }
   for (; t < end; ++t) {
     const auto& tri = pm.triangle_voxels[t];
     const Point3<double> f3 = triangle_force_third<ScalarTriangleOps>(
         to_point3(positions[tri[0]]), to_point3(positions[tri[1]]), to_point3(positions[tri[2]]),
         static_cast<double>(gauge));
-    add(t, _mm_setr_ps(static_cast<float>(f3.x), static_cast<float>(f3.y), static_cast<float>(f3.z),
-                       0.0f));
+    scratch.triangle_force[t] = {static_cast<float>(f3.x), static_cast<float>(f3.y),
+                                 static_cast<float>(f3.z), 0.0f};
   }
 }
 
@@ -1648,7 +1640,7 @@ constexpr StepKernels make_step_kernels(Simd simd) {
                      &fork_voxel_passes<L>,
                      &symplectic_voxel_pass<L>,
                      &chamber_volume_lanes<L>,
-                     &add_pressure_forces_lanes<L>};
+                     &pressure_forces_lanes<L>};
 }
 
 }  // namespace

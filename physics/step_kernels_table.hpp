@@ -27,9 +27,10 @@ struct StepKernels {
   bool (*symplectic_voxel_pass)(const Model&, State&, Scratch&, std::span<const Vec3>);
   // §3.2 volume of one chamber (= chamber_volume) [m^3]
   float (*chamber_volume)(const PneumaticsModel&, int chamber, std::span<const Vec3> positions);
-  // §3.4 pressure forces of one chamber at gauge pressure [bar], added to the wall slots' forces
-  void (*add_pressure_forces)(const PneumaticsModel&, int chamber, float gauge,
-                              std::span<const Vec3> positions, PneumaticsScratch&);
+  // §3.4 pressure force shares of one chamber's triangles at gauge pressure [bar]
+  // (PneumaticsScratch::triangle_force)
+  void (*pressure_forces)(const PneumaticsModel&, int chamber, float gauge,
+                          std::span<const Vec3> positions, PneumaticsScratch&);
 };
 
 // The table of a width (`best` resolved to the widest this CPU runs; an unsupported width gives
