@@ -61,7 +61,6 @@ Scratch make_scratch(const Model& model) {
   sc.grid_entries.assign(ns, Scratch::GridEntry{});
   sc.grid_sorted.assign(ns, Scratch::GridEntry{});
   sc.grid_bucket_begin.assign(buckets + 1, 0);
-  sc.grid_bucket.assign(ns, 0);
   sc.candidates.assign(ns, 0);
   return sc;
 }
@@ -205,9 +204,7 @@ void rebuild_pairs(const Model& m, State& st, Scratch& sc) {
                                   static_cast<float>(p.z())};
     const int cx = cell_coord(p.x(), inv_h), cy = cell_coord(p.y(), inv_h),
               cz = cell_coord(p.z(), inv_h);
-    const int b = static_cast<int>(bucket_of(cx, cy, cz, mask));
-    sc.grid_bucket[si] = b;
-    ++begin[b];
+    ++begin[bucket_of(cx, cy, cz, mask)];
     entries[si] = Scratch::GridEntry{p.x(), p.y(), p.z(), si, cx, cy, cz};  // staged unsorted
   }
   int running = 0;
@@ -217,7 +214,10 @@ void rebuild_pairs(const Model& m, State& st, Scratch& sc) {
   }
   // (grid_entries is in slot order; grid_sorted receives the bucket order)
   std::vector<Scratch::GridEntry>& sorted = sc.grid_sorted;
-  for (int si = ns - 1; si >= 0; --si) sorted[--begin[sc.grid_bucket[si]]] = entries[si];
+  for (int si = ns - 1; si >= 0; --si) {
+    const Scratch::GridEntry& e = entries[si];
+    sorted[--begin[bucket_of(e.cx, e.cy, e.cz, mask)]] = e;
+  }
   const auto same_cell = [](const Scratch::GridEntry& e, int x, int y, int z) {
     return e.cx == x && e.cy == y && e.cz == z;
   };
@@ -238,13 +238,12 @@ void rebuild_pairs(const Model& m, State& st, Scratch& sc) {
   // 2. Every pair of entries in the same cell or in two neighbouring cells, once: the entries of
   //    cell c = run [r0, r1) of its bucket; partner cell q = run of q's bucket with cell q.
   int count = 0;
-  auto add_pair = [&](int slot_i, int slot_j) {
+  auto add_pair = [&](int a, int b) {  // voxel ids, a < b
     if (count == static_cast<int>(st.col_pairs.size())) {
       // pathological pile-up beyond the reserved slots: grow (the only allocation in a step)
       st.col_pairs.resize(st.col_pairs.size() * 2 + 64);
       ++st.counters.collision_pair_growths;
     }
-    const int a = surf[std::min(slot_i, slot_j)], b = surf[std::max(slot_i, slot_j)];
     st.col_pairs[count++] = CollisionPair{a, b};
   };
   // test entry i against the entries [j0, j1): distance first (branch-free, into candidates),
@@ -260,8 +259,8 @@ void rebuild_pairs(const Model& m, State& st, Scratch& sc) {
     }
     for (int k = 0; k < n; ++k) {
       const int sj = sorted[within[k]].slot;
-      const int lo = std::min(ei.slot, sj), hi = std::max(ei.slot, sj);
-      if (!is_nearby(m, surf[lo], surf[hi])) add_pair(ei.slot, sj);
+      const int a = surf[std::min(ei.slot, sj)], b = surf[std::max(ei.slot, sj)];
+      if (!is_nearby(m, a, b)) add_pair(a, b);
     }
   };
   for (int b = 0; b < buckets; ++b) {

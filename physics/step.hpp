@@ -38,13 +38,13 @@ struct Scratch {
   };
   // Entry Model::missing_load_slot() = 2 x links is always zero: the end load of a missing link.
   std::vector<EndLoad> link_end_load;  // (2 x links + 1)
+  // link ids of the link pass's mixed groups, collected per mode (links)
+  std::vector<int> link_list_small;
+  std::vector<int> link_list_large;
   // §2.5 link damping multiplier c_V = damp_base_V / previous_dt (a float, held as a double) of
   // each link's end voxels N and P, refreshed at the start of a force link pass when previous_dt
   // changed (instead of two divisions per link and step); per link, so that a group of
   // consecutive links loads them as vectors.
-  // link ids of the link pass's mixed groups, collected per mode (links)
-  std::vector<int> link_list_small;
-  std::vector<int> link_list_large;
   std::vector<double> link_damping_neg;  // c_N [sqrt(kg)/s] (links)
   std::vector<double> link_damping_pos;  // c_P [sqrt(kg)/s] (links)
   // previous_dt that link_damping_neg / _pos were computed for (NaN: not yet); the division is
@@ -68,10 +68,9 @@ struct Scratch {
   };
   std::vector<GridEntry> grid_entries;  // (surface voxels)
   std::vector<GridEntry> grid_sorted;   // (surface voxels)
-  std::vector<int>
-      grid_bucket_begin;         // bucket b = grid_sorted [begin[b], begin[b + 1]) (buckets + 1)
-  std::vector<int> grid_bucket;  // surface voxel slot -> bucket
-  std::vector<int> candidates;   // grid_sorted indices within the radius (surface voxels)
+  // bucket b = grid_sorted[begin[b] .. begin[b + 1]) (buckets + 1)
+  std::vector<int> grid_bucket_begin;
+  std::vector<int> candidates;  // grid_sorted indices within the radius (surface voxels)
 };
 
 Scratch make_scratch(const Model& model);

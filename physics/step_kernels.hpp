@@ -885,7 +885,6 @@ template <Axis A, LinkPass K>
   }
 }
 
-// One group of links through link_group: `count` links group[0..count), padded to W lanes.
 // The links list[0..count) of axis A, all in small-angle (!kLarge) or large-angle (kLarge) mode at
 // their last update, W at a time (the last group padded with its last link).
 template <class L, Axis A, LinkPass K, bool kLarge>
@@ -931,8 +930,7 @@ template <class L, Axis A, LinkPass K, bool kLarge>
 // the others are collected per mode into lists (Scratch) and run after the axis's stretches.
 // Links are independent within a pass, so this order gives the same results as list order.
 // With forces (computes_forces(K)) the end loads are computed and the return value is true if any
-// strain > 100;
-// without, the state-only mid-step pass of the fork (§2.9 item 6).
+// strain > 100; without, only the link state (LinkPass::state and restore_state).
 template <class L, Axis A, LinkPass K>
 bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
   constexpr int W = L::W;
