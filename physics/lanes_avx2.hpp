@@ -29,7 +29,6 @@ struct LanesAvx2 {
     rows[2] = r2;
     rows[3] = r3;
   }
-  static D load_floats(const float* p) { return _mm256_cvtps_pd(_mm_loadu_ps(p)); }
   // Transposing record loads / stores (see step_kernels.hpp). A Vec3 record is read and written
   // with a 3-lane mask, so nothing beyond it is touched.
   static __m256i mask3() { return _mm256_setr_epi64x(-1, -1, -1, 0); }

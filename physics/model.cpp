@@ -105,11 +105,12 @@ float recommended_time_step(const Model& model) {
 
 namespace {
 
-// Records of 12 floats (VoxelConst, LinkConst) by member: result[j][i] = member j of record i.
+// Records of 12 floats (VoxelConst, LinkConst) by member, widened to double (exact):
+// result[j][i] = member j of record i.
 template <class Record>
-std::array<std::vector<float>, 12> members_of(const std::vector<Record>& records) {
+std::array<std::vector<double>, 12> members_of(const std::vector<Record>& records) {
   static_assert(sizeof(Record) == 12 * sizeof(float) && std::is_trivially_copyable_v<Record>);
-  std::array<std::vector<float>, 12> members;
+  std::array<std::vector<double>, 12> members;
   for (auto& column : members) column.resize(records.size());
   for (std::size_t i = 0; i < records.size(); ++i) {
     float floats[12];

@@ -108,8 +108,9 @@ struct Model {
   std::vector<double> voxel_mass;              // [kg] (voxels), = VoxelConst::mass
   std::vector<VoxelConst> voxel_const;         // (voxels)
   // The same constants by member, for the lane passes (a group of consecutive voxels loads each
-  // member with one vector load): voxel_const_members[j][v] = float member j of voxel v.
-  std::array<std::vector<float>, 12> voxel_const_members;
+  // member with one vector load): voxel_const_members[j][v] = float member j of voxel v, stored
+  // as the double it converts to (exact), so the passes load it without a conversion.
+  std::array<std::vector<double>, 12> voxel_const_members;
   std::vector<std::uint8_t> voxel_fixed;    // 1 = all DOFs fixed (validation scenes) (voxels)
   std::vector<std::uint8_t> voxel_surface;  // 1 = fewer than 6 links (§2.1 "surface") (voxels)
   int free_voxel_count = 0;                 // voxels that are not fixed
@@ -126,8 +127,8 @@ struct Model {
   std::vector<Axis> link_axis;
   std::vector<LinkConst> link_const;
   // The same constants by member, for the lane passes: link_const_members[j][i] = float member j
-  // of link i.
-  std::array<std::vector<float>, 12> link_const_members;
+  // of link i, as a double (exact; see voxel_const_members).
+  std::array<std::vector<double>, 12> link_const_members;
   std::array<int, 4> axis_link_begin{0, 0, 0, 0};  // links of axis a: ids [begin[a], begin[a+1])
   double rest_length = 0.0;  // L = s for every link [m] (double, as Voxelyze's baseSize)
   // 1 / L [1/m], for the division-free mode test of the link passes (link_mode.hpp)

@@ -75,11 +75,6 @@ struct LanesSse2 {
   static D round_to_float(D x) { return _mm_cvtps_pd(_mm_cvtpd_ps(x)); }
   static D sqrt(D x) { return _mm_sqrt_pd(x); }
   static int bits(M m) { return _mm_movemask_pd(reinterpret_cast<__m128d>(m)); }
-  static D load_floats(const float* p) {  // two floats (8 bytes, any alignment)
-    double two_floats;
-    std::memcpy(&two_floats, p, sizeof two_floats);
-    return _mm_cvtps_pd(_mm_castpd_ps(_mm_set_sd(two_floats)));
-  }
   // Lane k of (x, y, z) as the floats (x_k, y_k, z_k, 0), k = 0..1 (round to nearest).
   static void float_rows(D x, D y, D z, __m128 (&rows)[2]) {
     const __m128 xy = _mm_unpacklo_ps(_mm_cvtpd_ps(x), _mm_cvtpd_ps(y));   // x0 y0 x1 y1

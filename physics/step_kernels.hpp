@@ -25,7 +25,7 @@
 // vector of W lanes (comparison result, all ones = true); static D round_to_float(D);
 // static D sqrt(D) (IEEE, correctly rounded); static int bits(M) (bit k = lane k true);
 // optionally faster transposing loads / stores (gather3, gather4, scatter3, gather_f12,
-// load_records, store_records, load_floats, to_floats; generic fallbacks below).
+// load_records, store_records, to_floats; generic fallbacks below).
 //
 // Memory layout the groups rely on: link ids run axis by axis (Model), so the full groups of a
 // link pass are consecutive ids; voxel groups are consecutive voxel ids. Per-link state that the
@@ -495,21 +495,12 @@ template <class L>
 struct LinkConstL {
   DV<L> e_area, area, a2, b1, b2, b3, sq_a1, sq_a2xip, sq_b1, sq_b2xfmp, sq_b3xip;
 };
-// W consecutive floats at p as doubles (exact).
-template <class L>
-[[gnu::always_inline]] inline DV<L> load_floats(const float* p) {
-  if constexpr (requires { L::load_floats(p); }) {
-    return L::load_floats(p);
-  } else {
-    return make_lanes<L>([&](int k) { return static_cast<double>(p[k]); });
-  }
-}
 template <class L, bool kContig>
 [[gnu::always_inline]] inline LinkConstL<L> gather_link_const(const Model& m, const int* id) {
   static_assert(offsetof(LinkConst, e_area) == 0 && offsetof(LinkConst, sq_b3xip) == 40);
   DV<L> d[11];
-  if constexpr (kContig) {  // by member (Model::link_const_members)
-    for (int j = 0; j < 11; ++j) d[j] = load_floats<L>(&m.link_const_members[j][id[0]]);
+  if constexpr (kContig) {  // by member, already doubles (Model::link_const_members)
+    for (int j = 0; j < 11; ++j) d[j] = load_lanes<L>(&m.link_const_members[j][id[0]]);
   } else {
     const float* p[L::W];
     for (int k = 0; k < L::W; ++k) p[k] = &m.link_const[id[k]].e_area;
@@ -530,7 +521,7 @@ template <class L>
                 offsetof(VoxelConst, inv_inertia) == 8 && offsetof(VoxelConst, c_glob) == 12 &&
                 offsetof(VoxelConst, c_glob_rot) == 16 &&
                 offsetof(VoxelConst, gravity_force) == 28);
-  const auto member = [&](int j) { return load_floats<L>(&m.voxel_const_members[j][first]); };
+  const auto member = [&](int j) { return load_lanes<L>(&m.voxel_const_members[j][first]); };
   return {member(1), member(2), member(3), member(4), member(7)};
 }
 
