@@ -2,7 +2,9 @@
 // them.
 #pragma once
 
+#include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>
@@ -24,6 +26,17 @@ inline std::string build_dir() {
 
 inline std::string binary(const std::string& name) {
   return build_dir() + "/bin/" + name;
+}
+
+// A new folder for the running test, <tmp>/softevo_test_<prefix>_<pid>_<test name> (unique per
+// process and test, so that parallel ctest runs never share one).
+inline std::filesystem::path fresh_test_dir(const std::string& prefix) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() /
+      ("softevo_test_" + prefix + "_" + std::to_string(::getpid()) + "_" +
+       ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  std::filesystem::create_directories(dir);
+  return dir;
 }
 
 struct CommandResult {

@@ -45,10 +45,7 @@ class CmdEval : public ::testing::Test {
  protected:
   void SetUp() override {
     if (!fs::exists(binary("softevo"))) GTEST_SKIP() << "softevo not built: " << binary("softevo");
-    dir_ = fs::temp_directory_path() /
-           ("softevo_test_cmd_eval_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
+    dir_ = test::fresh_test_dir("cmd_eval");
     robot_ = write_robot(dir_);
   }
   void TearDown() override {

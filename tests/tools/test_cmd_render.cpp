@@ -37,10 +37,7 @@ class CmdRender : public ::testing::Test {
  protected:
   void SetUp() override {
     if (!fs::exists(softevo_binary())) GTEST_SKIP() << "softevo binary not built";
-    dir_ = fs::temp_directory_path() /
-           ("softevo_test_cmd_render_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
+    dir_ = test::fresh_test_dir("cmd_render");
   }
   void TearDown() override {
     std::error_code ec;

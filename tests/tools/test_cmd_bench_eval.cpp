@@ -1,0 +1,83 @@
+// `softevo bench eval DIR [--runs N] [--json]` (issue 4's speed benchmark) end to end on a small
+// gait robot with a recorded reference time: the JSON carries the run count and the per-robot
+// figures, the speed-up is the reference time over ours, directed robots are left out, and a
+// run count out of range is a usage error.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "common/robot.hpp"
+#include "tests/build_tree.hpp"
+#include "tests/test_controller_spec.hpp"
+
+namespace softevo {
+namespace {
+
+namespace fs = std::filesystem;
+
+using test::binary;
+using test::run_command;
+
+constexpr double kReferenceCpuSeconds = 12.5;
+
+// A 4x2x2 open-loop robot (gait or directed controller) with a one-cell chamber and a recorded
+// thesis CPU time.
+void write_bench_robot(const fs::path& path, const std::string& name, bool directed) {
+  RobotFile r;
+  r.name = name;
+  r.body.lattice = {4, 2, 2};
+  r.body.voxel_size = 0.01;
+  for (int k = 1; k <= 10; ++k) r.body.materials.push_back({2.0e4 * k, 1000.0});
+  r.body.cells.assign(4 * 2 * 2, 3);
+  r.body.cells[r.body.cell_index(1, 0, 1)] = 11;
+  r.controller = test::make_controller(
+      false, directed, [](int i) { return std::cos(0.5 + 1.3 * i); }, 1.5);
+  r.reference_json = R"({"fitness": 1.0, "cpu_seconds": 12.5})";
+  write_robot_file(r, path.string());
+}
+
+class CmdBenchEval : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!fs::exists(binary("softevo"))) GTEST_SKIP() << "softevo not built: " << binary("softevo");
+    dir_ = test::fresh_test_dir("cmd_bench_eval");
+    write_bench_robot(dir_ / "a-gait.robot.json", "a-gait", false);
+    write_bench_robot(dir_ / "b-directed.robot.json", "b-directed", true);
+  }
+  void TearDown() override {
+    if (!dir_.empty()) fs::remove_all(dir_);
+  }
+  fs::path dir_;
+};
+
+TEST_F(CmdBenchEval, BestOfRunsReportsTheGaitRobotAgainstItsReference) {
+  const auto r =
+      run_command(binary("softevo") + " bench eval '" + dir_.string() + "' --runs 2 --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output.substr(r.output.find('{')));
+  EXPECT_EQ(j["runs"], 2);
+  EXPECT_EQ(j["robots"], 1) << "the directed robot is not a gait champion";
+  ASSERT_EQ(j["per_robot"].size(), 1u);
+  const nlohmann::json& row = j["per_robot"][0];
+  EXPECT_EQ(row["name"], "a-gait");
+  EXPECT_EQ(row["reference_cpu_seconds"].get<double>(), kReferenceCpuSeconds);
+  EXPECT_EQ(row["voxels"], 4 * 2 * 2 - 1);
+  EXPECT_GT(row["steps"].get<long long>(), 0);
+  const double cpu = row["cpu_seconds"].get<double>();
+  ASSERT_GT(cpu, 0.0);
+  EXPECT_DOUBLE_EQ(j["median_speedup"].get<double>(), kReferenceCpuSeconds / cpu);
+  EXPECT_DOUBLE_EQ(j["median_cpu_seconds"].get<double>(), cpu);
+}
+
+TEST_F(CmdBenchEval, RunCountOutOfRangeIsAUsageError) {
+  const auto r = run_command(binary("softevo") + " bench eval '" + dir_.string() + "' --runs 0");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("--runs"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace softevo
