@@ -1,9 +1,10 @@
-// `softevo bench eval [DIR] [--jobs N] [--integrator I] [--only SUBSTR] [--json]`
+// `softevo bench eval [DIR] [--jobs N] [--integrator I] [--only SUBSTR] [--runs N] [--json]`
 //
 // Speed of one 10 s gait evaluation of the thesis gait champions (robot files of DIR whose
 // controller is not directed; default ../shared/reference/bestbots), compared with the thesis
 // simulator's CPU seconds recorded in each file (`reference.cpu_seconds`, median 33 s). Reports
-// per robot our thread CPU seconds and microseconds per voxel-step, and the median speed-up
+// per robot our thread CPU seconds, microseconds per voxel-step and evaluation status (a killed
+// robot ran fewer steps, so its time is not comparable), and the median speed-up
 // (goal >= 5x, one core, pneuvox integrator). CPU time is the figure to compare: wall time
 // depends on what else the machine runs. With --runs N every robot is evaluated N times and its
 // fastest run is kept (other tenants of a shared machine only ever slow a run down); the runs
@@ -84,6 +85,7 @@ int run_bench_eval(const BenchEvalArgs& a) {
     nlohmann::ordered_json list = nlohmann::ordered_json::array();
     for (std::size_t i = 0; i < rows.size(); ++i)
       list.push_back({{"name", rows[i].robot.name},
+                      {"status", to_string(rows[i].result.status)},
                       {"cpu_seconds", rows[i].cpu_seconds},
                       {"wall_seconds", rows[i].result.wall_seconds},
                       {"reference_cpu_seconds", rows[i].ref_cpu_seconds},
@@ -99,15 +101,15 @@ int run_bench_eval(const BenchEvalArgs& a) {
     return kExitOk;
   }
   if (a.runs > 1) std::printf("fastest of %d runs per robot\n", a.runs);
-  std::printf("%-16s %6s %7s %9s %9s %8s %8s %8s\n", "robot", "voxels", "steps", "cpu[s]",
-              "wall[s]", "ref[s]", "speedup", "us/v-st");
+  std::printf("%-16s %6s %7s %9s %9s %8s %8s %8s  %s\n", "robot", "voxels", "steps", "cpu[s]",
+              "wall[s]", "ref[s]", "speedup", "us/v-st", "status");
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const ChampionRow& r = rows[i];
-    std::printf("%-16s %6d %7lld %9.2f %9.2f %8.2f %7.2fx %8.3f\n", r.robot.name.c_str(),
+    std::printf("%-16s %6d %7lld %9.2f %9.2f %8.2f %7.2fx %8.3f  %s\n", r.robot.name.c_str(),
                 r.result.voxels, static_cast<long long>(r.result.steps), r.cpu_seconds,
                 r.result.wall_seconds, r.ref_cpu_seconds,
                 r.ref_cpu_seconds > 0 ? r.ref_cpu_seconds / r.cpu_seconds : 0.0,
-                us_per_voxel_step[i]);
+                us_per_voxel_step[i], to_string(r.result.status));
   }
   std::printf(
       "\nmedian CPU seconds: ours %.2f, thesis simulator %.2f; median speed-up %.2fx "

@@ -24,16 +24,16 @@ using test::run_command;
 
 constexpr double kReferenceCpuSeconds = 12.5;
 
-// A 4x2x2 open-loop robot (gait or directed controller) with a one-cell chamber and a recorded
-// thesis CPU time.
+// A 5x3x3 open-loop robot (gait or directed controller) with a one-cell chamber inside and a
+// recorded thesis CPU time; it is not killed during the 10 s evaluation.
 void write_bench_robot(const fs::path& path, const std::string& name, bool directed) {
   RobotFile r;
   r.name = name;
-  r.body.lattice = {4, 2, 2};
+  r.body.lattice = {5, 3, 3};
   r.body.voxel_size = 0.01;
-  for (int k = 1; k <= 10; ++k) r.body.materials.push_back({2.0e4 * k, 1000.0});
-  r.body.cells.assign(4 * 2 * 2, 3);
-  r.body.cells[r.body.cell_index(1, 0, 1)] = 11;
+  for (int k = 1; k <= 10; ++k) r.body.materials.push_back({1.0e4 * k, 1000.0});
+  r.body.cells.assign(5 * 3 * 3, 5);
+  r.body.cells[r.body.cell_index(2, 1, 1)] = 11;
   r.controller = test::make_controller(
       false, directed, [](int i) { return std::cos(0.5 + 1.3 * i); }, 1.5);
   r.reference_json = R"({"fitness": 1.0, "cpu_seconds": 12.5})";
@@ -64,8 +64,9 @@ TEST_F(CmdBenchEval, BestOfRunsReportsTheGaitRobotAgainstItsReference) {
   ASSERT_EQ(j["per_robot"].size(), 1u);
   const nlohmann::json& row = j["per_robot"][0];
   EXPECT_EQ(row["name"], "a-gait");
+  EXPECT_EQ(row["status"], "ok") << "a killed robot's time says nothing about speed";
   EXPECT_EQ(row["reference_cpu_seconds"].get<double>(), kReferenceCpuSeconds);
-  EXPECT_EQ(row["voxels"], 4 * 2 * 2 - 1);
+  EXPECT_EQ(row["voxels"], 5 * 3 * 3 - 1);
   EXPECT_GT(row["steps"].get<long long>(), 0);
   const double cpu = row["cpu_seconds"].get<double>();
   ASSERT_GT(cpu, 0.0);
