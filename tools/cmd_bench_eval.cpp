@@ -10,7 +10,6 @@
 // fastest run is kept (other tenants of a shared machine only ever slow a run down); the runs
 // must give bit-identical fitness, else the benchmark stops with an error.
 #include <cstdio>
-#include <cstring>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -33,11 +32,6 @@ struct BenchEvalArgs {
   int runs = 1;
   bool json = false;
 };
-
-// Bit-identical doubles (NaN included).
-bool same_bits(double a, double b) {
-  return std::memcmp(&a, &b, sizeof a) == 0;
-}
 
 int run_bench_eval(const BenchEvalArgs& a) {
   std::vector<ChampionRow> rows;

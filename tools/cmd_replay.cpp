@@ -6,10 +6,8 @@
 // the same code path as a run: worker::evaluate_unit per work unit (genome, or genome x
 // direction) and master::GenerationScheduler to combine the directions (§7.4). A difference in
 // fitness bits, status or any archived fitness component is a mismatch (exit code 1).
-#include <bit>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -37,10 +35,6 @@ struct ReplayArgs {
   bool verify = false;
   bool all = false;
 };
-
-bool same_bits(double a, double b) {
-  return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
-}
 
 // The archived component row layout (docs/archive.md): fitness, distance, path_length,
 // angle_error, perpendicular_penalty, status.

@@ -3,6 +3,9 @@
 // stores its exit code in `exit_code`; an exception escaping it is printed by main (exit 2).
 #pragma once
 
+#include <bit>
+#include <cstdint>
+
 #include <CLI/CLI.hpp>
 
 namespace softevo::cli {
@@ -11,6 +14,12 @@ namespace softevo::cli {
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitMismatch = 1;  // a check ran and found a difference
 inline constexpr int kExitUsage = 2;     // bad arguments, unreadable or malformed input
+
+// Bit-identical doubles (how the determinism checks of replay and the benchmarks compare
+// fitness: NaN equals a NaN of the same bits, +0 differs from -0).
+inline bool same_bits(double a, double b) {
+  return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
+}
 
 void register_version(CLI::App& app, int& exit_code);
 void register_config(CLI::App& app, int& exit_code);
