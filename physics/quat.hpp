@@ -98,6 +98,10 @@ constexpr double kNearPosXBelow =
   if (t * t < kRotvecToQuatTaylorBelow) {
     w = 1.0 - t / 2;
     s = 1.0 - t / 6;
+  } else if (t <= rmath::kSincCosSquareLimit) {
+    // physics revision 3: w = cos|theta| and s = sin|theta| / |theta| straight from t (every
+    // turn below 1.5 rad per step, that is every voxel that has not exploded)
+    rmath::sinc_cos_of_square(t, s, w);
   } else {
     const double mag = std::sqrt(t);
     double sin_mag;
@@ -115,8 +119,10 @@ constexpr double kNearPosXBelow =
     const double k = std::sqrt((2 - 2 * q.w) / t);
     return {q.x * 2.0 * k, q.y * 2.0 * k, q.z * 2.0 * k};
   }
+  // the reference divides each component (q.x * 2 * a / rs); physics revision 3 divides once
   const double a = rmath::acos(q.w), rs = std::sqrt(t);
-  return {q.x * 2.0 * a / rs, q.y * 2.0 * a / rs, q.z * 2.0 * a / rs};
+  const double f = 2.0 * a / rs;
+  return {q.x * f, q.y * f, q.z * f};
 }
 
 // §2.11 "angle to +X": q1, the rotation taking direction d onto +X (identity for d = 0), and its

@@ -1,7 +1,7 @@
-// acos, sin and cos of the physics (physics revision 2, see physics/revision.hpp), written once
-// with IEEE +, -, *, / and sqrt only, generic over the value type: a double, or a lane vector of
-// the SIMD step passes. With -ffp-contract=off every width then gives the same bits as the scalar
-// code, on every machine, and a whole lane vector is computed without a per-lane libm call.
+// acos, sin and cos of the physics (physics revisions 2 and 3, see physics/revision.hpp), written
+// once with IEEE +, -, *, / and sqrt only, generic over the value type: a double, or a lane vector
+// of the SIMD step passes. With -ffp-contract=off every width then gives the same bits as the
+// scalar code, on every machine, and a whole lane vector is computed without a per-lane libm call.
 //
 // Why not libm: the reference simulator calls glibc's acos / sin / cos once per lane for
 // large-angle links and fast-turning voxels; those scalar calls took 15-20% of a champion
@@ -9,9 +9,11 @@
 // scalar functions and from each other across widths, so they cannot keep the widths
 // bit-identical.
 //
-// Accuracy: the polynomials are within 0.6 ulp (acos) and 0.7 ulp (sin, cos) of the true value
-// (measured against mpmath at 50 digits); tests/physics/test_reproducible_math.cpp checks that
-// every result is within 1 ulp of glibc's (itself within about half an ulp) for |x| <= 2^10.
+// Accuracy, worst error against mpmath at 50 digits over 60000 random arguments each (revision 3,
+// Estrin; revision 2's Horner in brackets): acos 1.10 ulp (1.10), sin 0.73 (0.71), cos 0.74
+// (0.73), sinc_cos_of_square 0.77 (0.68) and 0.53 (0.53). tests/physics/test_reproducible_math.cpp
+// checks that every result is within 1 ulp of glibc's (itself within about half an ulp) for
+// |x| <= 2^10.
 // Beyond 2^10 rad, where the rounding of the Cody-Waite reduction below reaches 2 ulp, the
 // callers use the C library's sin / cos (kSinCosReducedLimit); the physics only asks for the
 // half angle a voxel turns in one step and the half angle of a link's bend, both below pi.
@@ -66,18 +68,31 @@ constexpr double kRoundMagic = 0x1.8p52;
 // |x| above which sincos_reduced must not be used.
 constexpr double kSinCosReducedLimit = 0x1p10;
 
+// c[0] + c[1] z + ... + c[N-1] z^(N-1) by Estrin's scheme (physics revision 3): the pairs
+// c[2k] + c[2k+1] z, then pairs of those joined by z^2, then by z^4, ...: a chain of about
+// log2(N) dependent multiply-adds instead of Horner's N - 1. The lane passes are bound by the
+// latency of these chains where a link or voxel takes an acos / sin / cos branch (issue 4).
 template <class T, int N>
-[[gnu::always_inline]] inline T horner(const T& z, const double (&c)[N]) {
-  T p = T{} + c[N - 1];
-  for (int k = N - 2; k >= 0; --k) p = p * z + c[k];
-  return p;
+[[gnu::always_inline]] inline T estrin(const T& z, const double (&c)[N]) {
+  T level[(N + 1) / 2];
+  int n = 0;
+  for (int k = 0; k < N; k += 2) level[n++] = k + 1 < N ? c[k] + z * c[k + 1] : T{} + c[k];
+  T power = z * z;  // z^2, then z^4, z^8
+  while (n > 1) {
+    int m = 0;
+    for (int k = 0; k < n; k += 2)
+      level[m++] = k + 1 < n ? level[k] + power * level[k + 1] : level[k];
+    n = m;
+    if (n > 1) power = power * power;
+  }
+  return level[0];
 }
 
 // asin(y) for y in [0, 1/2].
 template <class T>
 [[gnu::always_inline]] inline T asin_small(const T& y) {
   const T z = y * y;
-  return y + y * (z * horner(z, kAsinCoeff));
+  return y + y * (z * estrin(z, kAsinCoeff));
 }
 
 // acos(x) for x in [-1, 1] (NaN outside):
@@ -102,11 +117,11 @@ template <class Ops, class T>
   const T k = (x * kTwoOverPi + kRoundMagic) - kRoundMagic;
   const T r = ((x - k * kHalfPi1) - k * kHalfPi2) - k * kHalfPi3;
   const T z = r * r;
-  const T sin_r = r + r * (z * horner(z, kSinCoeff));
+  const T sin_r = r + r * (z * estrin(z, kSinCoeff));
   // 1 - z/2 with its rounding error added back (keeps cos within 1 ulp near pi/4)
   const T half_z = 0.5 * z;
   const T one_minus = 1.0 - half_z;
-  const T cos_r = one_minus + (((1.0 - one_minus) - half_z) + z * z * horner(z, kCosCoeff));
+  const T cos_r = one_minus + (((1.0 - one_minus) - half_z) + z * z * estrin(z, kCosCoeff));
   // quadrant = k - 4 round(k / 4), in {-2, -1, 0, 1, 2} (+-2 are the same quadrant)
   const T quadrant = k - 4.0 * ((k * 0.25 + kRoundMagic) - kRoundMagic);
   const auto odd = (quadrant == 1.0) | (quadrant == -1.0);
@@ -117,6 +132,19 @@ template <class Ops, class T>
   // r + r z S(z) turns r = -0 into +0; sin(+-0) = +-0 as IEEE asks
   sin_x = Ops::select(x == 0.0, x, Ops::select(sin_negative, -s, s));
   cos_x = Ops::select(cos_negative, -c, c);
+}
+
+// sin(r) / r and cos(r) from z = r^2 <= kSincCosSquareLimit (physics revision 3), with the sin /
+// cos polynomials above: sin(r) / r = 1 + z S(z), cos(r) = 1 - z/2 + z^2 C(z). quat_from_rotvec
+// (§2.11) needs exactly these of the half angle |theta| and has its square t = |theta|^2, so it
+// takes neither the square root, the range reduction nor the division sin(|theta|) / |theta|.
+constexpr double kSincCosSquareLimit = 0.6;  // < (pi/4)^2 = 0.6169, the polynomials' interval
+template <class T>
+[[gnu::always_inline]] inline void sinc_cos_of_square(const T& z, T& sinc, T& cos_r) {
+  sinc = 1.0 + z * estrin(z, kSinCoeff);
+  const T half_z = 0.5 * z;
+  const T one_minus = 1.0 - half_z;
+  cos_r = one_minus + (((1.0 - one_minus) - half_z) + z * z * estrin(z, kCosCoeff));
 }
 
 // Scalar entry points (quat.hpp): the C library beyond the reduction's range.

@@ -11,10 +11,15 @@
 //      half-angle identities (physics/quat.hpp frame_to_pos_x). The same formulas up to
 //      rounding: fitness values differ in their last bits and, through the chaotic gaits, by a
 //      few percent (issue 4 note).
+//   3  the same functions evaluated with fewer dependent operations (issue 4 speed): polynomials by
+//      Estrin's scheme instead of Horner's, quat_from_rotvec's sin / cos from the squared half
+//      angle (no square root, range reduction or division), rotvec's acos branch with one
+//      division instead of three. Still within 1 ulp of glibc per function; fitness values move
+//      as between revisions 1 and 2.
 #pragma once
 
 namespace softevo::physics {
 
-inline constexpr int kPhysicsRevision = 2;
+inline constexpr int kPhysicsRevision = 3;
 
 }  // namespace softevo::physics

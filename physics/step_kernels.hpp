@@ -564,11 +564,18 @@ inline QL<L> quat_from_rotvec_lanes(const VL<L>& r) {
   DV<L> w = 1.0 - t / 2.0, s = 1.0 - t / 6.0;
   const MV<L> taylor = t * t < kRotvecToQuatTaylorBelow;
   if (L::bits(taylor) != kAllLanes<L>) {
-    const DV<L> mag = L::sqrt(t);
-    DV<L> sin_mag, cos_mag;
-    sincos_lanes<L>(mag, sin_mag, cos_mag);
+    DV<L> sinc, cos_mag;
+    rmath::sinc_cos_of_square(t, sinc, cos_mag);
+    const MV<L> small = t <= rmath::kSincCosSquareLimit;
+    if (L::bits(small) != kAllLanes<L>) [[unlikely]] {  // a voxel turning > 1.5 rad per step
+      const DV<L> mag = L::sqrt(t);
+      DV<L> sin_mag, cos_big;
+      sincos_lanes<L>(mag, sin_mag, cos_big);
+      sinc = select<L>(small, sinc, sin_mag / mag);
+      cos_mag = select<L>(small, cos_mag, cos_big);
+    }
     w = select<L>(taylor, w, cos_mag);
-    s = select<L>(taylor, s, sin_mag / mag);
+    s = select<L>(taylor, s, sinc);
   }
   return {w, hx * s, hy * s, hz * s};
 }
@@ -605,9 +612,10 @@ inline VL<L> rotvec_lanes(const QL<L>& q) {
   VL<L> v{q.x * 2.0 * k, q.y * 2.0 * k, q.z * 2.0 * k};
   if (L::bits(unit | taylor) != kAllLanes<L>) {
     const D a = acos_lanes<L>(q.w), rs = L::sqrt(t);
-    v.x = select<L>(taylor, v.x, q.x * 2.0 * a / rs);
-    v.y = select<L>(taylor, v.y, q.y * 2.0 * a / rs);
-    v.z = select<L>(taylor, v.z, q.z * 2.0 * a / rs);
+    const D f = 2.0 * a / rs;  // one division (physics revision 3), as the scalar rotvec
+    v.x = select<L>(taylor, v.x, q.x * f);
+    v.y = select<L>(taylor, v.y, q.y * f);
+    v.z = select<L>(taylor, v.z, q.z * f);
   }
   return {select<L>(unit, zero, v.x), select<L>(unit, zero, v.y), select<L>(unit, zero, v.z)};
 }

@@ -3,8 +3,8 @@
 
 Each polynomial is a Chebyshev fit (near-minimax) of the smooth remainder of the function, in
 z = x^2, computed with mpmath at 60 digits and rounded to double. The script also measures the
-error of the rounded polynomials, evaluated in double exactly as the header does (Horner, no
-FMA), against mpmath, and prints the constants of the pi/2 reductions.
+error of the rounded polynomials, evaluated in double exactly as the header does (Estrin's
+scheme since physics revision 3, no FMA), against mpmath, and prints the constants of the pi/2 reductions.
 
     python3 tools/derive_math_coefficients.py        (needs python3-mpmath)
 """
@@ -20,11 +20,15 @@ def chebyshev_fit(f, a, b, n):
     return [float(c) for c in reversed(poly)]
 
 
-def horner(c, z):
-    p = c[-1]
-    for k in range(len(c) - 2, -1, -1):
-        p = p * z + c[k]
-    return p
+def estrin(c, z):  # as rmath::estrin: pairs c[2k] + c[2k+1] z, then joined by z^2, z^4, ...
+    level = [c[k] + z * c[k + 1] if k + 1 < len(c) else c[k] for k in range(0, len(c), 2)]
+    power = z * z
+    while len(level) > 1:
+        level = [level[k] + power * level[k + 1] if k + 1 < len(level) else level[k]
+                 for k in range(0, len(level), 2)]
+        if len(level) > 1:
+            power = power * power
+    return level[0]
 
 
 def ulp_error(got, exact):
@@ -62,18 +66,23 @@ def main():
         print(name, "=", ", ".join(x.hex() for x in c))
 
     rng = random.Random(1)
-    worst = {"asin": 0.0, "sin": 0.0, "cos": 0.0}
+    worst = {"asin": 0.0, "sin": 0.0, "cos": 0.0, "sinc": 0.0}
     for _ in range(20000):
         y = rng.random() * 0.5
         z = y * y
-        worst["asin"] = max(worst["asin"], ulp_error(y + y * (z * horner(asin_c, z)), mp.asin(y)))
+        worst["asin"] = max(worst["asin"], ulp_error(y + y * (z * estrin(asin_c, z)), mp.asin(y)))
         r = rng.random() * float(mp.pi / 4)
         z = r * r
-        worst["sin"] = max(worst["sin"], ulp_error(r + r * (z * horner(sin_c, z)), mp.sin(r)))
+        worst["sin"] = max(worst["sin"], ulp_error(r + r * (z * estrin(sin_c, z)), mp.sin(r)))
         half_z = 0.5 * z
         one_minus = 1.0 - half_z
-        c = one_minus + (((1.0 - one_minus) - half_z) + z * z * horner(cos_c, z))
+        c = one_minus + (((1.0 - one_minus) - half_z) + z * z * estrin(cos_c, z))
         worst["cos"] = max(worst["cos"], ulp_error(c, mp.cos(r)))
+        # sinc_cos_of_square: sin(r) / r from z = r^2 (quat_from_rotvec)
+        z = rng.random() * 0.6
+        exact_r = mp.sqrt(z)
+        sinc = 1.0 + z * estrin(sin_c, z)
+        worst["sinc"] = max(worst["sinc"], ulp_error(sinc, mp.sin(exact_r) / exact_r))
     print("worst error in ulp:", {k: round(v, 3) for k, v in worst.items()})
 
     def chop(x, bits):  # x rounded to `bits` significant bits

@@ -118,6 +118,36 @@ TEST(ReproducibleMath, SinCosSymmetryAndSpecialValues) {
   EXPECT_TRUE(std::isnan(ours_cos(std::numeric_limits<double>::quiet_NaN())));
 }
 
+// sinc_cos_of_square(z) against sin(r) / r and cos(r), r = sqrt(z), in long double (64-bit
+// significand: 11 bits beyond a double, so the reference's own error is about 1/2000 ulp).
+TEST(ReproducibleMath, SincCosOfSquareIsWithinOneUlp) {
+  std::mt19937_64 gen(15);
+  double worst_sinc = 0.0, worst_cos = 0.0, at_sinc = 0.0, at_cos = 0.0;
+  auto check = [&](double z) {
+    double sinc, cos_r;
+    sinc_cos_of_square(z, sinc, cos_r);
+    const long double r = std::sqrt(static_cast<long double>(z));
+    const double want_sinc = z == 0.0 ? 1.0 : static_cast<double>(std::sin(r) / r);
+    const double want_cos = static_cast<double>(std::cos(r));
+    const double es = ulps(sinc, want_sinc), ec = ulps(cos_r, want_cos);
+    if (es > worst_sinc) worst_sinc = es, at_sinc = z;
+    if (ec > worst_cos) worst_cos = ec, at_cos = z;
+  };
+  // quat_from_rotvec's range: from its Taylor branch's end (t^2 = 5.3e-15) to the limit
+  for (double limit : {1e-6, 1e-3, kSincCosSquareLimit}) {
+    std::uniform_real_distribution<double> uniform(0.0, limit);
+    for (int i = 0; i < 300'000; ++i) check(uniform(gen));
+  }
+  for (double z = 1e-300; z < kSincCosSquareLimit; z *= 3.7) check(z);
+  check(0.0);
+  check(kSincCosSquareLimit);
+  std::printf("sinc: worst %.3f ulp at z = %a; cos: worst %.3f ulp at z = %a\n", worst_sinc,
+              at_sinc, worst_cos, at_cos);
+  EXPECT_LE(worst_sinc, 1.0) << "at z = " << at_sinc;
+  EXPECT_LE(worst_cos, 1.0) << "at z = " << at_cos;
+  EXPECT_LT(kSincCosSquareLimit, (M_PI / 4) * (M_PI / 4));  // inside the polynomials' interval
+}
+
 // The same formulas on a 2-lane vector (GCC vector extension, as the SSE2 step passes' lane type)
 // give every lane the scalar function's bits.
 using V2 = double __attribute__((vector_size(16)));
@@ -141,7 +171,14 @@ TEST(ReproducibleMath, LaneVectorsGiveTheScalarBits) {
     const V2 r{angle(gen), angle(gen) * 1e-3};
     V2 s, c;
     sincos_reduced<V2Ops>(r, s, c);
+    const V2 z{r[0] * r[0] * 1e-3, r[1] * r[1] * 1e-3};
+    V2 sinc, cos_r;
+    sinc_cos_of_square(z, sinc, cos_r);
     for (int k = 0; k < 2; ++k) {
+      double sinc_k, cos_k;
+      sinc_cos_of_square(z[k], sinc_k, cos_k);
+      ASSERT_EQ(bits(sinc[k]), bits(sinc_k)) << z[k];
+      ASSERT_EQ(bits(cos_r[k]), bits(cos_k)) << z[k];
       ASSERT_EQ(bits(a[k]), bits(acos(x[k]))) << x[k];
       double ss, cc;
       sincos(r[k], ss, cc);
