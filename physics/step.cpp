@@ -53,9 +53,6 @@ Scratch make_scratch(const Model& model) {
   sc.fric.assign(nv, Vec3::Zero());
   sc.old_pos.assign(nv, Vec3::Zero());
   const std::size_t ns = model.surface_voxels.size();
-  std::size_t cap = ns * 128;
-  if (ns > 1 && cap > ns * (ns - 1) / 2) cap = ns * (ns - 1) / 2;
-  sc.pair_force.assign(cap, {0.0f, 0.0f, 0.0f});
   std::size_t buckets = 1;
   while (buckets < 2 * ns + 2) buckets <<= 1;
   sc.grid_entries.assign(ns, Scratch::GridEntry{});
@@ -286,8 +283,6 @@ void rebuild_pairs(const Model& m, State& st, Scratch& sc) {
               return x.a != y.a ? x.a < y.a : x.b < y.b;
             });
   st.col_pair_count = count;
-  if (sc.pair_force.size() < st.col_pairs.size())
-    sc.pair_force.resize(st.col_pairs.size(), {0.0f, 0.0f, 0.0f});
   st.collisions_stale = false;
   ++st.counters.collision_rebuilds;
 }
@@ -309,7 +304,10 @@ void rebuild_pairs(const Model& m, State& st, Scratch& sc) {
   }
   if (st.collisions_stale) rebuild_pairs(m, st, sc);
 
-  std::fill(sc.collision_force.begin(), sc.collision_force.end(), Vec3::Zero());
+  if (!sc.collision_force_zero) {
+    std::fill(sc.collision_force.begin(), sc.collision_force.end(), Vec3::Zero());
+    sc.collision_force_zero = true;
+  }
   // D0 = (s + s) * 0.625 (sum of the two base sizes x envelope radius), float
   const float nom_dist = static_cast<float>((m.voxel_size + m.voxel_size) * 0.625f);
   for (int k = 0; k < st.col_pair_count; ++k) {
@@ -338,6 +336,7 @@ void rebuild_pairs(const Model& m, State& st, Scratch& sc) {
     const float mag = kc * rel_dist + cc * rel_vel;
     const float fx = ux * mag, fy = uy * mag, fz = uz * mag;
     // voxel 1 receives -F, voxel 2 receives +F (collisionF = -sum of contactForce)
+    sc.collision_force_zero = false;
     sc.collision_force[a] -= Vec3(fx, fy, fz);
     sc.collision_force[b] -= Vec3(-fx, -fy, -fz);
   }

@@ -52,11 +52,12 @@ struct Scratch {
   float link_damping_dt = std::numeric_limits<float>::quiet_NaN();  // [s]
   // voxel pass (pneuvox part 1 -> part 2 carry-over, §2.1 "fork-only per-voxel scratch")
   std::vector<Vec3> collision_force;  // collisionF [N] (voxels)
-  std::vector<Vec3> part2_force;      // gravityF + collisionF + fric [N] (voxels)
-  std::vector<Vec3> fric;             // floor normal + friction force [N] (voxels)
-  std::vector<Vec3> old_pos;          // position at the start of the step [m] (voxels)
-  // self-collision: per-pair force (float, §2.10) and the broadphase grid
-  std::vector<std::array<float, 3>> pair_force;  // [N] (pairs; sized to pair capacity)
+  // every collision_force entry is +0: update_collisions then skips refilling it (most steps have
+  // no touching pair, and the refill was a third of the collision time of a champion)
+  bool collision_force_zero = true;
+  std::vector<Vec3> part2_force;  // gravityF + collisionF + fric [N] (voxels)
+  std::vector<Vec3> fric;         // floor normal + friction force [N] (voxels)
+  std::vector<Vec3> old_pos;      // position at the start of the step [m] (voxels)
   // Broadphase grid of a rebuild: the surface voxels with their grid cell and a copy of their
   // position, in slot order (grid_entries) and sorted by hash bucket of the cell (grid_sorted,
   // counting sort; within a bucket by cell, then ascending slot), so that the surface voxels of
