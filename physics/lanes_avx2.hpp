@@ -3,8 +3,10 @@
 // operations, encoded with 32 vector registers instead of 16). Internal to physics/.
 #pragma once
 
-#if !defined(__AVX2__) || defined(__FMA__)
-#error "lanes_avx2.hpp needs -mavx2 and no FMA (see physics/CMakeLists.txt)"
+// No FMA instructions with GCC; clang cannot leave them out of AVX-512 and relies on
+// -ffp-contract=off (physics/CMakeLists.txt).
+#if !defined(__AVX2__) || (defined(__FMA__) && !defined(__clang__))
+#error "lanes_avx2.hpp needs -mavx2 and, with GCC, no FMA (see physics/CMakeLists.txt)"
 #endif
 #include <immintrin.h>
 

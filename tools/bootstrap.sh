@@ -3,6 +3,7 @@
 #   tools/bootstrap.sh quickstart   install dependencies, build, run a small real evolution
 #   tools/bootstrap.sh test         install dependencies, build, run the whole test suite
 #   tools/bootstrap.sh sanitize     the test suite built with -fsanitize=address,undefined
+#   tools/bootstrap.sh clang        the physics bit tests built with clang (same golden hashes)
 # Idempotent: packages already installed are not touched, builds are incremental.
 set -euo pipefail
 
@@ -78,8 +79,20 @@ case "${1:-}" in
     ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1 \
       ctest --test-dir "$ROOT/build-sanitize" --output-on-failure -j"$JOBS" -LE "long|no_sanitize"
     ;;
+  clang)
+    # The physics gives the same bits with clang as with GCC: the golden hashes (every SIMD
+    # width, both integrators) and the lane/scalar bits of the reproducible math.
+    PACKAGES+=(clang)
+    install_dependencies
+    cmake -S "$ROOT" -B "$ROOT/build-clang" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+      -DSOFTEVO_WERROR=ON -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ >/dev/null
+    cmake --build "$ROOT/build-clang" -j"$JOBS" --target test_physics_determinism \
+      test_reproducible_math physics_golden_hash
+    "$ROOT/build-clang/tests/test_physics_determinism"
+    "$ROOT/build-clang/tests/test_reproducible_math"
+    ;;
   *)
-    echo "usage: $0 quickstart|test|sanitize" >&2
+    echo "usage: $0 quickstart|test|sanitize|clang" >&2
     exit 2
     ;;
 esac
