@@ -10,6 +10,7 @@
 #include "physics/model.hpp"
 #include "physics/scenes.hpp"
 #include "physics/step.hpp"
+#include "tests/physics/random_vec3.hpp"
 
 namespace softevo::physics::golden {
 
@@ -48,19 +49,13 @@ inline std::uint64_t run_scene(const std::string& integrator, Simd simd = Simd::
   State st = initial_state(m);
   Scratch sc = make_scratch(m);
   Rng rng(2024);
-  // x, then y, then z: each draw is its own statement, because the order in which a compiler
-  // evaluates the arguments of Vec3(rng.normal(), rng.normal(), rng.normal()) is unspecified
-  // (GCC 12 goes right to left, clang 14 left to right, and the scene differed between them)
-  const auto normal3 = [&rng]() {
-    const double x = rng.normal();
-    const double y = rng.normal();
-    const double z = rng.normal();
-    return Vec3(x, y, z);
-  };
+  // (x, y, z drawn in this order: with Vec3(rng.normal(), ...) the scene differed between GCC
+  // and clang, see random_vec3.hpp)
+  const auto normal = [&rng] { return rng.normal(); };
   for (int v = 0; v < m.voxel_count; ++v) {
     st.pos[v].z() += 0.3 * m.voxel_size;
-    st.lin_mom[v] = normal3() * 2e-5;
-    st.ang_mom[v] = normal3() * (2e-10 * spin);
+    st.lin_mom[v] = test::random_vec3(normal) * 2e-5;
+    st.ang_mom[v] = test::random_vec3(normal) * (2e-10 * spin);
   }
   std::vector<Vec3> ext(m.voxel_count, Vec3::Zero());
   for (int i = 0; i < kSteps; ++i) {

@@ -11,6 +11,7 @@
 #include "physics/observables.hpp"
 #include "physics/scenes.hpp"
 #include "physics/step.hpp"
+#include "tests/physics/random_vec3.hpp"
 
 namespace softevo::physics {
 namespace {
@@ -131,11 +132,9 @@ TEST(SelfCollisionPairs, GridMatchesBruteForce) {
       Scratch sc = make_scratch(m);
       for (auto& p : st.pos) {
         if (scattered) {
-          p = Vec3(rng.uniform(0.0, 15.0), rng.uniform(0.0, 15.0), rng.uniform(0.0, 15.0)) *
-              m.voxel_size;
+          p = test::random_vec3([&rng] { return rng.uniform(0.0, 15.0); }) * m.voxel_size;
         } else {
-          p += Vec3(rng.uniform(-0.8, 0.8), rng.uniform(-0.8, 0.8), rng.uniform(-0.8, 0.8)) *
-               m.voxel_size;
+          p += test::random_vec3([&rng] { return rng.uniform(-0.8, 0.8); }) * m.voxel_size;
         }
       }
       const std::vector<Vec3> before = st.pos;

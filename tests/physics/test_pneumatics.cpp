@@ -19,6 +19,7 @@
 #include "physics/pneumatics_triangle.hpp"
 #include "physics/state.hpp"
 #include "physics/step.hpp"
+#include "tests/physics/random_vec3.hpp"
 
 namespace {
 
@@ -290,7 +291,7 @@ TEST(Pneumatics, MeshPassesGiveTheReferenceBitsAtEverySimdWidth) {
   State st = initial_state(model);
   Rng rng(7);
   for (Vec3& p : st.pos)
-    p += Vec3(rng.normal(), rng.normal(), rng.normal()) * (0.1 * model.voxel_size);
+    p += test::random_vec3([&rng] { return rng.normal(); }) * (0.1 * model.voxel_size);
   const PneumaticsState start = initial_pneumatics_state(pm, st.pos);
 
   // reference: per chamber, p = n / V with n = 1.15 V0 (gauge > 0), forces triangle by triangle

@@ -15,6 +15,7 @@
 #include "physics/observables.hpp"
 #include "physics/scenes.hpp"
 #include "physics/step.hpp"
+#include "tests/physics/random_vec3.hpp"
 
 namespace softevo::physics {
 namespace {
@@ -127,11 +128,12 @@ TEST_P(Validation, FreeFlightMomentum) {
   State st = initial_state(m);
   Scratch sc = make_scratch(m);
   Rng rng(12345);
+  const auto normal = [&rng] { return rng.normal(); };
   Vec3 p0 = Vec3::Zero();
   for (int v = 0; v < m.voxel_count; ++v) {
-    st.lin_mom[v] = Vec3(rng.normal(), rng.normal(), rng.normal()) * 1e-5;  // ~1 cm/s
-    st.ang_mom[v] = Vec3(rng.normal(), rng.normal(), rng.normal()) * 1e-9;
-    st.pos[v] += Vec3(rng.normal(), rng.normal(), rng.normal()) * 5e-5;  // 0.5% strain
+    st.lin_mom[v] = test::random_vec3(normal) * 1e-5;  // ~1 cm/s
+    st.ang_mom[v] = test::random_vec3(normal) * 1e-9;
+    st.pos[v] += test::random_vec3(normal) * 5e-5;  // 0.5% strain
   }
   // remove the net momentum so that "round-off" is measured against zero
   for (int v = 0; v < m.voxel_count; ++v) p0 += st.lin_mom[v];
