@@ -95,6 +95,15 @@ template <class T>
   return y + y * (z * estrin(z, kAsinCoeff));
 }
 
+// cos(r) = 1 - z/2 + z^2 C(z) from z = r^2, |r| <= pi/4, with the rounding error of 1 - z/2 added
+// back (keeps cos within 1 ulp near pi/4).
+template <class T>
+[[gnu::always_inline]] inline T cos_of_square(const T& z) {
+  const T half_z = 0.5 * z;
+  const T one_minus = 1.0 - half_z;
+  return one_minus + (((1.0 - one_minus) - half_z) + z * z * estrin(z, kCosCoeff));
+}
+
 // acos(x) for x in [-1, 1] (NaN outside):
 //   |x| <= 1/2:  pi/2 - asin(x)
 //   x > 1/2:     2 asin(sqrt((1 - x) / 2))       (1 - x exact: Sterbenz)
@@ -118,10 +127,7 @@ template <class Ops, class T>
   const T r = ((x - k * kHalfPi1) - k * kHalfPi2) - k * kHalfPi3;
   const T z = r * r;
   const T sin_r = r + r * (z * estrin(z, kSinCoeff));
-  // 1 - z/2 with its rounding error added back (keeps cos within 1 ulp near pi/4)
-  const T half_z = 0.5 * z;
-  const T one_minus = 1.0 - half_z;
-  const T cos_r = one_minus + (((1.0 - one_minus) - half_z) + z * z * estrin(z, kCosCoeff));
+  const T cos_r = cos_of_square(z);
   // quadrant = k - 4 round(k / 4), in {-2, -1, 0, 1, 2} (+-2 are the same quadrant)
   const T quadrant = k - 4.0 * ((k * 0.25 + kRoundMagic) - kRoundMagic);
   const auto odd = (quadrant == 1.0) | (quadrant == -1.0);
@@ -142,9 +148,7 @@ constexpr double kSincCosSquareLimit = 0.6;  // < (pi/4)^2 = 0.6169, the polynom
 template <class T>
 [[gnu::always_inline]] inline void sinc_cos_of_square(const T& z, T& sinc, T& cos_r) {
   sinc = 1.0 + z * estrin(z, kSinCoeff);
-  const T half_z = 0.5 * z;
-  const T one_minus = 1.0 - half_z;
-  cos_r = one_minus + (((1.0 - one_minus) - half_z) + z * z * estrin(z, kCosCoeff));
+  cos_r = cos_of_square(z);
 }
 
 // Scalar entry points (quat.hpp): the C library beyond the reduction's range.

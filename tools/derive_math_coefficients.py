@@ -4,7 +4,8 @@
 Each polynomial is a Chebyshev fit (near-minimax) of the smooth remainder of the function, in
 z = x^2, computed with mpmath at 60 digits and rounded to double. The script also measures the
 error of the rounded polynomials, evaluated in double exactly as the header does (Estrin's
-scheme since physics revision 3, no FMA), against mpmath, and prints the constants of the pi/2 reductions.
+scheme since physics revision 3, no FMA), against mpmath, and prints the constants of the pi/2
+reductions.
 
     python3 tools/derive_math_coefficients.py        (needs python3-mpmath)
 """
