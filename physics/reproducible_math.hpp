@@ -144,7 +144,8 @@ template <class Ops, class T>
 // cos polynomials above: sin(r) / r = 1 + z S(z), cos(r) = 1 - z/2 + z^2 C(z). quat_from_rotvec
 // (§2.11) needs exactly these of the half angle |theta| and has its square t = |theta|^2, so it
 // takes neither the square root, the range reduction nor the division sin(|theta|) / |theta|.
-constexpr double kSincCosSquareLimit = 0.6;  // < (pi/4)^2 = 0.6169, the polynomials' interval
+// [rad^2] below (pi/4)^2 = 0.6169, the interval of the sin / cos polynomials
+constexpr double kSincCosSquareLimit = 0.6;
 template <class T>
 [[gnu::always_inline]] inline void sinc_cos_of_square(const T& z, T& sinc, T& cos_r) {
   sinc = 1.0 + z * estrin(z, kSinCoeff);
