@@ -31,6 +31,10 @@ constexpr int kDefaultMaterialCount = 10;             // materials 1..10 (pneuvo
 constexpr double kDefaultModulusStep = 10000.0;       // E_k = 10 kPa x k [Pa]
 constexpr double kDefaultDensity = 1000.0;            // [kg/m^3]
 constexpr int kMaxCellValue = kFirstChamberCell + 9;  // chambers 11..20
+// Deepest JSON nesting a robot file may have. A real file nests about 5 levels (genome, its
+// genes, their fields); `reference` holds a few more. Re-serialising `reference` with dump() is
+// recursive, so an adversarial file with 65k levels would overflow the stack: refuse it on read.
+constexpr int kMaxJsonDepth = 64;
 
 // Error context: the file (or source) name and the dotted key path of the current value.
 class Reader {
@@ -357,11 +361,21 @@ Json vectors_to_json(const ControllerVectors& v, int n_in, int hidden, int outpu
 RobotFile parse_robot_json(const std::string& json_text, const std::string& source_name) {
   const Reader r(source_name);
   Json root;
+  bool too_deep = false;
+  const Json::parser_callback_t refuse_deep_nesting = [&too_deep](int depth, Json::parse_event_t,
+                                                                  Json&) {
+    // Returning false discards the value, so the parser neither recurses nor allocates further.
+    if (depth > kMaxJsonDepth) too_deep = true;
+    return !too_deep;
+  };
   try {
-    root = Json::parse(json_text);
+    root = Json::parse(json_text, refuse_deep_nesting);
   } catch (const Json::parse_error& e) {
     r.fail_top(std::string("not valid JSON: ") + e.what());
   }
+  if (too_deep)
+    r.fail_top("JSON nested deeper than " + std::to_string(kMaxJsonDepth) +
+               " levels (a robot file needs fewer than 10)");
   if (!root.is_object()) r.fail_top("the robot file must be a JSON object");
   r.check_keys(root, "",
                {"format", "name", "voxel_size", "lattice", "cells", "materials", "controller",

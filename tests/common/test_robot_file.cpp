@@ -191,6 +191,30 @@ TEST(RobotFile, NotJsonAndMissingFileAreErrors) {
   EXPECT_THROW(softevo::read_robot_file("/nonexistent/robot.json"), RobotFileError);
 }
 
+TEST(RobotFile, DeepNestingIsRefusedNotACrash) {
+  // 65k levels inside `reference` once crashed the re-serialisation (a recursive dump()).
+  for (const int levels : {65536, 70}) {
+    nlohmann::ordered_json j = minimal_robot();
+    std::string text = j.dump();
+    text.pop_back();  // drop the closing brace and append a deeply nested reference
+    text += ",\"reference\": {\"x\": " + std::string(levels, '[') + std::string(levels, ']') + "}}";
+    try {
+      softevo::parse_robot_json(text, "deep.json");
+      ADD_FAILURE() << levels << " levels were accepted";
+    } catch (const RobotFileError& e) {
+      EXPECT_NE(std::string(e.what()).find("deep.json"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("nested deeper than 64"), std::string::npos) << e.what();
+    }
+  }
+  // Moderate nesting in `reference` is kept verbatim.
+  nlohmann::ordered_json j = minimal_robot();
+  std::string text = j.dump();
+  text.pop_back();
+  text += ",\"reference\": {\"x\": " + std::string(20, '[') + std::string(20, ']') + "}}";
+  EXPECT_NE(softevo::parse_robot_json(text, "ok.json").reference_json.find("[[[["),
+            std::string::npos);
+}
+
 TEST(RobotFile, ThesisChampionsParseAndRoundTrip) {
   const fs::path dir = shared_dir() / "reference" / "bestbots";
   if (!fs::exists(dir)) GTEST_SKIP() << "../shared/reference/bestbots not found (" << dir << ")";
