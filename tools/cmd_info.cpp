@@ -8,6 +8,7 @@
 #include <string>
 
 #include "common/config.hpp"
+#include "common/printable.hpp"
 #include "master/archive.hpp"
 #include "tools/commands.hpp"
 
@@ -57,16 +58,20 @@ void register_info(CLI::App& app, int& exit_code) {
       j["config"] = archive.config_text();
       std::printf("%s\n", j.dump(2).c_str());
     } else {
-      std::printf("archive          %s (%s)\n", path->c_str(), info.format.c_str());
-      std::printf("experiment       %s, seed %lld, config hash %s\n", info.experiment.c_str(),
-                  static_cast<long long>(info.seed), info.config_hash.c_str());
-      std::printf("state            %s, %lld generations done\n", info.state.c_str(),
+      // Archive strings are shown escaped: a file may carry terminal control sequences.
+      const auto shown = [](const std::string& text) { return printable(text); };
+      std::printf("archive          %s (%s)\n", shown(*path).c_str(), shown(info.format).c_str());
+      std::printf("experiment       %s, seed %lld, config hash %s\n",
+                  shown(info.experiment).c_str(), static_cast<long long>(info.seed),
+                  shown(info.config_hash).c_str());
+      std::printf("state            %s, %lld generations done\n", shown(info.state).c_str(),
                   static_cast<long long>(info.generations_done));
-      std::printf("written by       softevo %s (commit %s), %d ranks on %s\n", info.version.c_str(),
-                  info.git_commit.c_str(), info.ranks, info.host.c_str());
+      std::printf("written by       softevo %s (commit %s), %d ranks on %s\n",
+                  shown(info.version).c_str(), shown(info.git_commit).c_str(), info.ranks,
+                  shown(info.host).c_str());
       std::printf("physics revision %d\n", info.physics_revision);
-      std::printf("time             %s .. %s\n", info.start_time.c_str(),
-                  info.end_time.empty() ? "(running)" : info.end_time.c_str());
+      std::printf("time             %s .. %s\n", shown(info.start_time).c_str(),
+                  info.end_time.empty() ? "(running)" : shown(info.end_time).c_str());
       std::printf("fitness_digest   %s\n", fitness.c_str());
       std::printf("content_digest   %s\n", content.c_str());
       std::printf("\n%10s %12s %12s %12s %8s %10s\n", "generation", "best", "mean", "sd", "species",
@@ -75,7 +80,8 @@ void register_info(CLI::App& app, int& exit_code) {
         std::printf("%10lld %12.6g %12.6g %12.6g %8lld %10.3g\n",
                     static_cast<long long>(s.generation), s.best, s.mean, s.sd,
                     static_cast<long long>(s.species_count), s.evaluations_per_second);
-      std::printf("\n# resolved config\n%s", archive.config_text().c_str());
+      std::printf("\n# resolved config\n%s",
+                  printable(archive.config_text(), Newlines::keep).c_str());
     }
     exit_code = kExitOk;
   });
