@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/body_plan.hpp"
+#include "common/safe_write.hpp"
 
 namespace softevo {
 
@@ -79,6 +80,9 @@ class RobotFileError : public std::runtime_error {
 RobotFile read_robot_file(const std::string& path);
 RobotFile parse_robot_json(const std::string& json_text, const std::string& source_name);
 std::string robot_to_json(const RobotFile& robot);  // pretty JSON, full double precision
-void write_robot_file(const RobotFile& robot, const std::string& path);  // atomic (tmp + rename)
+// Atomic, refuses symlinks and special files (common/safe_write.hpp); an existing regular file
+// is replaced unless `overwrite` is refuse (the CLI's default; --force replaces).
+void write_robot_file(const RobotFile& robot, const std::string& path,
+                      Overwrite overwrite = Overwrite::replace);
 
 }  // namespace softevo

@@ -4,13 +4,11 @@
 // controller vector lengths follow from the input count of §4.1 (2 + directed + 10 x closed) and
 // the layouts of §4.4. Any problem is a RobotFileError "<file>: key '<path>': <problem>".
 // `reference` is never interpreted: it is kept as JSON text (key order preserved).
-#include <unistd.h>
 #include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <fstream>
 #include <initializer_list>
 #include <set>
@@ -469,26 +467,8 @@ std::string robot_to_json(const RobotFile& robot) {
   return root.dump(1) + "\n";
 }
 
-void write_robot_file(const RobotFile& robot, const std::string& path) {
-  const std::string text = robot_to_json(robot);
-  // Atomic replace: write a sibling temporary file, flush it, then rename over the target.
-  const std::string tmp = path + ".tmp." + std::to_string(static_cast<long>(::getpid()));
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw RobotFileError(path + ": cannot write '" + tmp + "': " + std::strerror(errno));
-    out << text;
-    out.flush();
-    if (!out) {
-      std::remove(tmp.c_str());
-      throw RobotFileError(path + ": write error on '" + tmp + "'");
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::remove(tmp.c_str());
-    throw RobotFileError(path + ": cannot rename '" + tmp + "': " + ec.message());
-  }
+void write_robot_file(const RobotFile& robot, const std::string& path, Overwrite overwrite) {
+  write_file_atomically(path, robot_to_json(robot), overwrite);
 }
 
 }  // namespace softevo

@@ -23,6 +23,7 @@ void register_export(CLI::App& app, int& exit_code) {
     bool best = false;
     std::int64_t id = -1;
     std::string out;
+    bool force = false;
   };
   auto a = std::make_shared<Args>();
   cmd->add_option("RUN", a->path, "run archive (.h5)")->required();
@@ -32,6 +33,7 @@ void register_export(CLI::App& app, int& exit_code) {
   auto* id = cmd->add_option("--id", a->id, "the individual with this genome id");
   best->excludes(id);
   cmd->add_option("-o,--out", a->out, "output robot file (.json)")->required();
+  cmd->add_flag("--force", a->force, "replace an existing output file");
   cmd->callback([&exit_code, a] {
     if (!a->best && a->id < 0) {
       std::fprintf(stderr, "softevo export: give --best or --id ID\n");
@@ -56,7 +58,8 @@ void register_export(CLI::App& app, int& exit_code) {
     const std::string name = archive.info().experiment + "_seed" +
                              std::to_string(archive.info().seed) + "_gen" + std::to_string(g) +
                              "_id" + std::to_string(rec.id[row]);
-    write_robot_file(worker::robot_file_of(config, genome, name), a->out);
+    write_robot_file(worker::robot_file_of(config, genome, name), a->out,
+                     a->force ? Overwrite::replace : Overwrite::refuse);
     std::printf("%s: generation %lld, id %lld, fitness %.17g -> %s\n", a->path.c_str(),
                 static_cast<long long>(g), static_cast<long long>(rec.id[row]), rec.fitness[row],
                 a->out.c_str());
