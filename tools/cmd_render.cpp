@@ -188,6 +188,7 @@ int run_render(const RenderArgs& args) {
     throw std::invalid_argument("render: output " + args.output +
                                 " must end in .png (image) or .mp4 (video)");
   }
+  if (!video) render::require_png_support(args.output);
   if (args.timelapse < 0 || args.timelapse > 64) {
     throw std::invalid_argument("render: --timelapse must be between 0 and 64");
   }

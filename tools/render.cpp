@@ -1,7 +1,9 @@
 // Software rasteriser for `softevo render` (see render.hpp for the approach).
 #include "tools/render.hpp"
 
+#ifdef SOFTEVO_HAVE_PNG
 #include <png.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
@@ -313,6 +315,15 @@ void Image::set(int x, int y, std::array<std::uint8_t, 3> c) {
   std::memcpy(&rgb[i], c.data(), 3);
 }
 
+void require_png_support([[maybe_unused]] const std::string& path) {
+#ifndef SOFTEVO_HAVE_PNG
+  throw std::runtime_error("cannot write or read PNG " + path +
+                           ": softevo was built without libpng (install libpng-dev, reconfigure "
+                           "and rebuild; video output such as .mp4 works without it)");
+#endif
+}
+
+#ifdef SOFTEVO_HAVE_PNG
 void write_png(const Image& image, const std::string& path) {
   if (image.width <= 0 || image.height <= 0 ||
       image.rgb.size() != static_cast<std::size_t>(image.width) * image.height * 3) {
@@ -347,6 +358,16 @@ Image read_png(const std::string& path) {
   }
   return image;
 }
+#else
+void write_png(const Image&, const std::string& path) {
+  require_png_support(path);
+}
+
+Image read_png(const std::string& path) {
+  require_png_support(path);
+  return {};
+}
+#endif
 
 Body body_from_plan(const BodyPlan& plan, int material_count) {
   const auto& d = plan.lattice;

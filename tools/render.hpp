@@ -38,6 +38,9 @@ struct Image {
 // libpng; throws std::runtime_error naming the path and the reason.
 void write_png(const Image& image, const std::string& path);
 Image read_png(const std::string& path);
+// libpng is optional (SOFTEVO_ENABLE_PNG): throws std::runtime_error naming `path` when this
+// build has no PNG support, so a render fails before it simulates.
+void require_png_support(const std::string& path);
 
 // What is drawn of a robot: its cells, independent of where they are.
 struct Body {

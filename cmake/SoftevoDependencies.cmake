@@ -1,0 +1,168 @@
+# Dependencies, each required only by the targets that use it.
+#
+# Optional parts follow one pattern: SOFTEVO_REQUIRE_<X> (default OFF) turns "not found" into a
+# configure error; SOFTEVO_ENABLE_<X> records what was found and decides what gets built.
+#   TESTS  GoogleTest             the test suite
+#   PNG    libpng                 `softevo render` to .png (without it: .mp4 only, via ffmpeg)
+#   MPI    MPI (C++ bindings off) softevo-mpi and the MPI tests
+#   HDF5   HDF5 C (C++ for now)   the master (run archive), softevo-mpi, the softevo CLI
+# The core (common, physics, evo, worker and their tests) needs none of them, only the
+# header-only libraries below.
+#
+# Header-only libraries (Eigen, CLI11, nlohmann-json, toml++) are looked up with find_package;
+# with SOFTEVO_FETCH_MISSING a missing one is downloaded at configure time from a pinned URL
+# checked by SHA256, so a cluster with only a compiler, CMake, MPI and HDF5 can build softevo-mpi.
+
+option(SOFTEVO_FETCH_MISSING
+       "download missing header-only libraries (Eigen, CLI11, nlohmann-json) at configure time" ON)
+option(SOFTEVO_REQUIRE_TESTS "fail at configure time unless GoogleTest is found" OFF)
+option(SOFTEVO_REQUIRE_PNG "fail at configure time unless libpng is found" OFF)
+option(SOFTEVO_REQUIRE_MPI "fail at configure time unless MPI is found" OFF)
+option(SOFTEVO_REQUIRE_HDF5 "fail at configure time unless HDF5 (C) is found" OFF)
+
+include(FetchContent)
+
+# softevo_optional(NAME X FOUND var HOW "install hint")
+#   after the find_package call: sets SOFTEVO_ENABLE_X from `var`, fails if SOFTEVO_REQUIRE_X.
+macro(softevo_optional)
+  cmake_parse_arguments(_opt "" "NAME;FOUND;HOW" "" ${ARGN})
+  if(${_opt_FOUND})
+    set(SOFTEVO_ENABLE_${_opt_NAME} ON)
+  else()
+    set(SOFTEVO_ENABLE_${_opt_NAME} OFF)
+    if(SOFTEVO_REQUIRE_${_opt_NAME})
+      message(FATAL_ERROR
+        "SOFTEVO_REQUIRE_${_opt_NAME} is ON but ${_opt_NAME} was not found: ${_opt_HOW}")
+    endif()
+  endif()
+endmacro()
+
+find_package(GTest QUIET)
+softevo_optional(NAME TESTS FOUND GTest_FOUND HOW "install libgtest-dev (Debian) or set GTest_DIR")
+
+find_package(PNG QUIET)
+softevo_optional(NAME PNG FOUND PNG_FOUND HOW "install libpng-dev (Debian) or set PNG_ROOT")
+
+find_package(MPI QUIET COMPONENTS CXX)
+softevo_optional(NAME MPI FOUND MPI_FOUND
+                 HOW "install libopenmpi-dev (Debian), or load your cluster's MPI module")
+
+# The C library serves the archive; the C++ bindings only the softevo CLI's trace reader, which
+# is moving to the C API (clusters often lack the C++ bindings).
+find_package(HDF5 QUIET COMPONENTS C OPTIONAL_COMPONENTS CXX)
+softevo_optional(NAME HDF5 FOUND HDF5_FOUND
+                 HOW "install libhdf5-dev (Debian), or load your cluster's HDF5 module")
+if(SOFTEVO_ENABLE_HDF5 AND HDF5_CXX_FOUND)
+  set(SOFTEVO_HAVE_HDF5_CXX ON)
+else()
+  set(SOFTEVO_HAVE_HDF5_CXX OFF)
+endif()
+
+# softevo_header_library(PACKAGE P TARGET T DEBIAN deb [MINIMUM v] [FIND_ARGS ...]
+#                        [VERSION v URLS u ... SHA256 h INCLUDE_DIR dir])
+#   find_package(P MINIMUM); when missing and a pinned download is known, fetch it and define the
+#   INTERFACE target T over its headers (no build of the project's own CMake: we need headers
+#   only). Records how it was satisfied in SOFTEVO_SOURCE_<P> for the summary.
+function(softevo_header_library)
+  cmake_parse_arguments(H "" "PACKAGE;TARGET;DEBIAN;MINIMUM;VERSION;SHA256;INCLUDE_DIR"
+                        "FIND_ARGS;URLS" ${ARGN})
+  find_package(${H_PACKAGE} ${H_MINIMUM} QUIET ${H_FIND_ARGS})
+  if(${H_PACKAGE}_FOUND AND TARGET ${H_TARGET})
+    set(SOFTEVO_SOURCE_${H_PACKAGE} "found ${${H_PACKAGE}_VERSION}" PARENT_SCOPE)
+    return()
+  endif()
+  set(how "install ${H_DEBIAN} (Debian) or point CMAKE_PREFIX_PATH at an install of it")
+  if(NOT H_URLS)
+    message(FATAL_ERROR "${H_PACKAGE} not found and softevo knows no checked download of it: ${how}")
+  endif()
+  if(NOT SOFTEVO_FETCH_MISSING)
+    message(FATAL_ERROR "${H_PACKAGE} not found and SOFTEVO_FETCH_MISSING is OFF: ${how}, "
+                        "or configure with -DSOFTEVO_FETCH_MISSING=ON to download it")
+  endif()
+  string(TOLOWER "softevo_dep_${H_PACKAGE}" content)
+  FetchContent_Declare(${content} URL ${H_URLS} URL_HASH SHA256=${H_SHA256})
+  FetchContent_GetProperties(${content})
+  if(NOT ${content}_POPULATED)
+    message(STATUS "${H_PACKAGE} not found: downloading ${H_VERSION} (SOFTEVO_FETCH_MISSING)")
+    FetchContent_Populate(${content})
+  endif()
+  add_library(${H_TARGET} INTERFACE IMPORTED GLOBAL)
+  target_include_directories(${H_TARGET} INTERFACE ${${content}_SOURCE_DIR}/${H_INCLUDE_DIR})
+  set(SOFTEVO_SOURCE_${H_PACKAGE} "downloaded ${H_VERSION}" PARENT_SCOPE)
+endfunction()
+
+# Pinned to the versions Debian 12 ships. The SHA256 sums are those of Debian's source tarballs
+# (checked against the packages' .dsc files); the Eigen and nlohmann-json tarballs are the
+# upstream release tarballs unchanged, so the upstream URLs serve as fallbacks.
+set(SOFTEVO_DEBIAN_POOL "http://deb.debian.org/debian/pool/main")
+softevo_header_library(PACKAGE Eigen3 MINIMUM 3.3 VERSION 3.4.0 TARGET Eigen3::Eigen DEBIAN libeigen3-dev
+  FIND_ARGS NO_MODULE
+  URLS ${SOFTEVO_DEBIAN_POOL}/e/eigen3/eigen3_3.4.0.orig.tar.bz2
+       https://gitlab.com/libeigen/eigen/-/archive/3.4.0/eigen-3.4.0.tar.bz2
+  SHA256 b4c198460eba6f28d34894e3a5710998818515104d6e74e5cc331ce31e46e626
+  INCLUDE_DIR .)
+softevo_header_library(PACKAGE nlohmann_json MINIMUM 3 VERSION 3.11.2 TARGET nlohmann_json::nlohmann_json
+  DEBIAN nlohmann-json3-dev
+  URLS ${SOFTEVO_DEBIAN_POOL}/n/nlohmann-json3/nlohmann-json3_3.11.2.orig.tar.gz
+       https://github.com/nlohmann/json/archive/refs/tags/v3.11.2.tar.gz
+  SHA256 d69f9deb6a75e2580465c6c4c5111b89c4dc2fa94e3a85fcd2ffcd9a143d9273
+  INCLUDE_DIR include)
+# toml++: Debian's 3.3.0+ds source tarball could not be downloaded to check its sum, so no
+# download is offered (an unchecked hash would be worse than a clear message).
+softevo_header_library(PACKAGE tomlplusplus TARGET tomlplusplus::tomlplusplus
+  DEBIAN libtomlplusplus-dev)
+
+# CLI11 only serves the executables (softevo, softevo-mpi), which need HDF5.
+if(SOFTEVO_ENABLE_HDF5)
+  # Debian's tarball is repacked (+ds: generated files removed), so no upstream fallback.
+  softevo_header_library(PACKAGE CLI11 VERSION 2.1.2 TARGET CLI11::CLI11 DEBIAN libcli11-dev
+    URLS ${SOFTEVO_DEBIAN_POOL}/c/cli11/cli11_2.1.2+ds.orig.tar.xz
+    SHA256 8143d20b688e98ccce8e24562d3b68e5f47c12e896c42c7ca8553dbde5bed55d
+    INCLUDE_DIR include)
+endif()
+
+# What gets built, from what was found.
+set(SOFTEVO_BUILD_MASTER ${SOFTEVO_ENABLE_HDF5})
+if(SOFTEVO_ENABLE_HDF5 AND SOFTEVO_ENABLE_MPI)
+  set(SOFTEVO_BUILD_SOFTEVO_MPI ON)
+else()
+  set(SOFTEVO_BUILD_SOFTEVO_MPI OFF)
+endif()
+set(SOFTEVO_BUILD_CLI ${SOFTEVO_HAVE_HDF5_CXX})
+
+function(softevo_print_summary)
+  set(built "common physics evo worker")
+  if(SOFTEVO_ENABLE_MPI)
+    string(APPEND built " worker_mpi")
+  endif()
+  if(SOFTEVO_BUILD_MASTER)
+    string(APPEND built " master")
+  endif()
+  if(SOFTEVO_BUILD_SOFTEVO_MPI)
+    string(APPEND built " master_mpi softevo-mpi")
+  endif()
+  if(SOFTEVO_BUILD_CLI)
+    string(APPEND built " softevo")
+    if(SOFTEVO_ENABLE_PNG)
+      string(APPEND built "(render .png)")
+    else()
+      string(APPEND built "(render .mp4 only)")
+    endif()
+  endif()
+  if(SOFTEVO_ENABLE_TESTS)
+    string(APPEND built " tests")
+  endif()
+  message(STATUS "softevo configuration:")
+  message(STATUS "  GoogleTest    ${SOFTEVO_ENABLE_TESTS}")
+  message(STATUS "  libpng        ${SOFTEVO_ENABLE_PNG}")
+  message(STATUS "  MPI           ${SOFTEVO_ENABLE_MPI}")
+  message(STATUS "  HDF5 C        ${SOFTEVO_ENABLE_HDF5}")
+  message(STATUS "  HDF5 C++      ${SOFTEVO_HAVE_HDF5_CXX} (softevo CLI only)")
+  foreach(p Eigen3 tomlplusplus nlohmann_json CLI11)
+    if(DEFINED SOFTEVO_SOURCE_${p})
+      string(SUBSTRING "${p}              " 0 14 label)
+      message(STATUS "  ${label}${SOFTEVO_SOURCE_${p}}")
+    endif()
+  endforeach()
+  message(STATUS "  builds        ${built}")
+endfunction()
