@@ -256,4 +256,17 @@ EvalResult decode_eval_result(std::span<const std::uint8_t> message) {
   return result;
 }
 
+std::vector<std::uint8_t> encode_shutdown(std::int32_t exit_code) {
+  WireWriter w;
+  w.i32(exit_code);
+  return frame_message(MessageKind::shutdown, w.data());
+}
+
+std::int32_t decode_shutdown(std::span<const std::uint8_t> message) {
+  WireReader r(unframe_message(message, MessageKind::shutdown), "shutdown");
+  const std::int32_t exit_code = r.i32("exit_code");
+  r.finish();
+  return exit_code;
+}
+
 }  // namespace softevo

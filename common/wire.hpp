@@ -28,7 +28,8 @@ enum class MessageKind : std::uint16_t {
   shutdown = 3,
   genome = 4,
   population = 5,
-  config_text = 6,
+  // 6 was config_text, never sent (the config travels as a broadcast, mpi/protocol.hpp); a new
+  // kind takes 7 so that no build reads another's 6 differently.
 };
 
 // Malformed, truncated or oversized input: the message names the field and the offsets.
@@ -94,5 +95,9 @@ std::vector<std::uint8_t> encode_eval_request(const EvalRequest& request);
 EvalRequest decode_eval_request(std::span<const std::uint8_t> message);
 std::vector<std::uint8_t> encode_eval_result(const EvalResult& result);
 EvalResult decode_eval_result(std::span<const std::uint8_t> message);
+
+// The message that ends a worker: the exit code every rank of the run returns (payload: i32).
+std::vector<std::uint8_t> encode_shutdown(std::int32_t exit_code);
+std::int32_t decode_shutdown(std::span<const std::uint8_t> message);
 
 }  // namespace softevo

@@ -1,27 +1,28 @@
-// The SPMD program softevo-mpi as a function of a communicator, so the MPI integration tests can
-// run it in-process on the world or on a sub-communicator (np = 1, 2, 3 in one test binary).
+// Rank 0 of softevo-mpi: the generation loop (master/run.hpp) with an executor that
+// self-schedules work units over ranks 1..N-1 (or evaluates by itself with one rank), the
+// console report, and the end of the workers. The program that joins this with the worker loop
+// is tools/softevo_mpi.cpp.
 //
-// Rank 0: parses options, resolves the config, prepares the run (start-up errors are broadcast:
-// every rank exits 2 with one message from rank 0, nothing touched), then runs the generation
-// loop (master/run.hpp) with an executor that self-schedules work units over ranks 1..N-1
-// (or evaluates by itself with one rank). Ranks 1..N-1 run the worker loop. An unrecoverable
-// error on any rank prints "softevo-mpi: rank R: error: ..." and calls MPI_Abort: no rank hangs.
-//
-// Exit codes (the same on every rank): 0 complete (or nothing to resume), 2 usage / config /
-// start-up error, 75 (kExitRequeue) stopped by SIGTERM/SIGINT/SIGUSR1 after a checkpoint.
+// Exit code: 0 complete (or nothing to resume), 75 (kExitRequeue) stopped by
+// SIGTERM/SIGINT/SIGUSR1 after a checkpoint. run_master sends it to every worker in the stop
+// message (mpi/protocol.hpp), the one way a worker learns it.
 #pragma once
 
-#include <mpi.h>
+#include <string>
 
-#include "worker/evaluate_unit.hpp"
+#include "master/run.hpp"
+#include "mpi/communicator.hpp"
 
 namespace softevo::master {
 
-struct MpiMainHooks {
-  worker::UnitOptions unit_options;  // tests: stand-in simulator
-  bool quiet = false;                // tests: no progress output
+struct MasterOptions {
+  std::string config_path;                   // shown in the console header
+  LocalExecutor::EvaluateFn evaluate_alone;  // evaluates a unit when there is no worker rank
+  bool quiet = false;                        // no console output (tests)
 };
 
-int softevo_mpi_main(int argc, char** argv, MPI_Comm comm, const MpiMainHooks& hooks = {});
+// Runs `run` (prepared by prepare_run) on rank 0 of `comm` and returns the exit code. Throws on
+// an unrecoverable error (the workers are then still waiting: the caller aborts the job).
+int run_master(const mpi::Communicator& comm, PreparedRun& run, const MasterOptions& options);
 
 }  // namespace softevo::master

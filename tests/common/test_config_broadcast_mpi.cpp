@@ -1,21 +1,12 @@
 // MPI: rank 0 resolves the config and broadcasts its canonical text; every rank re-parses it
-// and must arrive at the same hash (what softevo-mpi does at start-up).
+// and must arrive at the same hash (what softevo-mpi does at start-up, tools/softevo_mpi.cpp).
 #include <gtest/gtest.h>
 #include <mpi.h>
 
 #include "common/config.hpp"
+#include "mpi/communicator.hpp"
 
 namespace softevo {
-
-static std::string broadcast_string(const std::string& text) {
-  int rank = 0;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  unsigned long long size = text.size();
-  MPI_Bcast(&size, 1, MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD);
-  std::string out = rank == 0 ? text : std::string(size, '\0');
-  MPI_Bcast(out.data(), static_cast<int>(size), MPI_CHAR, 0, MPI_COMM_WORLD);
-  return out;
-}
 
 TEST(ConfigBroadcast, EveryRankGetsTheSameConfigAndHash) {
   int rank = 0, size = 0;
@@ -26,7 +17,7 @@ TEST(ConfigBroadcast, EveryRankGetsTheSameConfigAndHash) {
   if (rank == 0) {
     text = canonical_text(parse_config("[run]\nseed = 5\n", "bcast.toml", {"neat.pop_size=12"}));
   }
-  const std::string received = broadcast_string(text);
+  const std::string received = mpi::Communicator(MPI_COMM_WORLD).broadcast(text);
   const Config config = parse_config(received, "broadcast");
   EXPECT_EQ(config.run.seed, 5);
   EXPECT_EQ(config.neat.pop_size, 12);

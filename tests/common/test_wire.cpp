@@ -139,4 +139,17 @@ TEST(Wire, ErrorNamesTheField) {
   }
 }
 
+TEST(Wire, ShutdownCarriesTheExitCode) {
+  const std::vector<std::uint8_t> bytes = encode_shutdown(75);
+  // Header (magic "SEVO", version 1, kind 3 = shutdown, payload length 4), then the i32 code.
+  const std::vector<std::uint8_t> expected = {'S', 'E', 'V', 'O', 1, 0, 3,  0, 4, 0,
+                                              0,   0,   0,   0,   0, 0, 75, 0, 0, 0};
+  EXPECT_EQ(bytes, expected);
+  EXPECT_EQ(decode_shutdown(bytes), 75);
+  EXPECT_EQ(decode_shutdown(encode_shutdown(-3)), -3);
+  EXPECT_THROW(decode_shutdown(encode_eval_request({})), WireError);  // another kind
+  std::vector<std::uint8_t> longer = frame_message(MessageKind::shutdown, expected);
+  EXPECT_THROW(decode_shutdown(longer), WireError);  // trailing bytes after the code
+}
+
 }  // namespace softevo

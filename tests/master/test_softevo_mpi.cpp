@@ -23,15 +23,13 @@
 #include <vector>
 
 #include "common/robot.hpp"
-#include "common/wire.hpp"
 #include "evo/genome.hpp"
 #include "master/archive.hpp"
-#include "master/mpi_driver.hpp"
 #include "master/signals.hpp"
 #include "physics/revision.hpp"
 #include "tests/build_tree.hpp"
+#include "tools/softevo_mpi.hpp"
 #include "worker/evaluate_robot.hpp"
-#include "worker/worker_loop.hpp"
 
 extern char** environ;
 
@@ -113,8 +111,8 @@ std::string write_config(const TempDir& dir, const std::string& name, const std:
 }
 
 // Runs softevo-mpi on the first `nranks` ranks of the world (collective over the world).
-// Returns the exit code of rank 0 on every rank.
-int run_on(int nranks, const std::vector<std::string>& args, bool quiet = true) {
+// Returns this rank's exit code (-1 on a rank outside the run).
+int run_on_each(int nranks, const std::vector<std::string>& args, bool quiet = true) {
   const int wr = world_rank();
   MPI_Comm sub;
   MPI_Comm_split(MPI_COMM_WORLD, wr < nranks ? 0 : MPI_UNDEFINED, wr, &sub);
@@ -131,6 +129,12 @@ int run_on(int nranks, const std::vector<std::string>& args, bool quiet = true) 
     MPI_Comm_free(&sub);
   }
   sleepy_barrier();
+  return rc;
+}
+
+// As run_on_each, but returns the exit code of rank 0 on every rank.
+int run_on(int nranks, const std::vector<std::string>& args, bool quiet = true) {
+  int rc = run_on_each(nranks, args, quiet);
   MPI_Bcast(&rc, 1, MPI_INT, 0, MPI_COMM_WORLD);
   return rc;
 }
@@ -394,6 +398,22 @@ TEST(SoftevoMpi, SigtermAndSigusr1CheckpointAndExitWithRequeueCode) {
   }
 }
 
+TEST(SoftevoMpi, EveryRankReturnsTheRequeueCodeOfAStoppedRun) {
+  // The workers learn the exit code only from the master's stop message (mpi/protocol.hpp).
+  TempDir dir;
+  const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
+  const std::string out = dir.file("run.h5");
+  if (world_rank() == 0) request_stop(StopRequest::after_generation);  // what SIGUSR1 does
+  const int rc = run_on_each(world_size(), {"--config", cfg, "--out", out});
+  clear_stop_request();
+  EXPECT_EQ(rc, kExitRequeue) << "rank " << world_rank();
+  if (world_rank() == 0) {
+    const RunInfo info = Archive(out).info();
+    EXPECT_EQ(info.state, "interrupted");
+    EXPECT_LT(info.generations_done, 3);  // stopped before the end
+  }
+}
+
 TEST(SoftevoMpi, StartupErrorsFailFastAndTouchNothing) {
   TempDir dir;
   const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
@@ -479,32 +499,6 @@ TEST(SoftevoMpi, AWorkerThatThrowsDoesNotStopTheRun) {
     }
   }
   EXPECT_EQ(Archive(out).info().state, "complete");
-}
-
-TEST(SoftevoMpi, WorkerRejectsAConfigHashMismatch) {
-  if (world_size() < 2) GTEST_SKIP() << "needs a worker rank";
-  Config config;
-  const std::uint64_t hash = config_hash(config);
-  if (world_rank() == 0) {
-    EvalRequest req;
-    req.config_hash = hash ^ 1;  // a master with another config
-    req.genome_id = 42;
-    const std::vector<std::uint8_t> bytes = encode_eval_request(req);
-    MPI_Send(bytes.data(), static_cast<int>(bytes.size()), MPI_BYTE, 1, worker::kTagRequest,
-             MPI_COMM_WORLD);
-    MPI_Status st;
-    worker::wait_for_message(MPI_COMM_WORLD, 1, MPI_ANY_TAG, st);
-    const std::vector<std::uint8_t> reply = worker::receive_bytes(MPI_COMM_WORLD, st);
-    EXPECT_EQ(st.MPI_TAG, worker::kTagError);
-    const std::string text(reply.begin(), reply.end());
-    EXPECT_NE(text.find("config hash"), std::string::npos) << text;
-    EXPECT_NE(text.find("rank 1"), std::string::npos) << text;
-    for (int r = 1; r < world_size(); ++r)
-      MPI_Send(nullptr, 0, MPI_BYTE, r, worker::kTagStop, MPI_COMM_WORLD);
-  } else {
-    EXPECT_EQ(worker::run_worker_loop(MPI_COMM_WORLD, config, hash), 0);
-  }
-  sleepy_barrier();
 }
 
 }  // namespace

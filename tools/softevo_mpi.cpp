@@ -1,0 +1,145 @@
+#include "tools/softevo_mpi.hpp"
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/config.hpp"
+#include "master/mpi_driver.hpp"
+#include "master/run.hpp"
+#include "master/signals.hpp"
+#include "worker/worker_loop.hpp"
+
+#ifndef SOFTEVO_DEFAULT_SOURCE_DIR
+#define SOFTEVO_DEFAULT_SOURCE_DIR "."
+#endif
+
+namespace softevo {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kDefaultConfig = "configs/quickstart.toml";
+
+struct Options {
+  std::string config_path = kDefaultConfig;
+  std::vector<std::string> overrides;
+  std::int64_t seed = -1;
+  std::int64_t generations = -1;
+  std::int64_t population = -1;
+  std::string out_path;
+  bool resume = false;
+  bool overwrite = false;
+};
+
+[[noreturn]] void abort_run(const mpi::Communicator& comm, const std::string& message) {
+  std::fprintf(stderr, "softevo-mpi: rank %d: error: %s\n", comm.rank(), message.c_str());
+  std::fflush(stderr);
+  comm.abort(1);
+}
+
+std::string resolve_config_path(const std::string& path) {
+  if (path != kDefaultConfig || fs::exists(path)) return path;
+  const std::string baked = std::string(SOFTEVO_DEFAULT_SOURCE_DIR) + "/" + kDefaultConfig;
+  return fs::exists(baked) ? baked : path;
+}
+
+std::string default_out_path(const std::string& config_path, std::int64_t seed) {
+  return "runs/" + fs::path(config_path).stem().string() + "-seed" + std::to_string(seed) + ".h5";
+}
+
+// Rank 0's start-up: the resolved config and the prepared run. Throws ConfigError, StartupError.
+master::PreparedRun prepare(Options& o, int ranks) {
+  o.config_path = resolve_config_path(o.config_path);
+  std::vector<std::string> overrides = o.overrides;
+  if (o.seed >= 0) overrides.push_back("run.seed=" + std::to_string(o.seed));
+  if (o.generations >= 0) overrides.push_back("run.generations=" + std::to_string(o.generations));
+  if (o.population >= 0) overrides.push_back("neat.pop_size=" + std::to_string(o.population));
+  const Config config = load_config(o.config_path, overrides);
+  master::RunOptions ro;
+  ro.out_path = o.out_path;
+  if (ro.out_path.empty()) {
+    ro.out_path = default_out_path(o.config_path, config.run.seed);
+    std::error_code ec;
+    fs::create_directories("runs", ec);
+  }
+  ro.resume = o.resume;
+  ro.overwrite = o.overwrite;
+  return master::prepare_run(config, ro, ranks);
+}
+
+}  // namespace
+
+int softevo_mpi_main(int argc, char** argv, MPI_Comm parent, const MpiMainHooks& hooks) {
+  const mpi::Communicator comm(parent);
+
+  Options o;
+  CLI::App app{"softevo-mpi: distributed co-evolution of soft robot bodies and brains"};
+  app.add_option("--config", o.config_path, "TOML config file")->capture_default_str();
+  app.add_option("--seed", o.seed, "run seed (sets run.seed)");
+  app.add_option("--out", o.out_path, "run archive (default runs/<config>-seed<S>.h5)");
+  app.add_option("--generations", o.generations, "generations to evaluate (run.generations)");
+  app.add_option("--population", o.population, "population size (neat.pop_size)");
+  app.add_option("--set", o.overrides, "override a key: section.key=value (repeatable)");
+  app.add_flag("--resume", o.resume,
+               "continue the archive from its newest checkpoint (a new run if it does not exist)");
+  app.add_flag("--overwrite", o.overwrite, "replace an existing archive");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // Only rank 0 prints help or the usage error; every rank exits with the same code.
+    const int code = comm.rank() == 0 ? app.exit(e) : e.get_exit_code();
+    return code == 0 ? 0 : 2;
+  }
+  master::install_stop_handlers();
+
+  // Rank 0 resolves the config and prepares the run; status 0 = ok, else text is the message.
+  std::int32_t status = 0;
+  std::string text;
+  std::optional<master::PreparedRun> run;
+  if (comm.rank() == 0) {
+    try {
+      run.emplace(prepare(o, comm.size()));
+      text = run->config_text;
+    } catch (const ConfigError& e) {
+      status = 1;
+      text = std::string("config error: ") + e.what();
+    } catch (const std::exception& e) {
+      status = 1;
+      text = e.what();
+    }
+  }
+  try {
+    status = comm.broadcast(status);
+    text = comm.broadcast(text);
+  } catch (const std::exception& e) {
+    abort_run(comm, e.what());
+  }
+  if (status != 0) {
+    if (comm.rank() == 0) std::fprintf(stderr, "softevo-mpi: %s\n", text.c_str());
+    return 2;
+  }
+
+  try {
+    if (comm.rank() != 0) {
+      const Config config = parse_config(text, "config from rank 0");
+      return worker::run_worker_loop(comm, config, config_hash(config), hooks.unit_options)
+          .exit_code;
+    }
+    master::PreparedRun& r = *run;
+    master::MasterOptions mo;
+    mo.config_path = o.config_path;
+    mo.quiet = hooks.quiet;
+    mo.evaluate_alone = [&r, &hooks](const EvalRequest& request) {
+      return worker::evaluate_unit(r.config, r.config_hash, request, hooks.unit_options);
+    };
+    return master::run_master(comm, r, mo);
+  } catch (const std::exception& e) {
+    abort_run(comm, e.what());
+  }
+}
+
+}  // namespace softevo
