@@ -8,7 +8,7 @@
 
 #include "common/eval_types.hpp"
 #include "evo/genome.hpp"
-#include "master/archive.hpp"
+#include "io/archive.hpp"
 #include "tools/h5_read.hpp"
 #include "worker/evaluate_robot.hpp"
 #include "worker/evaluate_unit.hpp"
@@ -209,7 +209,7 @@ Motion load_trace(const std::string& path, const MotionRequest& request) {
   return motion;
 }
 
-ArchivedIndividual individual_at(const master::GenerationRecord& record, std::size_t row,
+ArchivedIndividual individual_at(const io::GenerationRecord& record, std::size_t row,
                                  const std::string& path, const std::string& config_text,
                                  const Config& config, const std::string& experiment) {
   ArchivedIndividual ind;
@@ -227,7 +227,7 @@ ArchivedIndividual individual_at(const master::GenerationRecord& record, std::si
   ind.genome = record.genome[row];
   ind.n_directions = record.n_directions;
   const std::size_t per_row =
-      static_cast<std::size_t>(record.n_directions) * master::kComponentCount;
+      static_cast<std::size_t>(record.n_directions) * io::kComponentCount;
   if (record.components.size() == per_row * record.size()) {
     ind.components.assign(
         record.components.begin() + static_cast<std::ptrdiff_t>(row * per_row),
@@ -239,13 +239,13 @@ ArchivedIndividual individual_at(const master::GenerationRecord& record, std::si
 }  // namespace
 
 std::vector<std::int64_t> archived_generations(const std::string& archive_path) {
-  const master::Archive archive(archive_path);
+  const io::Archive archive(archive_path);
   return archive.generations();
 }
 
 std::vector<ArchivedIndividual> archived_generation(const std::string& archive_path,
                                                     std::optional<std::int64_t> generation) {
-  const master::Archive archive(archive_path);
+  const io::Archive archive(archive_path);
   const std::vector<std::int64_t> gens = archive.generations();
   if (gens.empty()) throw std::runtime_error(archive_path + ": archive has no generation yet");
   const std::int64_t g = generation ? *generation : gens.back();
@@ -257,7 +257,7 @@ std::vector<ArchivedIndividual> archived_generation(const std::string& archive_p
   const std::string config_text = archive.config_text();
   const Config config = parse_config(config_text, archive_path + ":/config");
   const std::string experiment = archive.info().experiment;
-  const master::GenerationRecord record = archive.generation(g);
+  const io::GenerationRecord record = archive.generation(g);
   record.check();
   std::vector<ArchivedIndividual> out;
   for (std::size_t row = 0; row < record.size(); ++row) {
@@ -318,7 +318,7 @@ Motion load_motion(const std::string& input, const MotionRequest& request) {
   }
   const H5::H5File file = h5read::open_file(input);
   if (h5read::has_attribute(file, "format") &&
-      h5read::string_attribute(file, "format", input) == master::kArchiveFormat) {
+      h5read::string_attribute(file, "format", input) == io::kArchiveFormat) {
     const ArchivedIndividual ind = archived_individual(input, request.generation, request.id);
     const RobotFile robot = robot_of(ind);
     if (!request.needs_motion || request.static_pose) {

@@ -25,7 +25,7 @@
 #include "common/robot.hpp"
 #include "common/wire.hpp"
 #include "evo/genome.hpp"
-#include "master/archive.hpp"
+#include "io/archive.hpp"
 #include "master/mpi_driver.hpp"
 #include "master/signals.hpp"
 #include "physics/revision.hpp"
@@ -37,6 +37,11 @@ extern char** environ;
 
 namespace softevo::master {
 namespace {
+
+using io::Archive;
+using io::ArchiveError;
+using io::GenerationRecord;
+using io::RunInfo;
 
 namespace fs = std::filesystem;
 

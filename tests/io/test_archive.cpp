@@ -1,6 +1,6 @@
 // Run archive: round trip of every field, atomic updates (a failed update leaves the previous
 // file byte for byte), digests that see every deterministic field and ignore timing fields.
-#include "master/archive.hpp"
+#include "io/archive.hpp"
 
 #include <gtest/gtest.h>
 #include <hdf5.h>
@@ -11,7 +11,7 @@
 #include <fstream>
 #include <sstream>
 
-namespace softevo::master {
+namespace softevo::io {
 namespace {
 
 namespace fs = std::filesystem;
@@ -221,4 +221,4 @@ TEST(Archive, FitnessStatsUsePopulationSd) {
 }
 
 }  // namespace
-}  // namespace softevo::master
+}  // namespace softevo::io
