@@ -1,4 +1,4 @@
-// `softevo render`: pictures and videos of a robot, headless (tools/render.hpp).
+// `softevo render`: pictures and videos of a robot, headless (render/render.hpp).
 //
 // Inputs: a robot file (rest pose, or re-simulated when motion is asked for), a trace written by
 // `softevo eval --trace`, or a run archive (genome developed and re-simulated exactly as the
@@ -18,12 +18,15 @@
 
 #include "common/config.hpp"
 #include "common/robot.hpp"
+#include "motion/robot_source.hpp"
+#include "render/render.hpp"
 #include "tools/commands.hpp"
-#include "tools/h5_read.hpp"
-#include "tools/render.hpp"
-#include "tools/robot_source.hpp"
 
 namespace softevo::cli {
+
+using motion::load_motion;
+using motion::Motion;
+using motion::MotionRequest;
 
 namespace {
 

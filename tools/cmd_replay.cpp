@@ -18,12 +18,16 @@
 #include "common/eval_types.hpp"
 #include "io/archive.hpp"
 #include "master/scheduler.hpp"
+#include "motion/robot_source.hpp"
 #include "physics/revision.hpp"
 #include "tools/commands.hpp"
-#include "tools/robot_source.hpp"
 #include "worker/evaluate_unit.hpp"
 
 namespace softevo::cli {
+
+using motion::archived_generation;
+using motion::archived_individual;
+using motion::ArchivedIndividual;
 
 namespace {
 

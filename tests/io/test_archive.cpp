@@ -11,22 +11,14 @@
 #include <fstream>
 #include <sstream>
 
+#include "tests/io/tmp_dir.hpp"
+
 namespace softevo::io {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct TmpDir {
-  std::string path;
-  TmpDir() {
-    char t[] = "/tmp/softevo-archive-test-XXXXXX";
-    path = mkdtemp(t);
-  }
-  ~TmpDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
+using test::TmpDir;
 
 std::string bytes_of(const std::string& p) {
   std::ifstream in(p, std::ios::binary);

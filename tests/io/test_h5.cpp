@@ -12,23 +12,14 @@
 #include <string>
 #include <vector>
 
+#include "tests/io/tmp_dir.hpp"
+
 namespace softevo::io::h5 {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct TmpDir {
-  std::string path;
-  TmpDir() {
-    char t[] = "/tmp/softevo-h5-test-XXXXXX";
-    path = mkdtemp(t);
-  }
-  ~TmpDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string file(const std::string& name) const { return path + "/" + name; }
-};
+using test::TmpDir;
 
 ssize_t open_hdf5_objects() {
   return H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL);
