@@ -1,7 +1,9 @@
 // Crash-safe replacement of a file: the new content is written to a temporary file next to the
 // target (".<name>.tmp.<pid>"), which is fsync'ed and renamed over the target; then the
 // directory is fsync'ed. A crash leaves either the old or the new file, never a half-written
-// one. Used by the run archive and the trace.
+// one. The run archive's discipline (docs/archive.md): its temporaries carry the writer's pid,
+// so that a restarted run can tell the debris of a dead writer (remove_stale_temp_files) from
+// the copy a live one is editing; other outputs use common/safe_write.hpp.
 #pragma once
 
 #include <functional>

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <stdexcept>
 
-#include "io/atomic_file.hpp"
+#include "common/safe_write.hpp"
 #include "io/h5.hpp"
 
 namespace softevo::io {
@@ -53,27 +53,29 @@ void write_trace(const std::string& path, const Trace& t) {
   const auto frames = static_cast<hsize_t>(t.frames);
   const auto voxels = static_cast<hsize_t>(t.voxels);
   const auto chambers = static_cast<hsize_t>(t.chambers);
-  replace_atomically(path, [&](const std::string& temp) {
-    h5::File file = h5::File::create(temp, nullptr, path);
-    file.write_dataset<double>("positions", {frames, voxels, 3}, t.positions);
-    file.write_dataset<double>("orientations", {frames, voxels, 4}, t.orientations);
-    file.write_dataset<double>("pressures", {frames, chambers}, t.pressures);
-    file.write_dataset<float>("valve_commands", {frames, 2 * chambers}, t.valve_commands);
-    file.write_dataset<double>("time", {frames}, t.time);
-    file.write_dataset<std::int32_t>("voxel_cells", {voxels, 3}, t.voxel_cells);
-    file.write_dataset<std::int32_t>("voxel_material", {voxels}, t.voxel_material);
-    file.write_string_dataset("robot_json", t.robot_json, Charset::ascii);
-    file.write_string_attribute("format", kTraceFormat, Charset::ascii);
-    file.write_attribute<double>("dt", t.dt);
-    file.write_attribute<double>("voxel_size", t.voxel_size);
-    file.write_attribute<std::int64_t>("frames", t.frames);
-    file.write_attribute<double>("frame_rate", t.frame_rate);
-    file.write_attribute<std::int64_t>("steps_per_frame", t.steps_per_frame);
-    if (t.direction_deg) file.write_attribute<double>("direction_deg", *t.direction_deg);
-    if (t.fitness) file.write_attribute<double>("fitness", *t.fitness);
-    file.write_string_attribute("status", t.status, Charset::ascii);
-    file.close();
-  });
+  // Like every output file of a command (docs/output-files.md); a trace replaces an earlier
+  // one of the same name, as `eval --trace` always did.
+  AtomicOutput out(path, Overwrite::replace);
+  h5::File file = h5::File::create(out.temp_path(), nullptr, path);
+  file.write_dataset<double>("positions", {frames, voxels, 3}, t.positions);
+  file.write_dataset<double>("orientations", {frames, voxels, 4}, t.orientations);
+  file.write_dataset<double>("pressures", {frames, chambers}, t.pressures);
+  file.write_dataset<float>("valve_commands", {frames, 2 * chambers}, t.valve_commands);
+  file.write_dataset<double>("time", {frames}, t.time);
+  file.write_dataset<std::int32_t>("voxel_cells", {voxels, 3}, t.voxel_cells);
+  file.write_dataset<std::int32_t>("voxel_material", {voxels}, t.voxel_material);
+  file.write_string_dataset("robot_json", t.robot_json, Charset::ascii);
+  file.write_string_attribute("format", kTraceFormat, Charset::ascii);
+  file.write_attribute<double>("dt", t.dt);
+  file.write_attribute<double>("voxel_size", t.voxel_size);
+  file.write_attribute<std::int64_t>("frames", t.frames);
+  file.write_attribute<double>("frame_rate", t.frame_rate);
+  file.write_attribute<std::int64_t>("steps_per_frame", t.steps_per_frame);
+  if (t.direction_deg) file.write_attribute<double>("direction_deg", *t.direction_deg);
+  if (t.fitness) file.write_attribute<double>("fitness", *t.fitness);
+  file.write_string_attribute("status", t.status, Charset::ascii);
+  file.close();
+  out.commit();
 }
 
 Trace read_trace(const std::string& path) {

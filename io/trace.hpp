@@ -38,9 +38,10 @@ struct Trace {
   void check(const std::string& where) const;
 };
 
-// Writes `trace` to `path` atomically (temporary file + rename, io/atomic_file.hpp); every
-// dataset and attribute of docs/trace.md. Throws std::runtime_error naming the file, the
-// object and the reason.
+// Writes `trace` to `path` atomically (common/safe_write.hpp: temporary file, fsync, rename;
+// an existing regular file is replaced, a symlink or special file refused); every dataset and
+// attribute of docs/trace.md. Throws std::runtime_error naming the file, the object and the
+// reason.
 void write_trace(const std::string& path, const Trace& trace);
 
 // Reads a trace. Only /positions, /orientations, /voxel_cells and /voxel_material are required,
