@@ -5,7 +5,7 @@
 #   TESTS  GoogleTest             the test suite
 #   PNG    libpng                 `softevo render` to .png (without it: .mp4 only, via ffmpeg)
 #   MPI    MPI (C++ bindings off) softevo-mpi and the MPI tests
-#   HDF5   HDF5 C (C++ for now)   the master (run archive), softevo-mpi, the softevo CLI
+#   HDF5   HDF5 C                 io (run archive, trace), the master, softevo-mpi, the softevo CLI
 # The core (common, physics, evo, worker and their tests) needs none of them, only the
 # header-only libraries below.
 #
@@ -47,16 +47,10 @@ find_package(MPI QUIET COMPONENTS CXX)
 softevo_optional(NAME MPI FOUND MPI_FOUND
                  HOW "install libopenmpi-dev (Debian), or load your cluster's MPI module")
 
-# The C library serves the archive; the C++ bindings only the softevo CLI's trace reader, which
-# is moving to the C API (clusters often lack the C++ bindings).
-find_package(HDF5 QUIET COMPONENTS C OPTIONAL_COMPONENTS CXX)
+# The C library only (io/h5.hpp): clusters often install HDF5 without the C++ bindings.
+find_package(HDF5 QUIET COMPONENTS C)
 softevo_optional(NAME HDF5 FOUND HDF5_FOUND
                  HOW "install libhdf5-dev (Debian), or load your cluster's HDF5 module")
-if(SOFTEVO_ENABLE_HDF5 AND HDF5_CXX_FOUND)
-  set(SOFTEVO_HAVE_HDF5_CXX ON)
-else()
-  set(SOFTEVO_HAVE_HDF5_CXX OFF)
-endif()
 
 # softevo_header_library(PACKAGE P TARGET T DEBIAN deb [MINIMUM v] [FIND_ARGS ...]
 #                        [VERSION v URLS u ... SHA256 h INCLUDE_DIR dir])
@@ -128,12 +122,15 @@ if(SOFTEVO_ENABLE_HDF5 AND SOFTEVO_ENABLE_MPI)
 else()
   set(SOFTEVO_BUILD_SOFTEVO_MPI OFF)
 endif()
-set(SOFTEVO_BUILD_CLI ${SOFTEVO_HAVE_HDF5_CXX})
+set(SOFTEVO_BUILD_CLI ${SOFTEVO_ENABLE_HDF5})
 
 function(softevo_print_summary)
-  set(built "common physics evo worker")
+  set(built "common physics evo worker render")
   if(SOFTEVO_ENABLE_MPI)
     string(APPEND built " worker_mpi")
+  endif()
+  if(SOFTEVO_ENABLE_HDF5)
+    string(APPEND built " io motion")
   endif()
   if(SOFTEVO_BUILD_MASTER)
     string(APPEND built " master")
@@ -157,7 +154,6 @@ function(softevo_print_summary)
   message(STATUS "  libpng        ${SOFTEVO_ENABLE_PNG}")
   message(STATUS "  MPI           ${SOFTEVO_ENABLE_MPI}")
   message(STATUS "  HDF5 C        ${SOFTEVO_ENABLE_HDF5}")
-  message(STATUS "  HDF5 C++      ${SOFTEVO_HAVE_HDF5_CXX} (softevo CLI only)")
   foreach(p Eigen3 tomlplusplus nlohmann_json CLI11)
     if(DEFINED SOFTEVO_SOURCE_${p})
       string(SUBSTRING "${p}              " 0 14 label)

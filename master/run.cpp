@@ -15,6 +15,22 @@
 #include "physics/revision.hpp"
 
 namespace softevo::master {
+
+// The run archive (io/archive.hpp) is what this loop writes.
+using io::append_generation;
+using io::Archive;
+using io::ArchiveError;
+using io::check_output_path;
+using io::Checkpoint;
+using io::create_archive;
+using io::fitness_stats;
+using io::FitnessStats;
+using io::GenerationRecord;
+using io::remove_stale_temp_files;
+using io::RunInfo;
+using io::StatsRow;
+using io::update_run_info;
+
 namespace {
 
 namespace fs = std::filesystem;

@@ -2,7 +2,7 @@
 //   members = population.members()           (generation g, immigrants included)
 //   evaluate every work unit                 (UnitExecutor: in-process or over MPI)
 //   archive generation g, population.advance(results), checkpoint the NEXT population,
-//   all in one atomic archive update         (master/archive.hpp)
+//   all in one atomic archive update         (io/archive.hpp)
 // The MPI master driver (master/mpi_driver.cpp) only supplies an executor that farms the units
 // out to worker ranks; everything else is here and is tested without MPI.
 #pragma once
@@ -16,7 +16,7 @@
 #include "common/config.hpp"
 #include "common/eval_types.hpp"
 #include "evo/population.hpp"
-#include "master/archive.hpp"
+#include "io/archive.hpp"
 #include "master/progress.hpp"
 #include "master/scheduler.hpp"
 
@@ -80,7 +80,7 @@ struct PreparedRun {
   std::string config_text;
   std::uint64_t config_hash = 0;
   RunOptions options;
-  RunInfo info;
+  io::RunInfo info;
   std::optional<evo::Population> population;
   bool already_complete = false;
   bool resumed = false;

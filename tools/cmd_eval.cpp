@@ -9,18 +9,8 @@
 // else gait. Fitness is printed with full double precision (%.17g).
 //
 // --trace FILE.h5 records one frame per control frame (60 Hz) plus the state after the last
-// frame. Layout (all datasets little-endian, C order):
-//   /positions       float64 [frames, voxels, 3]   voxel centres [m]
-//   /orientations    float64 [frames, voxels, 4]   quaternions (w, x, y, z)
-//   /pressures       float64 [frames, chambers]    absolute chamber pressure [Pa]
-//   /valve_commands  float32 [frames, 2*chambers]  valve openings in [0,1] (2q inlet, 2q+1 outlet)
-//   /time            float64 [frames]              simulated time [s]
-//   /voxel_cells     int32   [voxels, 3]           lattice cell (i, j, k) of each voxel
-//   /voxel_material  int32   [voxels]              structural material id 1..10
-//   /robot_json      string                        the robot file, as re-written by softevo
-//   root attributes: format "softevo.trace/1", dt [s], voxel_size [m], frames, frame_rate [Hz],
-//                    steps_per_frame, direction_deg (directed task only), fitness, status.
-// With the directed task the trace records the first direction (or the one of --direction).
+// frame: format softevo.trace/1, docs/trace.md (io/trace.hpp). With the directed task the trace
+// records the first direction (or the one of --direction).
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -29,11 +19,10 @@
 #include <string>
 #include <vector>
 
-#include <H5Cpp.h>
-
 #include "common/config.hpp"
 #include "common/eval_types.hpp"
 #include "common/robot.hpp"
+#include "io/trace.hpp"
 #include "physics/model.hpp"
 #include "tools/commands.hpp"
 #include "worker/evaluate_robot.hpp"
@@ -72,61 +61,26 @@ struct TraceBuffer {
 
 void write_trace(const std::string& path, const TraceBuffer& t, const RobotFile& robot,
                  const EvalResult& result, double control_rate, const double* direction_deg) {
-  H5::Exception::dontPrint();
-  try {
-    const std::string tmp = path + ".tmp";
-    H5::H5File file(tmp, H5F_ACC_TRUNC);
-    const auto voxels = static_cast<hsize_t>(t.voxel_material.size());
-    const auto frames = static_cast<hsize_t>(t.frames);
-    const auto chambers = static_cast<hsize_t>(t.chambers);
-    auto dataset = [&](const char* name, const H5::PredType& type, std::vector<hsize_t> dims,
-                       const void* data) {
-      H5::DataSpace space(static_cast<int>(dims.size()), dims.data());
-      H5::DataSet ds = file.createDataSet(name, type, space);
-      if (space.getSimpleExtentNpoints() > 0) ds.write(data, type);
-    };
-    dataset("positions", H5::PredType::NATIVE_DOUBLE, {frames, voxels, 3}, t.positions.data());
-    dataset("orientations", H5::PredType::NATIVE_DOUBLE, {frames, voxels, 4},
-            t.orientations.data());
-    dataset("pressures", H5::PredType::NATIVE_DOUBLE, {frames, chambers}, t.pressures.data());
-    dataset("valve_commands", H5::PredType::NATIVE_FLOAT, {frames, 2 * chambers}, t.valves.data());
-    dataset("time", H5::PredType::NATIVE_DOUBLE, {frames}, t.time.data());
-    dataset("voxel_cells", H5::PredType::NATIVE_INT32, {voxels, 3}, t.voxel_cells.data());
-    dataset("voxel_material", H5::PredType::NATIVE_INT32, {voxels}, t.voxel_material.data());
-    const H5::StrType str(H5::PredType::C_S1, H5T_VARIABLE);
-    const H5::DataSpace scalar(H5S_SCALAR);
-    {
-      const std::string text = robot_to_json(robot);
-      const char* p = text.c_str();
-      file.createDataSet("robot_json", str, scalar).write(&p, str);
-    }
-    auto attr_d = [&](const char* name, double v) {
-      file.createAttribute(name, H5::PredType::NATIVE_DOUBLE, scalar)
-          .write(H5::PredType::NATIVE_DOUBLE, &v);
-    };
-    auto attr_i = [&](const char* name, long long v) {
-      file.createAttribute(name, H5::PredType::NATIVE_LLONG, scalar)
-          .write(H5::PredType::NATIVE_LLONG, &v);
-    };
-    auto attr_s = [&](const char* name, const std::string& v) {
-      const char* p = v.c_str();
-      file.createAttribute(name, str, scalar).write(str, &p);
-    };
-    attr_s("format", "softevo.trace/1");
-    attr_d("dt", t.dt);
-    attr_d("voxel_size", t.voxel_size);
-    attr_i("frames", t.frames);
-    attr_d("frame_rate", control_rate);
-    attr_i("steps_per_frame", t.steps_per_frame);
-    if (direction_deg) attr_d("direction_deg", *direction_deg);
-    attr_d("fitness", result.fitness);
-    attr_s("status", to_string(result.status));
-    file.close();
-    if (std::rename(tmp.c_str(), path.c_str()) != 0)
-      throw std::runtime_error("cannot rename " + tmp + " to " + path);
-  } catch (const H5::Exception& e) {
-    throw std::runtime_error(path + ": cannot write trace: " + e.getDetailMsg());
-  }
+  io::Trace trace;
+  trace.frames = t.frames;
+  trace.voxels = static_cast<std::int64_t>(t.voxel_material.size());
+  trace.chambers = t.chambers;
+  trace.positions = t.positions;
+  trace.orientations = t.orientations;
+  trace.pressures = t.pressures;
+  trace.valve_commands = t.valves;
+  trace.time = t.time;
+  trace.voxel_cells.assign(t.voxel_cells.begin(), t.voxel_cells.end());
+  trace.voxel_material.assign(t.voxel_material.begin(), t.voxel_material.end());
+  trace.robot_json = robot_to_json(robot);
+  trace.dt = t.dt;
+  trace.voxel_size = t.voxel_size;
+  trace.frame_rate = control_rate;
+  trace.steps_per_frame = t.steps_per_frame;
+  if (direction_deg) trace.direction_deg = *direction_deg;
+  trace.fitness = result.fitness;
+  trace.status = to_string(result.status);
+  io::write_trace(path, trace);
 }
 
 std::string json_number(double v) {

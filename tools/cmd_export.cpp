@@ -9,7 +9,7 @@
 #include "common/config.hpp"
 #include "common/robot.hpp"
 #include "evo/genome.hpp"
-#include "master/archive.hpp"
+#include "io/archive.hpp"
 #include "tools/commands.hpp"
 #include "worker/evaluate_unit.hpp"
 
@@ -40,18 +40,18 @@ void register_export(CLI::App& app, int& exit_code) {
       exit_code = kExitUsage;
       return;
     }
-    const master::Archive archive(a->path);
+    const io::Archive archive(a->path);
     const std::vector<std::int64_t> gens = archive.generations();
-    if (gens.empty()) throw master::ArchiveError(a->path + ": no evaluated generation");
+    if (gens.empty()) throw io::ArchiveError(a->path + ": no evaluated generation");
     const std::int64_t g = a->generation >= 0 ? a->generation : gens.back();
-    const master::GenerationRecord rec = archive.generation(g);
+    const io::GenerationRecord rec = archive.generation(g);
     std::size_t row = rec.size();
     for (std::size_t i = 0; i < rec.size(); ++i) {
       if (a->best ? (row == rec.size() || rec.fitness[i] > rec.fitness[row]) : rec.id[i] == a->id)
         row = i;
     }
     if (row == rec.size())
-      throw master::ArchiveError(a->path + ": generation " + std::to_string(g) +
+      throw io::ArchiveError(a->path + ": generation " + std::to_string(g) +
                                  " has no individual with id " + std::to_string(a->id));
     const Config config = parse_config(archive.config_text(), a->path + ":/config");
     const evo::Genome genome = evo::decode_genome(rec.genome[row]);

@@ -1,7 +1,7 @@
 // `softevo info RUN.h5 [--json]`: summary of a run archive (docs/archive.md): metadata, state,
 // per-generation best/mean, the resolved config, and two digests for one-line comparisons:
 // fitness_digest (every archived generation, id, status, fitness bits) and content_digest
-// (everything deterministic, see master/archive.hpp).
+// (everything deterministic, see io/archive.hpp).
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -9,7 +9,7 @@
 
 #include "common/config.hpp"
 #include "common/printable.hpp"
-#include "master/archive.hpp"
+#include "io/archive.hpp"
 #include "tools/commands.hpp"
 
 namespace softevo::cli {
@@ -21,11 +21,11 @@ void register_info(CLI::App& app, int& exit_code) {
   cmd->add_option("RUN", *path, "run archive (.h5)")->required();
   cmd->add_flag("--json", *json, "machine-readable output");
   cmd->callback([&exit_code, path, json] {
-    const master::Archive archive(*path);
-    const master::RunInfo info = archive.info();
-    const std::vector<master::StatsRow> stats = archive.stats();
-    const std::string fitness = hash_hex(master::fitness_digest(archive));
-    const std::string content = hash_hex(master::content_digest(archive));
+    const io::Archive archive(*path);
+    const io::RunInfo info = archive.info();
+    const std::vector<io::StatsRow> stats = archive.stats();
+    const std::string fitness = hash_hex(io::fitness_digest(archive));
+    const std::string content = hash_hex(io::content_digest(archive));
     const auto checkpoint = archive.checkpoint();
     if (*json) {
       nlohmann::ordered_json j;

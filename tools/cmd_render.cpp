@@ -1,14 +1,10 @@
-// `softevo render`: pictures and videos of a robot, headless (tools/render.hpp).
+// `softevo render`: pictures and videos of a robot, headless (render/compose.hpp).
 //
 // Inputs: a robot file (rest pose, or re-simulated when motion is asked for), a trace written by
 // `softevo eval --trace`, or a run archive (genome developed and re-simulated exactly as the
 // run evaluated it). Outputs: PNG (single frame, time-lapse strip or overlay) or MP4 through
 // ffmpeg.
-#include <unistd.h>
-#include <algorithm>
-#include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -18,20 +14,21 @@
 
 #include "common/config.hpp"
 #include "common/robot.hpp"
+#include "motion/robot_source.hpp"
+#include "render/compose.hpp"
+#include "render/render.hpp"
 #include "tools/commands.hpp"
-#include "tools/h5_read.hpp"
-#include "tools/render.hpp"
-#include "tools/robot_source.hpp"
 
 namespace softevo::cli {
+
+using motion::load_motion;
+using motion::Motion;
+using motion::MotionRequest;
 
 namespace {
 
 namespace fs = std::filesystem;
-using render::Body;
-using render::Camera;
 using render::Image;
-using render::Pose;
 using render::View;
 
 // Exit code when video output is asked for but ffmpeg is not installed.
@@ -66,120 +63,6 @@ std::string lower(std::string s) {
   return s;
 }
 
-// Index of the recorded pose nearest to time t (poses ascending in time).
-std::size_t pose_at(const std::vector<Pose>& poses, double t) {
-  std::size_t best = 0;
-  double best_gap = std::abs(poses[0].time - t);
-  for (std::size_t i = 1; i < poses.size(); ++i) {
-    const double gap = std::abs(poses[i].time - t);
-    if (gap < best_gap) {
-      best = i;
-      best_gap = gap;
-    }
-  }
-  return best;
-}
-
-std::string time_label(double t) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "t=%.2fs", t);
-  return buffer;
-}
-
-// Box around poses and the floor under them.
-Eigen::AlignedBox3d scene_box(const Body& body, const std::vector<Pose>& poses, double floor_z) {
-  Eigen::AlignedBox3d box;
-  for (const Pose& p : poses) box.extend(render::pose_bounds(body, p));
-  Eigen::Vector3d lo = box.min();
-  lo.z() = std::min(lo.z(), floor_z);
-  box.extend(lo);
-  return box;
-}
-
-std::optional<std::string> find_on_path(const std::string& program) {
-  const char* path = std::getenv("PATH");
-  if (path == nullptr) return std::nullopt;
-  std::string dirs = path;
-  std::size_t start = 0;
-  while (start <= dirs.size()) {
-    const std::size_t colon = dirs.find(':', start);
-    const std::string dir =
-        dirs.substr(start, colon == std::string::npos ? std::string::npos : colon - start);
-    const std::string candidate = (dir.empty() ? std::string(".") : dir) + "/" + program;
-    if (::access(candidate.c_str(), X_OK) == 0) return candidate;
-    if (colon == std::string::npos) break;
-    start = colon + 1;
-  }
-  return std::nullopt;
-}
-
-std::string shell_quote(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) {
-    if (c == '\'') {
-      out += "'\\''";
-    } else {
-      out += c;
-    }
-  }
-  return out + "'";
-}
-
-// Video: the camera keeps its scale and follows the centroid over the floor.
-int write_video(const Motion& motion, const RenderArgs& args, View view,
-                const render::SceneOptions& scene) {
-  const auto ffmpeg = find_on_path("ffmpeg");
-  if (!ffmpeg) {
-    std::fprintf(stderr,
-                 "softevo render: video output needs ffmpeg, which is not on PATH (install it, "
-                 "e.g. apt-get install ffmpeg), or render a PNG instead\n");
-    return kExitNoEncoder;
-  }
-  if (motion.poses.size() < 2) {
-    throw std::runtime_error("render " + args.output + ": a video needs motion (" +
-                             "the input has a single pose)");
-  }
-  const int width = (args.width > 0 ? args.width : 960) & ~1;  // yuv420p needs even sizes
-  const int height = (args.height > 0 ? args.height : 540) & ~1;
-  const Pose& first = motion.poses.front();
-  Eigen::AlignedBox3d box = scene_box(motion.body, {first}, scene.floor_z);
-  const Eigen::Vector3d grow = box.sizes() * 0.9;
-  box.extend(box.min() - grow);
-  box.extend(box.max() + grow);
-  Camera cam = render::fit_camera(view, box, width, height);
-  const Eigen::Vector3d start_centre = cam.center;
-  const Eigen::Vector3d start_centroid = render::centroid(first);
-
-  const std::string command =
-      shell_quote(*ffmpeg) + " -y -loglevel error -f rawvideo -pix_fmt rgb24 -s " +
-      std::to_string(width) + "x" + std::to_string(height) + " -r " + std::to_string(args.fps) +
-      " -i - -pix_fmt yuv420p " + shell_quote(args.output);
-  FILE* pipe = ::popen(command.c_str(), "w");
-  if (pipe == nullptr) throw std::runtime_error("render: cannot start ffmpeg: " + command);
-  const double end = motion.poses.back().time;
-  const int frames = static_cast<int>(std::floor(end * args.fps + 1e-9)) + 1;
-  bool ok = true;
-  for (int f = 0; f < frames && ok; ++f) {
-    const double t = f / args.fps;
-    const Pose& pose = motion.poses[pose_at(motion.poses, t)];
-    Eigen::Vector3d follow = render::centroid(pose) - start_centroid;
-    follow.z() = 0.0;
-    cam.center = start_centre + follow;
-    render::SceneOptions o = scene;
-    o.label = motion.name + "  " + time_label(pose.time);
-    const Image image = render::render_poses(motion.body, {pose}, cam, o);
-    ok = std::fwrite(image.rgb.data(), 1, image.rgb.size(), pipe) == image.rgb.size();
-  }
-  const int status = ::pclose(pipe);
-  if (!ok || status != 0) {
-    throw std::runtime_error("render " + args.output + ": ffmpeg failed (exit status " +
-                             std::to_string(status) + ")");
-  }
-  std::printf("wrote %s (%d frames at %.0f fps, %dx%d)\n", args.output.c_str(), frames, args.fps,
-              width, height);
-  return kExitOk;
-}
-
 int run_render(const RenderArgs& args) {
   const View view = render::parse_view(args.view);
   const std::string ext = lower(fs::path(args.output).extension().string());
@@ -195,10 +78,16 @@ int run_render(const RenderArgs& args) {
   if (video && args.timelapse > 0) {
     throw std::invalid_argument("render: --timelapse makes a PNG; video output shows every frame");
   }
-  std::string layout = args.layout;
-  if (layout.empty()) layout = view == View::top ? "overlay" : "strip";
-  if (layout != "strip" && layout != "overlay") {
-    throw std::invalid_argument("render: --layout must be strip or overlay, not '" + layout + "'");
+  render::Timelapse timelapse;
+  timelapse.snapshots = args.timelapse;
+  timelapse.span = args.span;
+  timelapse.start = args.start;
+  try {
+    timelapse.layout = args.layout.empty()
+                           ? (view == View::top ? render::Layout::overlay : render::Layout::strip)
+                           : render::parse_layout(args.layout);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("render: --") + e.what());
   }
 
   // How much simulated time the picture needs; none = the rest pose is enough.
@@ -227,64 +116,25 @@ int run_render(const RenderArgs& args) {
     scene.target_direction_deg = direction;
     scene.target_origin = render::centroid(motion.poses.front());
   }
-  if (video) return write_video(motion, args, view, scene);
-
-  const double end = motion.poses.back().time;
-  Image image;
-  if (args.timelapse == 0) {
-    const Pose& pose = motion.poses[pose_at(motion.poses, args.at)];
-    const int width = args.width > 0 ? args.width : 960;
-    const int height = args.height > 0 ? args.height : 540;
-    const Camera cam =
-        render::fit_camera(view, scene_box(motion.body, {pose}, scene.floor_z), width, height);
-    scene.label = motion.name + (motion.poses.size() > 1 ? "  " + time_label(pose.time) : "");
-    image = render::render_poses(motion.body, {pose}, cam, scene);
-  } else {
-    // Snapshot times: N evenly spaced over [start, start + span].
-    const int n = args.timelapse;
-    const double span = args.span ? *args.span : (view == View::top ? end : 0.5);
-    double start = args.start ? *args.start : (view == View::top ? 0.0 : 5.0);
-    start = std::clamp(start, 0.0, std::max(0.0, end - span));
-    std::vector<Pose> snaps;
-    for (int i = 0; i < n; ++i) {
-      const double t = n == 1 ? start : start + span * i / (n - 1);
-      snaps.push_back(motion.poses[pose_at(motion.poses, t)]);
+  const render::Clip clip{motion.body, motion.poses, motion.name};
+  if (video) {
+    const auto ffmpeg = render::find_on_path("ffmpeg");
+    if (!ffmpeg) {
+      std::fprintf(stderr,
+                   "softevo render: video output needs ffmpeg, which is not on PATH (install "
+                   "it, e.g. apt-get install ffmpeg), or render a PNG instead\n");
+      return kExitNoEncoder;
     }
-    const Eigen::AlignedBox3d box = scene_box(motion.body, snaps, scene.floor_z);
-    if (layout == "strip") {
-      const int width = args.width > 0 ? args.width : 360;
-      const int height = args.height > 0 ? args.height : 300;
-      const Camera cam = render::fit_camera(view, box, width, height);
-      std::vector<Image> panels;
-      for (std::size_t i = 0; i < snaps.size(); ++i) {
-        render::SceneOptions o = scene;
-        o.label = (i == 0 ? motion.name + "  " : std::string()) + time_label(snaps[i].time);
-        panels.push_back(render::render_poses(motion.body, {snaps[i]}, cam, o));
-      }
-      image = render::hstack(panels, 4);
-    } else {
-      const int width = args.width > 0 ? args.width : 960;
-      const int height = args.height > 0 ? args.height : 720;
-      Eigen::AlignedBox3d framed = box;
-      if (scene.target_direction_deg) {
-        // Keep a stretch of the target line in view ahead of the start.
-        const double beta = *scene.target_direction_deg * 3.14159265358979323846 / 180.0;
-        const double reach = std::max(0.1, (box.max() - box.min()).head<2>().norm() * 0.5);
-        framed.extend(Eigen::Vector3d(scene.target_origin.x() + reach * std::cos(beta),
-                                      scene.target_origin.y() + reach * std::sin(beta),
-                                      scene.floor_z));
-      }
-      const Camera cam = render::fit_camera(view, framed, width, height);
-      for (int i = 0; i < n; ++i) {
-        // Earlier snapshots fainter, the last one at full strength.
-        scene.pose_fade.push_back(n == 1 ? 1.0 : 0.35 + 0.65 * i / (n - 1));
-      }
-      char range[64];
-      std::snprintf(range, sizeof range, "  t=%.1f-%.1fs", snaps.front().time, snaps.back().time);
-      scene.label = motion.name + range;
-      image = render::render_poses(motion.body, snaps, cam, scene);
-    }
+    const render::VideoWritten v = render::write_video(
+        clip, view, {args.fps, args.width, args.height}, scene, *ffmpeg, args.output);
+    std::printf("wrote %s (%d frames at %.0f fps, %dx%d)\n", args.output.c_str(), v.frames,
+                args.fps, v.width, v.height);
+    return kExitOk;
   }
+  const Image image =
+      args.timelapse == 0
+          ? render::render_still(clip, view, args.at, args.width, args.height, scene)
+          : render::render_timelapse(clip, view, timelapse, args.width, args.height, scene);
   render::write_png(image, args.output);
   std::printf("wrote %s (%dx%d)%s\n", args.output.c_str(), image.width, image.height,
               motion.summary.empty() ? "" : ("; " + motion.summary).c_str());

@@ -16,14 +16,18 @@
 
 #include "common/config.hpp"
 #include "common/eval_types.hpp"
-#include "master/archive.hpp"
+#include "io/archive.hpp"
 #include "master/scheduler.hpp"
+#include "motion/robot_source.hpp"
 #include "physics/revision.hpp"
 #include "tools/commands.hpp"
-#include "tools/robot_source.hpp"
 #include "worker/evaluate_unit.hpp"
 
 namespace softevo::cli {
+
+using motion::archived_generation;
+using motion::archived_individual;
+using motion::ArchivedIndividual;
 
 namespace {
 
@@ -38,7 +42,7 @@ struct ReplayArgs {
 
 // The archived component row layout (docs/archive.md): fitness, distance, path_length,
 // angle_error, perpendicular_penalty, status.
-std::array<double, master::kComponentCount> component_row(const DirectionComponents& c) {
+std::array<double, io::kComponentCount> component_row(const DirectionComponents& c) {
   return {c.fitness,
           c.distance,
           c.path_length,
@@ -79,14 +83,14 @@ Replayed replay_one(const ArchivedIndividual& ind, std::uint64_t hash, bool veri
     r.mismatch = buf;
   } else if (!ind.components.empty()) {
     const std::size_t rows = r.outcome.components.size();
-    if (rows * master::kComponentCount != ind.components.size()) {
+    if (rows * io::kComponentCount != ind.components.size()) {
       r.mismatch = "component rows " + std::to_string(rows) + " != archived " +
-                   std::to_string(ind.components.size() / master::kComponentCount);
+                   std::to_string(ind.components.size() / io::kComponentCount);
     }
     for (std::size_t d = 0; d < rows && r.mismatch.empty(); ++d) {
       const auto row = component_row(r.outcome.components[d]);
-      for (int k = 0; k < master::kComponentCount; ++k) {
-        const double archived = ind.components[d * master::kComponentCount + k];
+      for (int k = 0; k < io::kComponentCount; ++k) {
+        const double archived = ind.components[d * io::kComponentCount + k];
         if (!same_bits(row[k], archived) && !(std::isnan(row[k]) && std::isnan(archived))) {
           char buf[160];
           std::snprintf(buf, sizeof buf, "component %d of direction %zu: %.17g != archived %.17g",
@@ -114,8 +118,8 @@ int run_replay(const ReplayArgs& args) {
   {
     // The archive's recorded hash must belong to its config text, or we would replay another
     // experiment than the one that ran.
-    const master::Archive archive(args.archive);
-    const master::RunInfo info = archive.info();
+    const io::Archive archive(args.archive);
+    const io::RunInfo info = archive.info();
     const std::string& recorded = info.config_hash;
     if (recorded != hash_hex(hash)) {
       throw std::runtime_error(args.archive + ": config_hash attribute " + recorded +

@@ -231,3 +231,20 @@ TEST(ModuleRules, DetectorFindsPlantedMpiAndCrossModuleViolations) {
   EXPECT_EQ(mpi[1].line, 4);
   EXPECT_EQ(cross.size(), 1u);
 }
+
+TEST(ModuleRules, OnlyIoIncludesHdf5AndNothingTheCxxBindings) {
+  // io/ is the one room over the HDF5 C API (io/h5.hpp); every other room reads and writes
+  // files through io/'s headers, which do not include hdf5.h. The C++ bindings are used nowhere
+  // (tests included): clusters often install HDF5 without them.
+  const std::regex hdf5_header(R"(^(hdf5\.h|hdf5_hl\.h|H5[A-Za-z]*\.h)$)");
+  std::vector<Violation> v;
+  for (const auto& entry : fs::directory_iterator(source_dir())) {
+    const std::string room = entry.path().filename().string();
+    if (!entry.is_directory() || !fs::exists(entry.path() / "CMakeLists.txt")) continue;
+    if (room == "io" || room == "tests") continue;
+    for (const auto& x : forbidden_includes(room, hdf5_header)) v.push_back(x);
+  }
+  for (const char* room : {"io", "tests"})
+    for (const auto& x : forbidden_includes(room, std::regex(R"(^H5Cpp\.h$)"))) v.push_back(x);
+  EXPECT_TRUE(v.empty()) << describe(v);
+}

@@ -24,7 +24,7 @@
 
 #include "common/robot.hpp"
 #include "evo/genome.hpp"
-#include "master/archive.hpp"
+#include "io/archive.hpp"
 #include "master/signals.hpp"
 #include "physics/revision.hpp"
 #include "tests/build_tree.hpp"
@@ -35,6 +35,11 @@ extern char** environ;
 
 namespace softevo::master {
 namespace {
+
+using io::Archive;
+using io::ArchiveError;
+using io::GenerationRecord;
+using io::RunInfo;
 
 namespace fs = std::filesystem;
 

@@ -4,15 +4,14 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
-#include <H5Cpp.h>
-
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
 
 #include "common/robot.hpp"
-#include "tools/render.hpp"
+#include "io/h5.hpp"
+#include "render/render.hpp"
 
 #include "tests/build_tree.hpp"
 
@@ -77,9 +76,8 @@ class CmdRender : public ::testing::Test {
   // Trace of the same body shape without chamber: 3 frames moving 1 cm per frame along x.
   std::string write_trace() {
     const std::string path = (dir_ / "trace.h5").string();
-    H5::H5File file(path, H5F_ACC_TRUNC);
-    std::vector<int> cells;
-    std::vector<int> material;
+    std::vector<std::int32_t> cells;
+    std::vector<std::int32_t> material;
     for (int x = 0; x < 4; ++x)
       for (int y = 0; y < 3; ++y)
         for (int z = 0; z < 3; ++z) {
@@ -94,18 +92,13 @@ class CmdRender : public ::testing::Test {
                                cells[3 * i + 2] * 0.01});
         ori.insert(ori.end(), {1.0, 0.0, 0.0, 0.0});
       }
-    const hsize_t pdims[3] = {frames, v, 3}, odims[3] = {frames, v, 4}, cdims[2] = {v, 3};
-    file.createDataSet("positions", H5::PredType::NATIVE_DOUBLE, H5::DataSpace(3, pdims))
-        .write(pos.data(), H5::PredType::NATIVE_DOUBLE);
-    file.createDataSet("orientations", H5::PredType::NATIVE_DOUBLE, H5::DataSpace(3, odims))
-        .write(ori.data(), H5::PredType::NATIVE_DOUBLE);
-    file.createDataSet("voxel_cells", H5::PredType::NATIVE_INT32, H5::DataSpace(2, cdims))
-        .write(cells.data(), H5::PredType::NATIVE_INT32);
-    file.createDataSet("voxel_material", H5::PredType::NATIVE_INT32, H5::DataSpace(1, &v))
-        .write(material.data(), H5::PredType::NATIVE_INT32);
-    const double size = 0.01;
-    file.createAttribute("voxel_size", H5::PredType::NATIVE_DOUBLE, H5::DataSpace())
-        .write(H5::PredType::NATIVE_DOUBLE, &size);
+    // Only what another tool would write: no time, pressures, robot or frame rate.
+    const io::h5::File file = io::h5::File::create(path);
+    file.write_dataset<double>("positions", {frames, v, 3}, pos);
+    file.write_dataset<double>("orientations", {frames, v, 4}, ori);
+    file.write_dataset<std::int32_t>("voxel_cells", {v, 3}, cells);
+    file.write_dataset<std::int32_t>("voxel_material", {v}, material);
+    file.write_attribute<double>("voxel_size", 0.01);
     return path;
   }
   fs::path dir_;

@@ -3,9 +3,6 @@
 // a foreign config hash, must fail.
 #include <gtest/gtest.h>
 
-#include <H5Cpp.h>
-
-#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -15,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "io/h5.hpp"
 #include "tests/build_tree.hpp"
 
 namespace softevo {
@@ -56,10 +54,10 @@ class CmdReplay : public ::testing::Test {
   }
   // A copy of the archive with one change made through `edit`.
   static std::string tampered_copy(const std::string& name,
-                                   const std::function<void(H5::H5File&)>& edit) {
+                                   const std::function<void(const io::h5::File&)>& edit) {
     const std::string path = (dir_ / name).string();
     fs::copy_file(archive_, path, fs::copy_options::overwrite_existing);
-    H5::H5File file(path, H5F_ACC_RDWR);
+    const io::h5::File file = io::h5::File::open(path, io::h5::File::Access::read_write);
     edit(file);
     return path;
   }
@@ -86,13 +84,11 @@ TEST_F(CmdReplay, VerifyAllPassesOnAFreshRun) {
 }
 
 TEST_F(CmdReplay, OneUlpOfTamperedFitnessIsAMismatch) {
-  const std::string path = tampered_copy("fitness.h5", [](H5::H5File& file) {
-    H5::DataSet ds = file.openDataSet("generations/000001/fitness");
-    const auto n = static_cast<std::size_t>(ds.getSpace().getSimpleExtentNpoints());
-    std::vector<double> f(n);
-    ds.read(f.data(), H5::PredType::NATIVE_DOUBLE);
-    f[n - 1] = std::nextafter(f[n - 1], INFINITY);  // smallest possible change
-    ds.write(f.data(), H5::PredType::NATIVE_DOUBLE);
+  const std::string path = tampered_copy("fitness.h5", [](const io::h5::File& file) {
+    const io::h5::Dataset ds = file.open_dataset("generations/000001/fitness");
+    std::vector<double> f = ds.read<double>();
+    f.back() = std::nextafter(f.back(), INFINITY);  // smallest possible change
+    ds.write(f);
   });
   const Result r = run(binary("softevo") + " replay " + path + " --all --verify --generation 1");
   EXPECT_EQ(r.code, 1) << r.output;
@@ -103,24 +99,19 @@ TEST_F(CmdReplay, OneUlpOfTamperedFitnessIsAMismatch) {
 }
 
 TEST_F(CmdReplay, TamperedStatusIsAMismatch) {
-  const std::string path = tampered_copy("status.h5", [](H5::H5File& file) {
-    H5::DataSet ds = file.openDataSet("generations/000000/status");
-    const auto n = static_cast<std::size_t>(ds.getSpace().getSimpleExtentNpoints());
-    std::vector<std::uint8_t> s(n);
-    ds.read(s.data(), H5::PredType::NATIVE_UINT8);
+  const std::string path = tampered_copy("status.h5", [](const io::h5::File& file) {
+    const io::h5::Dataset ds = file.open_dataset("generations/000000/status");
+    std::vector<std::uint8_t> s = ds.read<std::uint8_t>();
     s[0] = s[0] == 1 ? 2 : 1;  // a killed status the robot did not have
-    ds.write(s.data(), H5::PredType::NATIVE_UINT8);
+    ds.write(s);
   });
   const Result r = run(binary("softevo") + " replay " + path + " --all --verify --generation 0");
   EXPECT_EQ(r.code, 1) << r.output;
 }
 
 TEST_F(CmdReplay, ForeignConfigHashIsRefused) {
-  const std::string path = tampered_copy("hash.h5", [](H5::H5File& file) {
-    file.removeAttr("config_hash");
-    H5::StrType type(H5::PredType::C_S1, H5T_VARIABLE);
-    const std::string foreign = "0000000000000000";
-    file.createAttribute("config_hash", type, H5::DataSpace()).write(type, foreign);
+  const std::string path = tampered_copy("hash.h5", [](const io::h5::File& file) {
+    file.write_string_attribute("config_hash", "0000000000000000", io::h5::Charset::utf8);
   });
   const Result r = run(binary("softevo") + " replay " + path + " --verify");
   EXPECT_EQ(r.code, 2) << r.output;
@@ -130,9 +121,8 @@ TEST_F(CmdReplay, ForeignConfigHashIsRefused) {
 // Bits are only comparable within one physics revision (physics/revision.hpp): --verify of an
 // archive of another revision is refused with both revisions named; a plain replay still runs.
 TEST_F(CmdReplay, OtherPhysicsRevisionIsRefusedByVerify) {
-  const std::string path = tampered_copy("revision.h5", [](H5::H5File& file) {
-    file.openAttribute("physics_revision")
-        .write(H5::PredType::NATIVE_INT32, std::array<std::int32_t, 1>{1}.data());
+  const std::string path = tampered_copy("revision.h5", [](const io::h5::File& file) {
+    file.write_attribute<std::int32_t>("physics_revision", 1);
   });
   const Result r = run(binary("softevo") + " replay " + path + " --best --verify");
   EXPECT_EQ(r.code, 2) << r.output;

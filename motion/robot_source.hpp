@@ -1,6 +1,11 @@
-// Where the CLI tools get a robot and its motion from: a robot file, an `eval --trace` HDF5
-// file, or one individual of a run archive (its genome developed and re-simulated with the
-// archived config, exactly as the run evaluated it). Shared by `render` and `replay`.
+// Where a robot and its motion come from: a robot file, an `eval --trace` HDF5 file
+// (docs/trace.md), or one individual of a run archive (its genome developed and re-simulated
+// with the archived config, exactly as the run evaluated it). Used by `softevo render` and
+// `softevo replay`, and meant for the viewer.
+//
+// Its own room rather than io/: it re-simulates (worker/), develops genomes (evo/) and builds
+// the renderer's bodies (render/), while io/ is the storage layer that master/ and
+// softevo-mpi link and that must stay free of those.
 #pragma once
 
 #include <cstdint>
@@ -10,9 +15,9 @@
 
 #include "common/config.hpp"
 #include "common/robot.hpp"
-#include "tools/render.hpp"
+#include "render/render.hpp"
 
-namespace softevo::cli {
+namespace softevo::motion {
 
 // A body and its poses over time (one pose = static).
 struct Motion {
@@ -79,4 +84,4 @@ ArchivedIndividual archived_individual(const std::string& archive_path,
 // genome, developed exactly as the worker does. Throws std::runtime_error for an invalid body.
 RobotFile robot_of(const ArchivedIndividual& individual);
 
-}  // namespace softevo::cli
+}  // namespace softevo::motion

@@ -1,7 +1,7 @@
-// Unit tests of the software renderer (tools/render.hpp): colours, PNG I/O, projection,
+// Unit tests of the software renderer (render/render.hpp): colours, PNG I/O, projection,
 // orientation, chamber placement and the target line, on small hand-made bodies whose
 // projection is known.
-#include "tools/render.hpp"
+#include "render/render.hpp"
 
 #include <gtest/gtest.h>
 

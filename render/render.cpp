@@ -1,5 +1,5 @@
 // Software rasteriser for `softevo render` (see render.hpp for the approach).
-#include "tools/render.hpp"
+#include "render/render.hpp"
 
 #ifdef SOFTEVO_HAVE_PNG
 #include <png.h>

@@ -2,22 +2,26 @@
 // The schema is documented in docs/archive.md; this header is its single implementation.
 //
 // Crash safety: an archive on disk is always a complete, valid file. Every change (new run,
-// one more generation + checkpoint, state change) is made on a copy next to the target
-// (".<name>.tmp.<pid>"), the copy is fsync'ed and renamed over the target, then the directory
-// is fsync'ed (copy-append-rename). A crash leaves either the old or the new file, never a half
-// written one; the cost is one file copy per generation (page-cache speed, small next to the
-// evaluation of a generation).
+// one more generation + checkpoint, state change) is made on a copy next to the target and
+// swapped in by io/atomic_file.hpp (copy-append-rename). A crash leaves either the old or the
+// new file, never a half written one; the cost is one file copy per generation (page-cache
+// speed, small next to the evaluation of a generation).
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "common/eval_types.hpp"
+#include "io/atomic_file.hpp"  // remove_stale_temp_files
 
-namespace softevo::master {
+namespace softevo::io {
+
+namespace h5 {
+class File;
+}
 
 inline constexpr const char* kArchiveFormat = "softevo.run/1";
 // Per direction: fitness, distance, path_length, angle_error, perpendicular_penalty, status.
@@ -25,7 +29,8 @@ inline constexpr int kComponentCount = 6;
 // Columns of /stats: generation, best, mean, sd, species_count, evaluations_per_second.
 inline constexpr int kStatsColumns = 6;
 
-// A missing, unreadable, foreign or malformed archive; the message names the file and object.
+// A missing, unreadable, foreign or malformed archive, or a failed write; the message names the
+// file, the object and the reason.
 class ArchiveError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
@@ -56,7 +61,7 @@ struct GenerationRecord {
   std::vector<std::int64_t> parent1;  // -1: none
   std::vector<std::int64_t> parent2;  // -1: none
   std::vector<std::int64_t> species;
-  std::vector<std::uint8_t> status;  // EvalStatus
+  std::vector<std::uint8_t> status;  // EvalStatus (common/eval_types.hpp)
   std::vector<double> fitness;
   std::vector<std::int32_t> voxels;
   std::vector<std::int32_t> chambers;
@@ -112,9 +117,6 @@ void create_archive(const std::string& path, const RunInfo& info, const std::str
 // Adds /generations/<G>, appends a /stats row, replaces /checkpoint and the root attributes.
 void append_generation(const std::string& path, const RunInfo& info, const GenerationRecord& record,
                        const StatsRow& stats, const Checkpoint& checkpoint);
-// Removes ".<name>.tmp.<pid>" files next to `path` left by a process that no longer exists
-// (a run killed while writing); returns how many were removed.
-int remove_stale_temp_files(const std::string& path);
 // Replaces the root attributes (state changes, end time).
 void update_run_info(const std::string& path, const RunInfo& info);
 
@@ -138,8 +140,11 @@ class Archive {
 
  private:
   std::string path_;
-  std::int64_t file_ = -1;  // hid_t
+  std::unique_ptr<h5::File> file_;
 };
+
+// `path` is an HDF5 file whose root attribute `format` is kArchiveFormat (never throws).
+bool is_run_archive(const std::string& path);
 
 // FNV-1a 64 over every archived (generation, id, status, fitness bits), generations ascending,
 // rows in id order, each field little-endian (i64, i64, u8, u64 bits). Equal digests = equal
@@ -154,4 +159,4 @@ std::uint64_t content_digest(const Archive& archive);
 // "000042"
 std::string generation_group_name(std::int64_t generation);
 
-}  // namespace softevo::master
+}  // namespace softevo::io

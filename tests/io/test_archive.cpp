@@ -1,6 +1,6 @@
 // Run archive: round trip of every field, atomic updates (a failed update leaves the previous
 // file byte for byte), digests that see every deterministic field and ignore timing fields.
-#include "master/archive.hpp"
+#include "io/archive.hpp"
 
 #include <gtest/gtest.h>
 #include <hdf5.h>
@@ -11,22 +11,14 @@
 #include <fstream>
 #include <sstream>
 
-namespace softevo::master {
+#include "tests/io/tmp_dir.hpp"
+
+namespace softevo::io {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct TmpDir {
-  std::string path;
-  TmpDir() {
-    char t[] = "/tmp/softevo-archive-test-XXXXXX";
-    path = mkdtemp(t);
-  }
-  ~TmpDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
+using test::TmpDir;
 
 std::string bytes_of(const std::string& p) {
   std::ifstream in(p, std::ios::binary);
@@ -221,4 +213,4 @@ TEST(Archive, FitnessStatsUsePopulationSd) {
 }
 
 }  // namespace
-}  // namespace softevo::master
+}  // namespace softevo::io

@@ -1,4 +1,4 @@
-#include "tools/robot_source.hpp"
+#include "motion/robot_source.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,12 +8,12 @@
 
 #include "common/eval_types.hpp"
 #include "evo/genome.hpp"
-#include "master/archive.hpp"
-#include "tools/h5_read.hpp"
+#include "io/archive.hpp"
+#include "io/trace.hpp"
 #include "worker/evaluate_robot.hpp"
 #include "worker/evaluate_unit.hpp"
 
-namespace softevo::cli {
+namespace softevo::motion {
 
 namespace {
 
@@ -86,120 +86,70 @@ Motion static_motion(const BodyPlan& plan, int material_count, const std::string
 }
 
 // Body of a trace: voxels from the trace, chamber cells from a robot file when known.
-render::Body trace_body(const H5::H5File& file, const std::string& path,
+render::Body trace_body(const io::Trace& trace, const std::string& path,
                         const std::string& robot_file) {
-  std::vector<hsize_t> dims;
-  const std::vector<std::int64_t> cells = h5read::ints(file, "voxel_cells", dims, path);
-  if (dims.size() != 2 || dims[1] != 3) {
-    throw std::runtime_error(path + ": dataset 'voxel_cells' must have shape [voxels, 3]");
-  }
-  std::vector<hsize_t> mdims;
-  const std::vector<std::int64_t> material = h5read::ints(file, "voxel_material", mdims, path);
-  if (material.size() != dims[0]) {
-    throw std::runtime_error(path + ": 'voxel_material' and 'voxel_cells' differ in length");
-  }
-  const double voxel_size = h5read::has_attribute(file, "voxel_size")
-                                ? h5read::double_attribute(file, "voxel_size", path)
-                                : 0.01;
+  const auto voxels = static_cast<std::size_t>(trace.voxels);
+  const auto cell = [&trace](std::size_t v) {
+    return Eigen::Vector3i(trace.voxel_cells[3 * v], trace.voxel_cells[3 * v + 1],
+                           trace.voxel_cells[3 * v + 2]);
+  };
   std::optional<RobotFile> robot;
   if (!robot_file.empty()) {
     robot = read_robot_file(robot_file);
-  } else if (h5read::has_link(file, "robot_json")) {
-    robot =
-        parse_robot_json(h5read::string_dataset(file, "robot_json", path), path + ":robot_json");
-  } else if (h5read::has_attribute(file, "robot_json")) {
-    robot =
-        parse_robot_json(h5read::string_attribute(file, "robot_json", path), path + ":robot_json");
+  } else if (!trace.robot_json.empty()) {
+    robot = parse_robot_json(trace.robot_json, path + ":robot_json");
   }
   render::Body body;
   if (robot) {
     body = render::body_from_plan(robot->body);
-    bool same = body.voxel_cells.size() == dims[0];
-    for (std::size_t i = 0; same && i < dims[0]; ++i) {
-      same = body.voxel_cells[i] == Eigen::Vector3i(static_cast<int>(cells[3 * i]),
-                                                    static_cast<int>(cells[3 * i + 1]),
-                                                    static_cast<int>(cells[3 * i + 2]));
-    }
+    bool same = body.voxel_cells.size() == voxels;
+    for (std::size_t v = 0; same && v < voxels; ++v) same = body.voxel_cells[v] == cell(v);
     if (!same) {
       throw std::runtime_error(path + ": the robot's voxels do not match the trace's voxel_cells");
     }
-    body.voxel_size = voxel_size;
+    body.voxel_size = trace.voxel_size;
     return body;
   }
-  body.voxel_size = voxel_size;
-  for (std::size_t i = 0; i < dims[0]; ++i) {
-    body.voxel_cells.emplace_back(static_cast<int>(cells[3 * i]),
-                                  static_cast<int>(cells[3 * i + 1]),
-                                  static_cast<int>(cells[3 * i + 2]));
-    body.voxel_material.push_back(static_cast<int>(material[i]));
-    body.material_count = std::max(body.material_count, static_cast<int>(material[i]));
-  }
-  if ((body.voxel_cells.size() > 0) &&
-      std::any_of(cells.begin(), cells.end(), [](std::int64_t c) { return c < 0; })) {
-    throw std::runtime_error(path + ": negative voxel cell index");
+  body.voxel_size = trace.voxel_size;
+  for (std::size_t v = 0; v < voxels; ++v) {
+    body.voxel_cells.push_back(cell(v));
+    body.voxel_material.push_back(trace.voxel_material[v]);
+    body.material_count = std::max(body.material_count, static_cast<int>(trace.voxel_material[v]));
   }
   return body;
 }
 
 Motion load_trace(const std::string& path, const MotionRequest& request) {
-  const H5::H5File file = h5read::open_file(path);
+  const io::Trace trace = io::read_trace(path);
   Motion motion;
-  motion.body = trace_body(file, path, request.robot_file);
+  motion.body = trace_body(trace, path, request.robot_file);
   motion.name = fs::path(path).stem().string();
-  const std::size_t voxels = motion.body.voxel_cells.size();
-  std::vector<hsize_t> pdims, odims, prdims;
-  const std::vector<double> pos = h5read::doubles(file, "positions", pdims, path);
-  const std::vector<double> ori = h5read::doubles(file, "orientations", odims, path);
-  if (pdims.size() != 3 || pdims[1] != voxels || pdims[2] != 3) {
-    throw std::runtime_error(path + ": 'positions' must have shape [frames, " +
-                             std::to_string(voxels) + ", 3]");
-  }
-  if (odims.size() != 3 || odims[0] != pdims[0] || odims[1] != voxels || odims[2] != 4) {
-    throw std::runtime_error(path + ": 'orientations' must have shape [" +
-                             std::to_string(pdims[0]) + ", " + std::to_string(voxels) + ", 4]");
-  }
-  std::vector<double> pressure;
-  std::size_t chambers = 0;
-  if (h5read::has_link(file, "pressures")) {
-    pressure = h5read::doubles(file, "pressures", prdims, path);
-    if (prdims.size() == 2 && prdims[0] == pdims[0]) chambers = prdims[1];
-  }
-  std::vector<double> times;
-  if (h5read::has_link(file, "time")) {
-    std::vector<hsize_t> tdims;
-    times = h5read::doubles(file, "time", tdims, path);
-    if (times.size() != pdims[0]) throw std::runtime_error(path + ": 'time' length != frames");
-  }
-  const double rate = h5read::has_attribute(file, "frame_rate")
-                          ? h5read::double_attribute(file, "frame_rate", path)
-                          : 60.0;  // §5: one record per 60 Hz control frame
-  if (h5read::has_attribute(file, "direction_deg")) {
-    motion.direction_deg = h5read::double_attribute(file, "direction_deg", path);
-  }
-  for (std::size_t f = 0; f < pdims[0]; ++f) {
+  motion.direction_deg = trace.direction_deg;
+  const auto voxels = static_cast<std::size_t>(trace.voxels);
+  const auto chambers = static_cast<std::size_t>(trace.chambers);
+  for (std::size_t f = 0; f < static_cast<std::size_t>(trace.frames); ++f) {
     render::Pose pose;
-    pose.time = times.empty() ? static_cast<double>(f) / rate : times[f];
+    pose.time = trace.time[f];
     pose.position.resize(voxels);
     pose.orientation.resize(voxels);
     for (std::size_t v = 0; v < voxels; ++v) {
-      const double* p = &pos[(f * voxels + v) * 3];
-      const double* q = &ori[(f * voxels + v) * 4];
+      const double* p = &trace.positions[(f * voxels + v) * 3];
+      const double* q = &trace.orientations[(f * voxels + v) * 4];
       pose.position[v] = Eigen::Vector3d(p[0], p[1], p[2]);
       pose.orientation[v] = Eigen::Quaterniond(q[0], q[1], q[2], q[3]);
     }
     if (chambers > 0) {
       pose.chamber_pressure.assign(
-          pressure.begin() + static_cast<std::ptrdiff_t>(f * chambers),
-          pressure.begin() + static_cast<std::ptrdiff_t>((f + 1) * chambers));
+          trace.pressures.begin() + static_cast<std::ptrdiff_t>(f * chambers),
+          trace.pressures.begin() + static_cast<std::ptrdiff_t>((f + 1) * chambers));
     }
     motion.poses.push_back(std::move(pose));
   }
   if (motion.poses.empty()) throw std::runtime_error(path + ": trace has no frame");
-  if (h5read::has_attribute(file, "fitness") && h5read::has_attribute(file, "status")) {
+  if (trace.fitness && !trace.status.empty()) {
     char line[160];
-    std::snprintf(line, sizeof line, "traced fitness %.17g, status %s",
-                  h5read::double_attribute(file, "fitness", path),
-                  h5read::string_attribute(file, "status", path).c_str());
+    std::snprintf(line, sizeof line, "traced fitness %.17g, status %s", *trace.fitness,
+                  trace.status.c_str());
     motion.summary = line;
   }
   if (motion.body.chamber_cells.empty()) {
@@ -209,7 +159,7 @@ Motion load_trace(const std::string& path, const MotionRequest& request) {
   return motion;
 }
 
-ArchivedIndividual individual_at(const master::GenerationRecord& record, std::size_t row,
+ArchivedIndividual individual_at(const io::GenerationRecord& record, std::size_t row,
                                  const std::string& path, const std::string& config_text,
                                  const Config& config, const std::string& experiment) {
   ArchivedIndividual ind;
@@ -226,8 +176,7 @@ ArchivedIndividual individual_at(const master::GenerationRecord& record, std::si
   ind.chambers = record.chambers[row];
   ind.genome = record.genome[row];
   ind.n_directions = record.n_directions;
-  const std::size_t per_row =
-      static_cast<std::size_t>(record.n_directions) * master::kComponentCount;
+  const std::size_t per_row = static_cast<std::size_t>(record.n_directions) * io::kComponentCount;
   if (record.components.size() == per_row * record.size()) {
     ind.components.assign(
         record.components.begin() + static_cast<std::ptrdiff_t>(row * per_row),
@@ -239,13 +188,13 @@ ArchivedIndividual individual_at(const master::GenerationRecord& record, std::si
 }  // namespace
 
 std::vector<std::int64_t> archived_generations(const std::string& archive_path) {
-  const master::Archive archive(archive_path);
+  const io::Archive archive(archive_path);
   return archive.generations();
 }
 
 std::vector<ArchivedIndividual> archived_generation(const std::string& archive_path,
                                                     std::optional<std::int64_t> generation) {
-  const master::Archive archive(archive_path);
+  const io::Archive archive(archive_path);
   const std::vector<std::int64_t> gens = archive.generations();
   if (gens.empty()) throw std::runtime_error(archive_path + ": archive has no generation yet");
   const std::int64_t g = generation ? *generation : gens.back();
@@ -257,7 +206,7 @@ std::vector<ArchivedIndividual> archived_generation(const std::string& archive_p
   const std::string config_text = archive.config_text();
   const Config config = parse_config(config_text, archive_path + ":/config");
   const std::string experiment = archive.info().experiment;
-  const master::GenerationRecord record = archive.generation(g);
+  const io::GenerationRecord record = archive.generation(g);
   record.check();
   std::vector<ArchivedIndividual> out;
   for (std::size_t row = 0; row < record.size(); ++row) {
@@ -316,9 +265,7 @@ Motion load_motion(const std::string& input, const MotionRequest& request) {
     config.task.control = robot.controller.closed_loop ? "closed" : "open";
     return simulate_motion(config, robot.body, robot.controller, request, name);
   }
-  const H5::H5File file = h5read::open_file(input);
-  if (h5read::has_attribute(file, "format") &&
-      h5read::string_attribute(file, "format", input) == master::kArchiveFormat) {
+  if (io::is_run_archive(input)) {
     const ArchivedIndividual ind = archived_individual(input, request.generation, request.id);
     const RobotFile robot = robot_of(ind);
     if (!request.needs_motion || request.static_pose) {
@@ -331,10 +278,10 @@ Motion load_motion(const std::string& input, const MotionRequest& request) {
     motion.summary += archived;
     return motion;
   }
-  if (h5read::has_link(file, "positions")) return load_trace(input, request);
+  if (io::is_trace(input)) return load_trace(input, request);
   throw std::runtime_error(input +
                            ": neither a run archive (format softevo.run/1) nor a trace "
                            "(/positions); robot files must end in .json");
 }
 
-}  // namespace softevo::cli
+}  // namespace softevo::motion

@@ -1,0 +1,428 @@
+// HDF5 implementation of the run archive (schema: docs/archive.md) over the RAII layer of
+// io/h5.hpp. Every failure, HDF5 or file system, becomes an ArchiveError naming the file and
+// the object.
+#include "io/archive.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <utility>
+
+#include "io/h5.hpp"
+
+namespace softevo::io {
+namespace {
+
+namespace fs = std::filesystem;
+using h5::Charset;
+
+// Runs `body`; any other error (h5::Error, file system) is rethrown as an ArchiveError with the
+// same message, so callers catch one type.
+template <typename Body>
+auto archive_errors(Body&& body) -> decltype(body()) {
+  try {
+    return body();
+  } catch (const ArchiveError&) {
+    throw;
+  } catch (const std::runtime_error& e) {
+    throw ArchiveError(e.what());
+  }
+}
+
+const char* const kStatsColumnNames =
+    "generation,best,mean,sd,species_count,evaluations_per_second";
+
+void write_run_info(const h5::File& file, const RunInfo& info) {
+  file.write_string_attribute("format", info.format, Charset::utf8);
+  file.write_string_attribute("version", info.version, Charset::utf8);
+  file.write_string_attribute("git_commit", info.git_commit, Charset::utf8);
+  file.write_attribute<std::int32_t>("physics_revision", info.physics_revision);
+  file.write_attribute<std::int64_t>("seed", info.seed);
+  file.write_attribute<std::int32_t>("ranks", info.ranks);
+  file.write_string_attribute("host", info.host, Charset::utf8);
+  file.write_string_attribute("start_time", info.start_time, Charset::utf8);
+  file.write_string_attribute("end_time", info.end_time, Charset::utf8);
+  file.write_string_attribute("config_hash", info.config_hash, Charset::utf8);
+  file.write_string_attribute("experiment", info.experiment, Charset::utf8);
+  file.write_string_attribute("state", info.state, Charset::utf8);
+  file.write_attribute<std::int64_t>("generations_done", info.generations_done);
+}
+
+// Runs `edit` on a copy of `path` (or on a new file if `fresh`), then swaps the copy in
+// (io/atomic_file.hpp). Messages name `path`, not the copy.
+template <typename Edit>
+void atomic_edit(const std::string& path, bool fresh, Edit&& edit) {
+  archive_errors([&] {
+    if (!fresh && !fs::exists(path)) throw ArchiveError(path + ": archive does not exist");
+    replace_atomically(path, [&](const std::string& temp) {
+      h5::File file = [&] {
+        if (fresh) {
+          // Persistent free-space tracking: space freed by replacing /checkpoint is reused on
+          // the next generation instead of growing the file forever.
+          h5::PropertyList creation = h5::PropertyList::file_creation();
+          creation.persist_free_space();
+          return h5::File::create(temp, &creation, path);
+        }
+        fs::copy_file(path, temp, fs::copy_options::overwrite_existing);
+        return h5::File::open(temp, h5::File::Access::read_write, path);
+      }();
+      edit(file);
+      file.flush();
+      file.close();
+    });
+  });
+}
+
+// ---- FNV-1a 64 ---------------------------------------------------------------------------------
+class Fnv {
+ public:
+  void byte(std::uint8_t b) {
+    h_ ^= b;
+    h_ *= 0x100000001b3ULL;
+  }
+  void u64(std::uint64_t v) {
+    for (int i = 0; i < 8; ++i) byte(static_cast<std::uint8_t>(v >> (8 * i)));
+  }
+  void i64(std::int64_t v) { u64(static_cast<std::uint64_t>(v)); }
+  void f64(double v) {
+    std::uint64_t bits = 0;
+    std::memcpy(&bits, &v, sizeof bits);
+    u64(bits);
+  }
+  void bytes(const std::vector<std::uint8_t>& b) {
+    u64(b.size());
+    for (std::uint8_t x : b) byte(x);
+  }
+  void str(const std::string& s) {
+    u64(s.size());
+    for (char c : s) byte(static_cast<std::uint8_t>(c));
+  }
+  std::uint64_t value() const { return h_; }
+
+ private:
+  std::uint64_t h_ = 0xcbf29ce484222325ULL;
+};
+
+}  // namespace
+
+std::string generation_group_name(std::int64_t generation) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%06lld", static_cast<long long>(generation));
+  return buf;
+}
+
+void GenerationRecord::check() const {
+  const std::size_t n = id.size();
+  const bool same = parent1.size() == n && parent2.size() == n && species.size() == n &&
+                    status.size() == n && fitness.size() == n && voxels.size() == n &&
+                    chambers.size() == n && wall_seconds.size() == n && worker_rank.size() == n &&
+                    genome.size() == n && n_directions >= 1 &&
+                    components.size() == n * static_cast<std::size_t>(n_directions) *
+                                             static_cast<std::size_t>(kComponentCount);
+  if (!same)
+    throw ArchiveError("generation " + std::to_string(generation) +
+                       ": record columns have different lengths");
+  for (std::size_t i = 1; i < n; ++i)
+    if (id[i] <= id[i - 1])
+      throw ArchiveError("generation " + std::to_string(generation) +
+                         ": rows are not sorted by ascending unique id");
+}
+
+FitnessStats fitness_stats(const std::vector<double>& fitness) {
+  FitnessStats s;
+  if (fitness.empty()) return s;
+  s.best = fitness[0];
+  double sum = 0.0;
+  for (double f : fitness) {
+    s.best = std::max(s.best, f);
+    sum += f;
+  }
+  s.mean = sum / static_cast<double>(fitness.size());
+  double ss = 0.0;
+  for (double f : fitness) ss += (f - s.mean) * (f - s.mean);
+  s.sd = std::sqrt(ss / static_cast<double>(fitness.size()));
+  return s;
+}
+
+void check_output_path(const std::string& path) {
+  if (path.empty()) throw ArchiveError("output path is empty");
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw ArchiveError(path + ": is a directory, not a file");
+  const std::string dir = directory_of(path);
+  if (!fs::is_directory(dir, ec))
+    throw ArchiveError(path + ": output directory " + dir + " does not exist");
+  const std::string probe = temp_path_for(path) + ".probe";
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
+  if (fd < 0)
+    throw ArchiveError(path + ": cannot create files in " + dir + ": " + std::strerror(errno));
+  ::close(fd);
+  ::unlink(probe.c_str());
+}
+
+void create_archive(const std::string& path, const RunInfo& info, const std::string& config_text) {
+  atomic_edit(path, true, [&](const h5::File& file) {
+    write_run_info(file, info);
+    file.write_string_dataset("config", config_text, Charset::utf8);
+    // /stats: chunked, unlimited rows, extended by one row per generation.
+    h5::PropertyList creation = h5::PropertyList::dataset_creation();
+    creation.chunk({64, kStatsColumns});
+    const h5::Dataset stats = file.create_dataset<double>(
+        "stats", h5::Dataspace::simple({0, kStatsColumns}, {H5S_UNLIMITED, kStatsColumns}),
+        &creation);
+    stats.write_string_attribute("columns", kStatsColumnNames, Charset::utf8);
+    file.create_group("generations");
+  });
+}
+
+void append_generation(const std::string& path, const RunInfo& info, const GenerationRecord& record,
+                       const StatsRow& stats, const Checkpoint& checkpoint) {
+  record.check();
+  atomic_edit(path, false, [&](const h5::File& file) {
+    const std::string name = "generations/" + generation_group_name(record.generation);
+    if (file.has_link(name)) throw ArchiveError(path + ": /" + name + " already exists");
+    const h5::Group g = file.create_group(name);
+    const hsize_t n = record.size();
+    g.write_dataset<std::int64_t>("id", {n}, record.id);
+    g.write_dataset<std::int64_t>("parent1", {n}, record.parent1);
+    g.write_dataset<std::int64_t>("parent2", {n}, record.parent2);
+    g.write_dataset<std::int64_t>("species", {n}, record.species);
+    g.write_dataset<std::uint8_t>("status", {n}, record.status);
+    g.write_dataset<double>("fitness", {n}, record.fitness);
+    g.write_dataset<std::int32_t>("voxels", {n}, record.voxels);
+    g.write_dataset<std::int32_t>("chambers", {n}, record.chambers);
+    g.write_dataset<double>("wall_seconds", {n}, record.wall_seconds);
+    g.write_dataset<std::int32_t>("worker_rank", {n}, record.worker_rank);
+    g.write_byte_rows("genome", record.genome);
+    g.write_dataset<double>("components",
+                            {n, static_cast<hsize_t>(record.n_directions), kComponentCount},
+                            record.components);
+    g.write_attribute<double>("best", record.best);
+    g.write_attribute<double>("mean", record.mean);
+    g.write_attribute<double>("sd", record.sd);
+    g.write_attribute<std::int64_t>("species_count", record.species_count);
+    g.write_attribute<std::int64_t>("evaluations", record.evaluations);
+    g.write_attribute<double>("eval_wall_seconds", record.eval_wall_seconds);
+
+    // /stats: one more row.
+    const h5::Dataset table = file.open_dataset("stats");
+    const hsize_t rows = table.dims().at(0);
+    table.set_extent({rows + 1, kStatsColumns});
+    table.write_block<double>({rows, 0}, {1, kStatsColumns},
+                              {stats.generation, stats.best, stats.mean, stats.sd,
+                               stats.species_count, stats.evaluations_per_second});
+
+    // /checkpoint: replaced as a whole.
+    if (file.has_link("checkpoint")) file.delete_link("checkpoint");
+    const h5::Group cg = file.create_group("checkpoint");
+    cg.write_dataset<std::uint8_t>(
+        "population", {static_cast<hsize_t>(checkpoint.population.size())}, checkpoint.population);
+    cg.write_attribute<std::int64_t>("generation", checkpoint.generation);
+
+    write_run_info(file, info);
+  });
+}
+
+void update_run_info(const std::string& path, const RunInfo& info) {
+  atomic_edit(path, false, [&](const h5::File& file) { write_run_info(file, info); });
+}
+
+// ---- Archive (reader) --------------------------------------------------------------------------
+Archive::Archive(const std::string& path) : path_(path) {
+  archive_errors([&] {
+    file_ = std::make_unique<h5::File>(h5::File::open(path));
+    if (!file_->has_attribute("format"))
+      throw ArchiveError(path + ": not a softevo run archive (no format attribute)");
+    const std::string format = file_->read_string_attribute("format");
+    if (format != kArchiveFormat)
+      throw ArchiveError(path + ": unsupported archive format \"" + format + "\" (expected " +
+                         kArchiveFormat + ")");
+  });
+}
+
+Archive::~Archive() = default;
+
+RunInfo Archive::info() const {
+  return archive_errors([&] {
+    const h5::File& f = *file_;
+    RunInfo r;
+    r.format = f.read_string_attribute("format");
+    r.version = f.read_string_attribute("version");
+    r.git_commit = f.read_string_attribute("git_commit");
+    r.physics_revision = f.has_attribute("physics_revision")
+                             ? f.read_attribute<std::int32_t>("physics_revision")
+                             : 1;
+    r.seed = f.read_attribute<std::int64_t>("seed");
+    r.ranks = f.read_attribute<std::int32_t>("ranks");
+    r.host = f.read_string_attribute("host");
+    r.start_time = f.read_string_attribute("start_time");
+    r.end_time = f.read_string_attribute("end_time");
+    r.config_hash = f.read_string_attribute("config_hash");
+    r.experiment = f.read_string_attribute("experiment");
+    r.state = f.read_string_attribute("state");
+    r.generations_done = f.read_attribute<std::int64_t>("generations_done");
+    return r;
+  });
+}
+
+std::string Archive::config_text() const {
+  return archive_errors([&] { return file_->open_dataset("config").read_string(); });
+}
+
+std::vector<std::int64_t> Archive::generations() const {
+  return archive_errors([&] {
+    std::vector<std::int64_t> out;
+    for (const std::string& name : file_->open_group("generations").link_names()) {
+      char* end = nullptr;
+      const long long v = std::strtoll(name.c_str(), &end, 10);
+      if (end == name.c_str() || *end != '\0' || name.size() != 6)
+        throw ArchiveError(path_ + ": unexpected object /generations/" + name);
+      out.push_back(v);
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+  });
+}
+
+GenerationRecord Archive::generation(std::int64_t gen) const {
+  return archive_errors([&] {
+    const std::string name = "generations/" + generation_group_name(gen);
+    if (!file_->has_link(name))
+      throw ArchiveError(path_ + ": no generation " + std::to_string(gen) + " (/" + name + ")");
+    const h5::Group g = file_->open_group(name);
+    GenerationRecord r;
+    r.generation = gen;
+    r.id = g.read_dataset<std::int64_t>("id");
+    r.parent1 = g.read_dataset<std::int64_t>("parent1");
+    r.parent2 = g.read_dataset<std::int64_t>("parent2");
+    r.species = g.read_dataset<std::int64_t>("species");
+    r.status = g.read_dataset<std::uint8_t>("status");
+    r.fitness = g.read_dataset<double>("fitness");
+    r.voxels = g.read_dataset<std::int32_t>("voxels");
+    r.chambers = g.read_dataset<std::int32_t>("chambers");
+    r.wall_seconds = g.read_dataset<double>("wall_seconds");
+    r.worker_rank = g.read_dataset<std::int32_t>("worker_rank");
+    r.genome = g.open_dataset("genome").read_byte_rows();
+    std::vector<hsize_t> dims;
+    r.components = g.read_dataset<double>("components", &dims);
+    if (dims.size() != 3 || dims[2] != kComponentCount)
+      throw ArchiveError(path_ + ": /" + name + "/components is not [n, n_directions, 6]");
+    r.n_directions = static_cast<int>(dims[1]);
+    r.best = g.read_attribute<double>("best");
+    r.mean = g.read_attribute<double>("mean");
+    r.sd = g.read_attribute<double>("sd");
+    r.species_count = g.read_attribute<std::int64_t>("species_count");
+    r.evaluations = g.read_attribute<std::int64_t>("evaluations");
+    r.eval_wall_seconds = g.read_attribute<double>("eval_wall_seconds");
+    try {
+      r.check();
+    } catch (const ArchiveError& e) {
+      throw ArchiveError(path_ + ": " + e.what());
+    }
+    return r;
+  });
+}
+
+std::vector<StatsRow> Archive::stats() const {
+  return archive_errors([&] {
+    std::vector<hsize_t> dims;
+    const std::vector<double> v = file_->read_dataset<double>("stats", &dims);
+    if (dims.size() != 2 || dims[1] != kStatsColumns)
+      throw ArchiveError(path_ + ": /stats is not [G, 6]");
+    std::vector<StatsRow> rows(static_cast<std::size_t>(dims[0]));
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const double* r = &v[i * kStatsColumns];
+      rows[i] = StatsRow{r[0], r[1], r[2], r[3], r[4], r[5]};
+    }
+    return rows;
+  });
+}
+
+std::optional<Checkpoint> Archive::checkpoint() const {
+  return archive_errors([&]() -> std::optional<Checkpoint> {
+    if (!file_->has_link("checkpoint")) return std::nullopt;
+    const h5::Group g = file_->open_group("checkpoint");
+    Checkpoint c;
+    c.generation = g.read_attribute<std::int64_t>("generation");
+    c.population = g.read_dataset<std::uint8_t>("population");
+    return c;
+  });
+}
+
+bool is_run_archive(const std::string& path) {
+  try {
+    if (!h5::File::is_hdf5(path)) return false;
+    const h5::File file = h5::File::open(path);
+    return file.has_attribute("format") && file.read_string_attribute("format") == kArchiveFormat;
+  } catch (const h5::Error&) {
+    return false;
+  }
+}
+
+std::uint64_t fitness_digest(const Archive& archive) {
+  Fnv h;
+  for (std::int64_t gen : archive.generations()) {
+    const GenerationRecord r = archive.generation(gen);
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      h.i64(gen);
+      h.i64(r.id[i]);
+      h.byte(r.status[i]);
+      h.f64(r.fitness[i]);
+    }
+  }
+  return h.value();
+}
+
+std::uint64_t content_digest(const Archive& archive) {
+  Fnv h;
+  const RunInfo info = archive.info();
+  h.str(info.format);
+  h.i64(info.seed);
+  h.str(info.config_hash);
+  h.str(info.experiment);
+  h.str(info.state);
+  h.i64(info.generations_done);
+  h.str(archive.config_text());
+  for (std::int64_t gen : archive.generations()) {
+    const GenerationRecord r = archive.generation(gen);
+    h.i64(gen);
+    h.u64(r.size());
+    h.i64(r.n_directions);
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      h.i64(r.id[i]);
+      h.i64(r.parent1[i]);
+      h.i64(r.parent2[i]);
+      h.i64(r.species[i]);
+      h.byte(r.status[i]);
+      h.f64(r.fitness[i]);
+      h.i64(r.voxels[i]);
+      h.i64(r.chambers[i]);
+      h.bytes(r.genome[i]);
+    }
+    for (double c : r.components) h.f64(c);
+    h.f64(r.best);
+    h.f64(r.mean);
+    h.f64(r.sd);
+    h.i64(r.species_count);
+    h.i64(r.evaluations);
+  }
+  for (const StatsRow& s : archive.stats()) {
+    h.f64(s.generation);
+    h.f64(s.best);
+    h.f64(s.mean);
+    h.f64(s.sd);
+    h.f64(s.species_count);
+  }
+  if (const auto c = archive.checkpoint()) {
+    h.i64(c->generation);
+    h.bytes(c->population);
+  }
+  return h.value();
+}
+
+}  // namespace softevo::io

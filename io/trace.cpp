@@ -1,0 +1,154 @@
+// HDF5 implementation of the trace (schema: docs/trace.md) over the RAII layer of io/h5.hpp.
+#include "io/trace.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "common/safe_write.hpp"
+#include "io/h5.hpp"
+
+namespace softevo::io {
+namespace {
+
+using h5::Charset;
+
+// Defaults for traces written by other tools (docs/trace.md): one frame per 60 Hz control
+// frame, a 1 cm lattice.
+constexpr double kDefaultFrameRate = 60.0;  // [Hz]
+constexpr double kDefaultVoxelSize = 0.01;  // [m]
+
+void expect_size(std::size_t actual, std::int64_t expected, const char* name,
+                 const std::string& where) {
+  if (actual != static_cast<std::size_t>(expected))
+    throw std::invalid_argument(where + ": " + name + " has " + std::to_string(actual) +
+                                " values, expected " + std::to_string(expected));
+}
+
+[[noreturn]] void bad_shape(const h5::Where& where, const std::string& expected) {
+  where.fail("read dataset", "shape must be " + expected);
+}
+
+std::string shape(std::initializer_list<std::int64_t> dims) {
+  std::string s = "[";
+  for (const std::int64_t d : dims) s += (s.size() > 1 ? ", " : "") + std::to_string(d);
+  return s + "]";
+}
+
+}  // namespace
+
+void Trace::check(const std::string& where) const {
+  if (frames < 0 || voxels < 0 || chambers < 0)
+    throw std::invalid_argument(where + ": negative frame, voxel or chamber count");
+  expect_size(positions.size(), frames * voxels * 3, "positions", where);
+  expect_size(orientations.size(), frames * voxels * 4, "orientations", where);
+  expect_size(pressures.size(), frames * chambers, "pressures", where);
+  expect_size(valve_commands.size(), frames * 2 * chambers, "valve_commands", where);
+  expect_size(time.size(), frames, "time", where);
+  expect_size(voxel_cells.size(), voxels * 3, "voxel_cells", where);
+  expect_size(voxel_material.size(), voxels, "voxel_material", where);
+}
+
+void write_trace(const std::string& path, const Trace& t) {
+  t.check(path);
+  const auto frames = static_cast<hsize_t>(t.frames);
+  const auto voxels = static_cast<hsize_t>(t.voxels);
+  const auto chambers = static_cast<hsize_t>(t.chambers);
+  // Like every output file of a command (docs/output-files.md); a trace replaces an earlier
+  // one of the same name, as `eval --trace` always did.
+  AtomicOutput out(path, Overwrite::replace);
+  h5::File file = h5::File::create(out.temp_path(), nullptr, path);
+  file.write_dataset<double>("positions", {frames, voxels, 3}, t.positions);
+  file.write_dataset<double>("orientations", {frames, voxels, 4}, t.orientations);
+  file.write_dataset<double>("pressures", {frames, chambers}, t.pressures);
+  file.write_dataset<float>("valve_commands", {frames, 2 * chambers}, t.valve_commands);
+  file.write_dataset<double>("time", {frames}, t.time);
+  file.write_dataset<std::int32_t>("voxel_cells", {voxels, 3}, t.voxel_cells);
+  file.write_dataset<std::int32_t>("voxel_material", {voxels}, t.voxel_material);
+  file.write_string_dataset("robot_json", t.robot_json, Charset::ascii);
+  file.write_string_attribute("format", kTraceFormat, Charset::ascii);
+  file.write_attribute<double>("dt", t.dt);
+  file.write_attribute<double>("voxel_size", t.voxel_size);
+  file.write_attribute<std::int64_t>("frames", t.frames);
+  file.write_attribute<double>("frame_rate", t.frame_rate);
+  file.write_attribute<std::int64_t>("steps_per_frame", t.steps_per_frame);
+  if (t.direction_deg) file.write_attribute<double>("direction_deg", *t.direction_deg);
+  if (t.fitness) file.write_attribute<double>("fitness", *t.fitness);
+  file.write_string_attribute("status", t.status, Charset::ascii);
+  file.close();
+  out.commit();
+}
+
+Trace read_trace(const std::string& path) {
+  const h5::File file = h5::File::open(path);
+  Trace t;
+  std::vector<hsize_t> dims;
+  t.voxel_cells = file.read_dataset<std::int32_t>("voxel_cells", &dims);
+  if (dims.size() != 2 || dims[1] != 3) bad_shape(file.where().child("voxel_cells"), "[voxels, 3]");
+  t.voxels = static_cast<std::int64_t>(dims[0]);
+  if (std::any_of(t.voxel_cells.begin(), t.voxel_cells.end(), [](std::int32_t c) { return c < 0; }))
+    file.where().child("voxel_cells").fail("read dataset", "negative voxel cell index");
+  t.voxel_material = file.read_dataset<std::int32_t>("voxel_material", &dims);
+  if (dims != std::vector<hsize_t>{static_cast<hsize_t>(t.voxels)})
+    bad_shape(file.where().child("voxel_material"), shape({t.voxels}));
+
+  t.positions = file.read_dataset<double>("positions", &dims);
+  if (dims.size() != 3 || dims[1] != static_cast<hsize_t>(t.voxels) || dims[2] != 3)
+    bad_shape(file.where().child("positions"), "[frames, " + std::to_string(t.voxels) + ", 3]");
+  t.frames = static_cast<std::int64_t>(dims[0]);
+  t.orientations = file.read_dataset<double>("orientations", &dims);
+  if (dims !=
+      std::vector<hsize_t>{static_cast<hsize_t>(t.frames), static_cast<hsize_t>(t.voxels), 4})
+    bad_shape(file.where().child("orientations"), shape({t.frames, t.voxels, 4}));
+
+  if (file.has_link("pressures")) {
+    t.pressures = file.read_dataset<double>("pressures", &dims);
+    if (dims.size() != 2 || dims[0] != static_cast<hsize_t>(t.frames))
+      bad_shape(file.where().child("pressures"), "[" + std::to_string(t.frames) + ", chambers]");
+    t.chambers = static_cast<std::int64_t>(dims[1]);
+  }
+  if (file.has_link("valve_commands")) {
+    t.valve_commands = file.read_dataset<float>("valve_commands", &dims);
+    if (dims !=
+        std::vector<hsize_t>{static_cast<hsize_t>(t.frames), static_cast<hsize_t>(2 * t.chambers)})
+      bad_shape(file.where().child("valve_commands"), shape({t.frames, 2 * t.chambers}));
+  } else {
+    t.valve_commands.assign(static_cast<std::size_t>(t.frames * 2 * t.chambers), 0.0f);
+  }
+
+  t.frame_rate = file.has_attribute("frame_rate") ? file.read_attribute<double>("frame_rate")
+                                                  : kDefaultFrameRate;
+  if (file.has_link("time")) {
+    t.time = file.read_dataset<double>("time", &dims);
+    if (dims != std::vector<hsize_t>{static_cast<hsize_t>(t.frames)})
+      bad_shape(file.where().child("time"), shape({t.frames}));
+  } else {
+    for (std::int64_t f = 0; f < t.frames; ++f)
+      t.time.push_back(static_cast<double>(f) / t.frame_rate);
+  }
+  // Early traces kept the robot file in an attribute.
+  if (file.has_link("robot_json")) {
+    t.robot_json = file.open_dataset("robot_json").read_string();
+  } else if (file.has_attribute("robot_json")) {
+    t.robot_json = file.read_string_attribute("robot_json");
+  }
+  t.voxel_size = file.has_attribute("voxel_size") ? file.read_attribute<double>("voxel_size")
+                                                  : kDefaultVoxelSize;
+  if (file.has_attribute("dt")) t.dt = file.read_attribute<double>("dt");
+  if (file.has_attribute("steps_per_frame"))
+    t.steps_per_frame = file.read_attribute<std::int64_t>("steps_per_frame");
+  if (file.has_attribute("direction_deg"))
+    t.direction_deg = file.read_attribute<double>("direction_deg");
+  if (file.has_attribute("fitness")) t.fitness = file.read_attribute<double>("fitness");
+  if (file.has_attribute("status")) t.status = file.read_string_attribute("status");
+  return t;
+}
+
+bool is_trace(const std::string& path) {
+  try {
+    return h5::File::is_hdf5(path) && h5::File::open(path).has_link("positions");
+  } catch (const h5::Error&) {
+    return false;
+  }
+}
+
+}  // namespace softevo::io

@@ -1,0 +1,57 @@
+// Trace `softevo.trace/1` (HDF5): one simulated evaluation frame by frame, written by
+// `softevo eval --trace` and read by `softevo render` and analysis scripts. The schema is
+// documented in docs/trace.md; this header is its single implementation.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace softevo::io {
+
+inline constexpr const char* kTraceFormat = "softevo.trace/1";
+
+// Everything a trace holds. Per-frame arrays are row-major with the frame index outermost.
+struct Trace {
+  std::int64_t frames = 0;
+  std::int64_t voxels = 0;
+  std::int64_t chambers = 0;
+  std::vector<double> positions;             // [m] voxel centres [frames][voxels][3]
+  std::vector<double> orientations;          // unit quaternions (w, x, y, z) [frames][voxels][4]
+  std::vector<double> pressures;             // [Pa] absolute chamber pressure [frames][chambers]
+  std::vector<float> valve_commands;         // openings in [0, 1] [frames][2 * chambers]
+  std::vector<double> time;                  // [s] simulated time of each frame [frames]
+  std::vector<std::int32_t> voxel_cells;     // lattice cell (i, j, k) [voxels][3]
+  std::vector<std::int32_t> voxel_material;  // structural material 1..10 [voxels]
+  std::string robot_json;                    // the robot file; "" = unknown (read only)
+  double dt = 0.0;                           // [s] physics time step; 0 = unknown (read only)
+  double voxel_size = 0.0;                   // [m] lattice pitch
+  double frame_rate = 0.0;                   // [Hz] frames per simulated second
+  std::int64_t steps_per_frame = 0;     // physics steps between frames; 0 = unknown (read only)
+  std::optional<double> direction_deg;  // [deg] target direction (directed task only)
+  std::optional<double> fitness;        // fitness of the evaluation
+  std::string status;                   // EvalStatus name ("ok", ...); "" = unknown
+
+  // Throws std::invalid_argument naming the first array whose length does not match the
+  // counts (`where` names the trace in the message).
+  void check(const std::string& where) const;
+};
+
+// Writes `trace` to `path` atomically (common/safe_write.hpp: temporary file, fsync, rename;
+// an existing regular file is replaced, a symlink or special file refused); every dataset and
+// attribute of docs/trace.md. Throws std::runtime_error naming the file, the object and the
+// reason.
+void write_trace(const std::string& path, const Trace& trace);
+
+// Reads a trace. Only /positions, /orientations, /voxel_cells and /voxel_material are required,
+// so that traces written by other tools can be drawn: a missing /time is f / frame_rate, a
+// missing frame_rate 60 Hz (one frame per control frame), a missing voxel_size 0.01 m, missing
+// pressures and valves leave chambers = 0. Throws std::runtime_error naming the file, the
+// object and the reason (a missing required dataset, a wrong shape).
+Trace read_trace(const std::string& path);
+
+// `path` is an HDF5 file with a /positions dataset, the mark of a trace (never throws).
+bool is_trace(const std::string& path);
+
+}  // namespace softevo::io

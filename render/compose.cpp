@@ -1,0 +1,183 @@
+#include "render/compose.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
+
+namespace softevo::render {
+namespace {
+
+constexpr int kMaxSnapshots = 64;
+constexpr double kPi = 3.14159265358979323846;
+
+std::string time_label(double t) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "t=%.2fs", t);
+  return buffer;
+}
+
+std::string shell_quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) {
+    if (c == '\'') {
+      out += "'\\''";
+    } else {
+      out += c;
+    }
+  }
+  return out + "'";
+}
+
+}  // namespace
+
+std::size_t pose_at(const std::vector<Pose>& poses, double t) {
+  std::size_t best = 0;
+  double best_gap = std::abs(poses[0].time - t);
+  for (std::size_t i = 1; i < poses.size(); ++i) {
+    const double gap = std::abs(poses[i].time - t);
+    if (gap < best_gap) {
+      best = i;
+      best_gap = gap;
+    }
+  }
+  return best;
+}
+
+Eigen::AlignedBox3d scene_box(const Body& body, const std::vector<Pose>& poses, double floor_z) {
+  Eigen::AlignedBox3d box;
+  for (const Pose& p : poses) box.extend(pose_bounds(body, p));
+  Eigen::Vector3d lo = box.min();
+  lo.z() = std::min(lo.z(), floor_z);
+  box.extend(lo);
+  return box;
+}
+
+Image render_still(const Clip& clip, View view, double at, int width, int height,
+                   SceneOptions scene) {
+  const Pose& pose = clip.poses[pose_at(clip.poses, at)];
+  const Camera cam = fit_camera(view, scene_box(clip.body, {pose}, scene.floor_z),
+                                width > 0 ? width : 960, height > 0 ? height : 540);
+  scene.label = clip.name + (clip.poses.size() > 1 ? "  " + time_label(pose.time) : "");
+  return render_poses(clip.body, {pose}, cam, scene);
+}
+
+Layout parse_layout(const std::string& name) {
+  if (name == "strip") return Layout::strip;
+  if (name == "overlay") return Layout::overlay;
+  throw std::invalid_argument("layout must be strip or overlay, not '" + name + "'");
+}
+
+Image render_timelapse(const Clip& clip, View view, const Timelapse& timelapse, int width,
+                       int height, SceneOptions scene) {
+  const int n = timelapse.snapshots;
+  if (n < 1 || n > kMaxSnapshots)
+    throw std::invalid_argument("a time-lapse needs 1 to 64 snapshots, not " + std::to_string(n));
+  // Snapshot times: n evenly spaced over [start, start + span].
+  const double end = clip.poses.back().time;
+  const double span = timelapse.span ? *timelapse.span : (view == View::top ? end : 0.5);
+  double start = timelapse.start ? *timelapse.start : (view == View::top ? 0.0 : 5.0);
+  start = std::clamp(start, 0.0, std::max(0.0, end - span));
+  std::vector<Pose> snaps;
+  for (int i = 0; i < n; ++i) {
+    const double t = n == 1 ? start : start + span * i / (n - 1);
+    snaps.push_back(clip.poses[pose_at(clip.poses, t)]);
+  }
+  const Eigen::AlignedBox3d box = scene_box(clip.body, snaps, scene.floor_z);
+  if (timelapse.layout == Layout::strip) {
+    const Camera cam = fit_camera(view, box, width > 0 ? width : 360, height > 0 ? height : 300);
+    std::vector<Image> panels;
+    for (std::size_t i = 0; i < snaps.size(); ++i) {
+      SceneOptions o = scene;
+      o.label = (i == 0 ? clip.name + "  " : std::string()) + time_label(snaps[i].time);
+      panels.push_back(render_poses(clip.body, {snaps[i]}, cam, o));
+    }
+    return hstack(panels, 4);
+  }
+  Eigen::AlignedBox3d framed = box;
+  if (scene.target_direction_deg) {
+    // Keep a stretch of the target line in view ahead of the start.
+    const double beta = *scene.target_direction_deg * kPi / 180.0;
+    const double reach = std::max(0.1, (box.max() - box.min()).head<2>().norm() * 0.5);
+    framed.extend(Eigen::Vector3d(scene.target_origin.x() + reach * std::cos(beta),
+                                  scene.target_origin.y() + reach * std::sin(beta), scene.floor_z));
+  }
+  const Camera cam = fit_camera(view, framed, width > 0 ? width : 960, height > 0 ? height : 720);
+  for (int i = 0; i < n; ++i) {
+    // Earlier snapshots fainter, the last one at full strength.
+    scene.pose_fade.push_back(n == 1 ? 1.0 : 0.35 + 0.65 * i / (n - 1));
+  }
+  char range[64];
+  std::snprintf(range, sizeof range, "  t=%.1f-%.1fs", snaps.front().time, snaps.back().time);
+  scene.label = clip.name + range;
+  return render_poses(clip.body, snaps, cam, scene);
+}
+
+std::optional<std::string> find_on_path(const std::string& program) {
+  const char* path = std::getenv("PATH");
+  if (path == nullptr) return std::nullopt;
+  const std::string dirs = path;
+  std::size_t start = 0;
+  while (start <= dirs.size()) {
+    const std::size_t colon = dirs.find(':', start);
+    const std::string dir =
+        dirs.substr(start, colon == std::string::npos ? std::string::npos : colon - start);
+    const std::string candidate = (dir.empty() ? std::string(".") : dir) + "/" + program;
+    if (::access(candidate.c_str(), X_OK) == 0) return candidate;
+    if (colon == std::string::npos) break;
+    start = colon + 1;
+  }
+  return std::nullopt;
+}
+
+VideoWritten write_video(const Clip& clip, View view, const VideoOptions& options,
+                         const SceneOptions& scene, const std::string& ffmpeg,
+                         const std::string& output) {
+  if (clip.poses.size() < 2) {
+    throw std::runtime_error("render " + output + ": a video needs motion (" +
+                             "the input has a single pose)");
+  }
+  VideoWritten written;
+  written.width = (options.width > 0 ? options.width : 960) & ~1;  // yuv420p needs even sizes
+  written.height = (options.height > 0 ? options.height : 540) & ~1;
+  const Pose& first = clip.poses.front();
+  Eigen::AlignedBox3d box = scene_box(clip.body, {first}, scene.floor_z);
+  const Eigen::Vector3d grow = box.sizes() * 0.9;
+  box.extend(box.min() - grow);
+  box.extend(box.max() + grow);
+  Camera cam = fit_camera(view, box, written.width, written.height);
+  const Eigen::Vector3d start_centre = cam.center;
+  const Eigen::Vector3d start_centroid = centroid(first);
+
+  const std::string command =
+      shell_quote(ffmpeg) + " -y -loglevel error -f rawvideo -pix_fmt rgb24 -s " +
+      std::to_string(written.width) + "x" + std::to_string(written.height) + " -r " +
+      std::to_string(options.fps) + " -i - -pix_fmt yuv420p " + shell_quote(output);
+  FILE* pipe = ::popen(command.c_str(), "w");
+  if (pipe == nullptr) throw std::runtime_error("render: cannot start ffmpeg: " + command);
+  const double end = clip.poses.back().time;
+  written.frames = static_cast<int>(std::floor(end * options.fps + 1e-9)) + 1;
+  bool ok = true;
+  for (int f = 0; f < written.frames && ok; ++f) {
+    const double t = f / options.fps;
+    const Pose& pose = clip.poses[pose_at(clip.poses, t)];
+    Eigen::Vector3d follow = centroid(pose) - start_centroid;
+    follow.z() = 0.0;
+    cam.center = start_centre + follow;
+    SceneOptions o = scene;
+    o.label = clip.name + "  " + time_label(pose.time);
+    const Image image = render_poses(clip.body, {pose}, cam, o);
+    ok = std::fwrite(image.rgb.data(), 1, image.rgb.size(), pipe) == image.rgb.size();
+  }
+  const int status = ::pclose(pipe);
+  if (!ok || status != 0) {
+    throw std::runtime_error("render " + output + ": ffmpeg failed (exit status " +
+                             std::to_string(status) + ")");
+  }
+  return written;
+}
+
+}  // namespace softevo::render

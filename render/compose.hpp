@@ -1,0 +1,68 @@
+// Pictures and videos of a moving body, composed from render_poses (render.hpp): one image at
+// a time, a time-lapse (panels side by side, or one scene with earlier poses fainter, thesis
+// figures 4.3 and 4.4) and a video piped through ffmpeg with a camera that follows the robot.
+// Used by `softevo render`; meant for the viewer too.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "render/render.hpp"
+
+namespace softevo::render {
+
+// What is drawn: a body, its poses ascending in time, and the name the labels show.
+struct Clip {
+  const Body& body;
+  const std::vector<Pose>& poses;  // at least one
+  std::string name;
+};
+
+// Index of the pose nearest to time t [s].
+std::size_t pose_at(const std::vector<Pose>& poses, double t);
+// Box around the poses' cubes and the floor at `floor_z` [m] under them.
+Eigen::AlignedBox3d scene_box(const Body& body, const std::vector<Pose>& poses, double floor_z);
+
+// One image of the pose nearest to `at` [s], framed to fit; size 0 = 960 x 540 pixels.
+Image render_still(const Clip& clip, View view, double at, int width, int height,
+                   SceneOptions scene);
+
+enum class Layout { strip, overlay };
+// "strip" | "overlay"; throws std::invalid_argument otherwise.
+Layout parse_layout(const std::string& name);
+
+struct Timelapse {
+  int snapshots = 4;            // evenly spaced over [start, start + span]
+  std::optional<double> span;   // [s] default: the whole clip (top view) or 0.5 s
+  std::optional<double> start;  // [s] default: 0 (top view) or 5 s; clamped into the clip
+  Layout layout = Layout::strip;
+};
+// Strip: one panel per snapshot (size per panel, 0 = 360 x 300 pixels), the first labelled with
+// the name. Overlay: one scene (0 = 960 x 720 pixels), earlier snapshots fainter, with the
+// target line kept in view. Throws std::invalid_argument unless 1 <= snapshots <= 64.
+Image render_timelapse(const Clip& clip, View view, const Timelapse& timelapse, int width,
+                       int height, SceneOptions scene);
+
+// Full path of an executable `program` on PATH, if any.
+std::optional<std::string> find_on_path(const std::string& program);
+
+struct VideoOptions {
+  double fps = 30.0;  // [1/s] frames per second of video
+  int width = 0;      // [pixel] 0 = 960; rounded down to even (yuv420p)
+  int height = 0;     // [pixel] 0 = 540; rounded down to even
+};
+struct VideoWritten {
+  int frames = 0;
+  int width = 0;
+  int height = 0;
+};
+// Encodes the clip at `fps` through `ffmpeg` (a path) into `output`: the camera keeps its scale
+// and follows the centroid over the floor. Throws std::runtime_error when the clip has a single
+// pose or ffmpeg fails.
+VideoWritten write_video(const Clip& clip, View view, const VideoOptions& options,
+                         const SceneOptions& scene, const std::string& ffmpeg,
+                         const std::string& output);
+
+}  // namespace softevo::render

@@ -1,0 +1,163 @@
+// Trace softevo.trace/1 (io/trace.hpp, docs/trace.md): a round trip of every field, the
+// on-disk types the document promises, the defaults for minimal traces of other tools, and
+// clear errors for malformed ones.
+#include "io/trace.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+
+#include "io/h5.hpp"
+#include "tests/io/tmp_dir.hpp"
+
+namespace softevo::io {
+namespace {
+
+using test::TmpDir;
+
+// Two frames of a two-voxel, one-chamber robot; every value distinct.
+Trace sample_trace() {
+  Trace t;
+  t.frames = 2;
+  t.voxels = 2;
+  t.chambers = 1;
+  for (int i = 0; i < 12; ++i) t.positions.push_back(0.001 * i);
+  for (int i = 0; i < 16; ++i) t.orientations.push_back(i % 4 == 0 ? 1.0 : 0.0);
+  t.pressures = {101325.0, 150000.5};
+  t.valve_commands = {0.25f, 0.0f, 1.0f, 0.5f};
+  t.time = {0.0, 1.0 / 60.0};
+  t.voxel_cells = {0, 0, 0, 1, 0, 0};
+  t.voxel_material = {3, 10};
+  t.robot_json = "{\"name\": \"sample\"}";
+  t.dt = 1e-4;
+  t.voxel_size = 0.01;
+  t.frame_rate = 60.0;
+  t.steps_per_frame = 166;
+  t.direction_deg = 45.0;
+  t.fitness = 12.5;
+  t.status = "ok";
+  return t;
+}
+
+TEST(Trace, EveryFieldRoundTrips) {
+  TmpDir d;
+  const Trace t = sample_trace();
+  write_trace(d.file("t.h5"), t);
+  const Trace r = read_trace(d.file("t.h5"));
+  EXPECT_EQ(r.frames, t.frames);
+  EXPECT_EQ(r.voxels, t.voxels);
+  EXPECT_EQ(r.chambers, t.chambers);
+  EXPECT_EQ(r.positions, t.positions);
+  EXPECT_EQ(r.orientations, t.orientations);
+  EXPECT_EQ(r.pressures, t.pressures);
+  EXPECT_EQ(r.valve_commands, t.valve_commands);
+  EXPECT_EQ(r.time, t.time);
+  EXPECT_EQ(r.voxel_cells, t.voxel_cells);
+  EXPECT_EQ(r.voxel_material, t.voxel_material);
+  EXPECT_EQ(r.robot_json, t.robot_json);
+  EXPECT_EQ(r.dt, t.dt);
+  EXPECT_EQ(r.voxel_size, t.voxel_size);
+  EXPECT_EQ(r.frame_rate, t.frame_rate);
+  EXPECT_EQ(r.steps_per_frame, t.steps_per_frame);
+  EXPECT_EQ(r.direction_deg, t.direction_deg);
+  EXPECT_EQ(r.fitness, t.fitness);
+  EXPECT_EQ(r.status, t.status);
+  EXPECT_TRUE(is_trace(d.file("t.h5")));
+  // Atomic: no temporary left next to it.
+  for (const auto& e : std::filesystem::directory_iterator(d.path))
+    EXPECT_EQ(e.path().filename().string(), "t.h5");
+}
+
+TEST(Trace, OnDiskTypesAndAttributesAreTheDocumentedOnes) {
+  TmpDir d;
+  Trace t = sample_trace();
+  t.direction_deg.reset();  // gait: no direction attribute
+  write_trace(d.file("t.h5"), t);
+  const h5::File f = h5::File::open(d.file("t.h5"));
+  const auto type_is = [&f](const char* name, hid_t expected) {
+    const h5::Id type(H5Dget_type(f.open_dataset(name).id()), H5Tclose);
+    return H5Tequal(type.get(), expected) > 0;
+  };
+  EXPECT_TRUE(type_is("positions", H5T_IEEE_F64LE));
+  EXPECT_TRUE(type_is("orientations", H5T_IEEE_F64LE));
+  EXPECT_TRUE(type_is("pressures", H5T_IEEE_F64LE));
+  EXPECT_TRUE(type_is("valve_commands", H5T_IEEE_F32LE));
+  EXPECT_TRUE(type_is("time", H5T_IEEE_F64LE));
+  EXPECT_TRUE(type_is("voxel_cells", H5T_STD_I32LE));
+  EXPECT_TRUE(type_is("voxel_material", H5T_STD_I32LE));
+  EXPECT_EQ(f.open_dataset("positions").dims(), (std::vector<hsize_t>{2, 2, 3}));
+  EXPECT_EQ(f.open_dataset("valve_commands").dims(), (std::vector<hsize_t>{2, 2}));
+  EXPECT_EQ(f.read_string_attribute("format"), kTraceFormat);
+  EXPECT_EQ(f.read_attribute<std::int64_t>("frames"), 2);
+  EXPECT_FALSE(f.has_attribute("direction_deg"));
+  EXPECT_FALSE(read_trace(d.file("t.h5")).direction_deg.has_value());
+}
+
+TEST(Trace, InconsistentTraceIsRefusedBeforeAnythingIsWritten) {
+  TmpDir d;
+  Trace t = sample_trace();
+  t.pressures.pop_back();
+  try {
+    write_trace(d.file("bad.h5"), t);
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("pressures"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(d.file("bad.h5")));
+  // A failed write keeps the previous trace.
+  write_trace(d.file("keep.h5"), sample_trace());
+  EXPECT_THROW(write_trace(d.file("keep.h5"), t), std::invalid_argument);
+  EXPECT_EQ(read_trace(d.file("keep.h5")).pressures.size(), 2u);
+  EXPECT_THROW(write_trace(d.file("no/dir/t.h5"), sample_trace()), std::runtime_error);
+}
+
+TEST(Trace, MinimalTraceOfAnotherToolGetsTheDocumentedDefaults) {
+  TmpDir d;
+  {
+    const h5::File f = h5::File::create(d.file("min.h5"));
+    f.write_dataset<double>("positions", {3, 1, 3}, std::vector<double>(9, 0.0));
+    f.write_dataset<double>("orientations", {3, 1, 4}, {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0});
+    f.write_dataset<std::int32_t>("voxel_cells", {1, 3}, {0, 0, 0});
+    f.write_dataset<std::int32_t>("voxel_material", {1}, {5});
+  }
+  const Trace r = read_trace(d.file("min.h5"));
+  EXPECT_EQ(r.frames, 3);
+  EXPECT_EQ(r.chambers, 0);
+  EXPECT_EQ(r.frame_rate, 60.0);
+  EXPECT_EQ(r.voxel_size, 0.01);
+  EXPECT_EQ(r.time, (std::vector<double>{0.0, 1.0 / 60.0, 2.0 / 60.0}));
+  EXPECT_TRUE(r.robot_json.empty());
+  EXPECT_FALSE(r.fitness.has_value());
+  EXPECT_TRUE(r.status.empty());
+  EXPECT_NO_THROW(r.check("min.h5"));
+}
+
+TEST(Trace, WrongShapeNamesFileDatasetAndExpectedShape) {
+  TmpDir d;
+  const std::string path = d.file("shape.h5");
+  {
+    const h5::File f = h5::File::create(path);
+    f.write_dataset<double>("positions", {2, 1, 3}, std::vector<double>(6, 0.0));
+    f.write_dataset<double>("orientations", {1, 1, 4}, {1, 0, 0, 0});  // one frame short
+    f.write_dataset<std::int32_t>("voxel_cells", {1, 3}, {0, 0, 0});
+    f.write_dataset<std::int32_t>("voxel_material", {1}, {5});
+  }
+  try {
+    read_trace(path);
+    ADD_FAILURE() << "no exception";
+  } catch (const h5::Error& e) {
+    EXPECT_EQ(e.file(), path);
+    EXPECT_EQ(e.object(), "/orientations");
+    EXPECT_NE(e.reason().find("[2, 1, 4]"), std::string::npos) << e.what();
+  }
+  std::ofstream(d.file("text.h5")) << "not hdf5";
+  EXPECT_FALSE(is_trace(d.file("text.h5")));
+  EXPECT_THROW(read_trace(d.file("text.h5")), std::runtime_error);
+  EXPECT_THROW(read_trace(d.file("missing.h5")), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace softevo::io

@@ -1,0 +1,116 @@
+// Composition of pictures from poses (render/compose.hpp): pose lookup by time, image sizes of
+// stills and time-lapses, snapshot spacing, the overlay's fading, and the refusals.
+#include "render/compose.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace softevo::render {
+namespace {
+
+// A bar of 3 voxels moving 1 cm along x per 0.1 s, over 1 s (11 poses).
+struct MovingBar {
+  Body body;
+  std::vector<Pose> poses;
+  MovingBar() {
+    BodyPlan plan;
+    plan.lattice = {3, 1, 1};
+    plan.cells.assign(3, 10);
+    plan.voxel_size = 0.01;
+    body = body_from_plan(plan);
+    const Pose rest = rest_pose(body);
+    for (int f = 0; f <= 10; ++f) {
+      Pose p = rest;
+      p.time = 0.1 * f;
+      for (auto& x : p.position) x.x() += 0.01 * f;
+      poses.push_back(p);
+    }
+  }
+  Clip clip() const { return Clip{body, poses, "bar"}; }
+};
+
+SceneOptions small_scene() {
+  SceneOptions scene;
+  scene.supersample = 1;
+  return scene;
+}
+
+TEST(Compose, PoseAtIsTheNearestInTime) {
+  const MovingBar bar;
+  EXPECT_EQ(pose_at(bar.poses, -1.0), 0u);
+  EXPECT_EQ(pose_at(bar.poses, 0.34), 3u);
+  EXPECT_EQ(pose_at(bar.poses, 0.36), 4u);
+  EXPECT_EQ(pose_at(bar.poses, 99.0), 10u);
+}
+
+TEST(Compose, SceneBoxReachesDownToTheFloor) {
+  const MovingBar bar;
+  const Eigen::AlignedBox3d box = scene_box(bar.body, {bar.poses[0], bar.poses[10]}, -0.2);
+  EXPECT_DOUBLE_EQ(box.min().z(), -0.2);
+  // The last voxel of the last pose, out to half a cube's space diagonal (pose_bounds).
+  EXPECT_NEAR(box.max().x(), 0.02 + 0.1 + 0.5 * std::sqrt(3.0) * 0.01, 1e-12);
+}
+
+TEST(Compose, StillAndStripHaveTheRequestedSizes) {
+  const MovingBar bar;
+  const Image still = render_still(bar.clip(), View::side, 0.5, 0, 0, small_scene());
+  EXPECT_EQ(still.width, 960);
+  EXPECT_EQ(still.height, 540);
+  Timelapse strip;
+  strip.snapshots = 3;
+  strip.start = 0.0;
+  strip.span = 1.0;
+  const Image panels = render_timelapse(bar.clip(), View::side, strip, 50, 40, small_scene());
+  EXPECT_EQ(panels.width, 3 * 50 + 2 * 4);  // 4-pixel gaps
+  EXPECT_EQ(panels.height, 40);
+}
+
+TEST(Compose, OverlayIsOneSceneOfEverySnapshot) {
+  const MovingBar bar;
+  Timelapse overlay;
+  overlay.layout = Layout::overlay;
+  overlay.start = 0.0;
+  overlay.span = 1.0;
+  overlay.snapshots = 4;
+  const Image four = render_timelapse(bar.clip(), View::top, overlay, 120, 90, small_scene());
+  EXPECT_EQ(four.width, 120);
+  EXPECT_EQ(four.height, 90);
+  // Framed like the overlay, the last snapshot alone covers less than all four together.
+  SceneOptions last_only = small_scene();
+  last_only.label = "bar  t=1.0-1.0s";  // as long as the overlay's label
+  const Image last = render_poses(
+      bar.body, {bar.poses[10]},
+      fit_camera(View::top, scene_box(bar.body, {bar.poses[0], bar.poses[10]}, -0.005), 120, 90),
+      last_only);
+  const std::array<std::uint8_t, 3> floor = four.pixel(2, four.height - 3);
+  EXPECT_GT(count_pixels_unlike(four, floor, 24), count_pixels_unlike(last, floor, 24));
+}
+
+TEST(Compose, RefusesWhatItCannotDraw) {
+  const MovingBar bar;
+  Timelapse none;
+  none.snapshots = 0;
+  EXPECT_THROW(render_timelapse(bar.clip(), View::side, none, 10, 10, small_scene()),
+               std::invalid_argument);
+  none.snapshots = 65;
+  EXPECT_THROW(render_timelapse(bar.clip(), View::side, none, 10, 10, small_scene()),
+               std::invalid_argument);
+  EXPECT_THROW(parse_layout("grid"), std::invalid_argument);
+  EXPECT_EQ(parse_layout("overlay"), Layout::overlay);
+  const std::vector<Pose> single = {bar.poses[0]};
+  EXPECT_THROW(write_video(Clip{bar.body, single, "bar"}, View::side, {}, small_scene(),
+                           "/bin/false", "/tmp/never.mp4"),
+               std::runtime_error);
+}
+
+TEST(Compose, FindOnPathFindsExecutablesOnly) {
+  EXPECT_TRUE(find_on_path("sh").has_value());
+  EXPECT_FALSE(find_on_path("softevo-no-such-program").has_value());
+}
+
+}  // namespace
+}  // namespace softevo::render
