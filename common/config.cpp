@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <variant>
 
@@ -21,8 +22,9 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kPascalPerBar = 1.0e5;
 
-using Target = std::variant<double*, std::int64_t*, bool*, std::string*, std::vector<double>*,
-                            std::vector<std::int64_t>*, std::vector<std::string>*>;
+using Target =
+    std::variant<double*, std::int64_t*, bool*, std::string*, TaskKind*, std::vector<double>*,
+                 std::vector<std::int64_t>*, std::vector<std::string>*>;
 
 struct KeyDef {
   const char* section;
@@ -35,7 +37,18 @@ struct KeyDef {
   const char* unit = "";                  // config unit, for messages
   std::size_t list_length = 0;            // exact list length, 0 = any non-empty length
   bool min_exclusive = false;
+  // A key of one task only: printed (and hashed) only when task.kind is that task, and an error
+  // to set for another task. Keys of the tasks that predate this (task.directions and
+  // task.path_penalty_weight of the directed task) stay in every canonical text, because the
+  // config hash of every existing archive covers them.
+  std::optional<TaskKind> only_for_task = std::nullopt;
 };
+
+std::vector<std::string> task_kind_names() {
+  std::vector<std::string> names;
+  for (TaskKind k : task_kinds()) names.emplace_back(to_string(k));
+  return names;
+}
 
 const std::vector<std::string> kSections = {"run",        "task", "physics", "pneumatics",
                                             "controller", "body", "neat"};
@@ -56,12 +69,23 @@ std::vector<KeyDef> schema(Config& c) {
       {"run", "eval_timeout_seconds", &r.eval_timeout_seconds, 0, kInf, {}, 1.0, "s"},
       {"run", "on_failure", &r.on_failure, 0, 0, {"killed", "abort"}},
 
-      {"task", "kind", &t.kind, 0, 0, {"gait", "directed"}},
+      {"task", "kind", &t.kind, 0, 0, task_kind_names()},
       {"task", "control", &t.control, 0, 0, {"open", "closed"}},
       {"task", "eval_seconds", &t.eval_seconds, 0, 3600, {}, 1.0, "s", 0, true},
       {"task", "control_rate", &t.control_rate, 0, 10000, {}, 1.0, "Hz", 0, true},
       {"task", "directions", &t.directions, -180, 180, {}, 1.0, "deg"},
       {"task", "path_penalty_weight", &t.path_penalty_weight, 0, kInf},
+      {"task",
+       "rotate_travel_penalty",
+       &t.rotate_travel_penalty,
+       0,
+       kInf,
+       {},
+       1.0,
+       "rad per body length",
+       0,
+       false,
+       TaskKind::rotate},
 
       {"physics", "integrator", &p.integrator, 0, 0, {"pneuvox", "symplectic"}},
       {"physics", "dt_fraction", &p.dt_fraction, 0, 1.0, {}, 1.0, "", 0, true},
@@ -220,7 +244,7 @@ std::string allowed_text(const KeyDef& def) {
         if constexpr (std::is_same_v<T, double>) return range_text(def, false);
         if constexpr (std::is_same_v<T, std::int64_t>) return range_text(def, true);
         if constexpr (std::is_same_v<T, bool>) return "true or false";
-        if constexpr (std::is_same_v<T, std::string>) {
+        if constexpr (std::is_same_v<T, std::string> || std::is_same_v<T, TaskKind>) {
           std::vector<std::string> q;
           for (const auto& a : def.allowed) q.push_back(quote(a));
           return "one of " + join(q);
@@ -366,6 +390,8 @@ void assign(const KeyDef& def, const toml::node& node, const Location& at) {
           *target = node.as_boolean()->get();
         } else if constexpr (std::is_same_v<T, std::string>) {
           *target = string_of(node, def, at, name);
+        } else if constexpr (std::is_same_v<T, TaskKind>) {
+          *target = *task_kind_from_string(string_of(node, def, at, name));  // allowed: checked
         } else {
           if (!node.is_array()) {
             fail(at, name + " must be " + allowed_text(def) + ", got " + type_name(node));
@@ -457,7 +483,15 @@ void check_consistency(const Config& c, const std::string& source) {
   }
 }
 
-void apply_table(Config& config, const toml::table& root, const std::string& source) {
+// Where each key was last set (file line or --set), for checks that follow all overrides.
+using SetKeys = std::map<std::string, Location>;
+
+std::string full_name(const KeyDef& def) {
+  return std::string(def.section) + "." + def.key;
+}
+
+void apply_table(Config& config, const toml::table& root, const std::string& source,
+                 SetKeys& set_keys) {
   auto defs = schema(config);
   for (const auto& [section_key, section_node] : root) {
     const std::string section(section_key.str());
@@ -474,12 +508,14 @@ void apply_table(Config& config, const toml::table& root, const std::string& sou
     check_known_section(section, at);
     for (const auto& [key, node] : *table) {
       const Location key_at{source, static_cast<std::int64_t>(key.source().begin.line)};
-      assign(known_key(defs, section, std::string(key.str()), key_at), node, key_at);
+      const KeyDef& def = known_key(defs, section, std::string(key.str()), key_at);
+      assign(def, node, key_at);
+      set_keys.insert_or_assign(full_name(def), key_at);
     }
   }
 }
 
-void apply_override(Config& config, const std::string& text) {
+void apply_override(Config& config, const std::string& text, SetKeys& set_keys) {
   const Location at{"--set " + text, 0};
   const auto eq = text.find('=');
   const auto dot = text.find('.');
@@ -502,6 +538,20 @@ void apply_override(Config& config, const std::string& text) {
     parsed.insert("v", value);
   }
   assign(def, *parsed.get("v"), at);
+  set_keys.insert_or_assign(full_name(def), at);
+}
+
+// A key of another task than the configured one would be silently ignored (and left out of the
+// hash): say so instead.
+void check_task_keys(Config& config, const SetKeys& set_keys) {
+  for (const KeyDef& def : schema(config)) {
+    if (!def.only_for_task || *def.only_for_task == config.task.kind) continue;
+    const auto it = set_keys.find(full_name(def));
+    if (it != set_keys.end())
+      fail(it->second, full_name(def) +
+                           " applies to task.kind = " + quote(to_string(*def.only_for_task)) +
+                           " only (task.kind is " + quote(to_string(config.task.kind)) + ")");
+  }
 }
 
 std::string value_text(const KeyDef& def) {
@@ -512,6 +562,7 @@ std::string value_text(const KeyDef& def) {
         if constexpr (std::is_same_v<T, std::int64_t>) return std::to_string(*target);
         if constexpr (std::is_same_v<T, bool>) return *target ? "true" : "false";
         if constexpr (std::is_same_v<T, std::string>) return quote(*target);
+        if constexpr (std::is_same_v<T, TaskKind>) return quote(to_string(*target));
         if constexpr (std::is_same_v<T, std::vector<double>>) {
           std::vector<std::string> items;
           for (double v : *target) items.push_back(format_double(v / def.scale));
@@ -544,8 +595,10 @@ Config parse_config(const std::string& toml_text, const std::string& source_name
     throw ConfigError(source_name + ":" + std::to_string(e.source().begin.line) +
                       ": TOML syntax error: " + std::string(e.description()));
   }
-  apply_table(config, root, source_name);
-  for (const auto& o : overrides) apply_override(config, o);
+  SetKeys set_keys;
+  apply_table(config, root, source_name, set_keys);
+  for (const auto& o : overrides) apply_override(config, o, set_keys);
+  check_task_keys(config, set_keys);
   check_consistency(config, source_name);
   return config;
 }
@@ -566,6 +619,7 @@ std::string canonical_text(const Config& config) {
   for (const auto& section : kSections) {
     out += "[" + section + "]\n";
     for (const auto& d : defs) {
+      if (d.only_for_task && *d.only_for_task != config.task.kind) continue;
       if (section == d.section) out += std::string(d.key) + " = " + value_text(d) + "\n";
     }
   }
@@ -602,8 +656,33 @@ std::vector<StructuralMaterial> material_table(const PhysicsConfig& physics) {
   return table;
 }
 
+const std::vector<TaskKind>& task_kinds() {
+  static const std::vector<TaskKind> kinds = {TaskKind::gait, TaskKind::directed, TaskKind::rotate};
+  return kinds;
+}
+
+const char* to_string(TaskKind kind) {
+  switch (kind) {
+    case TaskKind::gait:
+      return "gait";
+    case TaskKind::directed:
+      return "directed";
+    case TaskKind::rotate:
+      return "rotate";
+  }
+  return "unknown";
+}
+
+std::optional<TaskKind> task_kind_from_string(const std::string& name) {
+  for (TaskKind k : task_kinds())
+    if (name == to_string(k)) return k;
+  return std::nullopt;
+}
+
 std::string experiment_name(const TaskConfig& task) {
-  return std::string(task.kind == "directed" ? "dir" : "gait") + "-" + task.control;
+  // "dir" is the thesis' short name of the directed experiments (run names mdv2_*, §8.9).
+  const std::string kind = task.kind == TaskKind::directed ? "dir" : to_string(task.kind);
+  return kind + "-" + task.control;
 }
 
 }  // namespace softevo

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -27,14 +28,29 @@ struct RunConfig {
   std::string on_failure = "killed";
 };
 
+// The task a run evolves robots for (§7). Parsed once, here at the config boundary; the rest of
+// the code asks the task's module (tasks/task.hpp) and never tests the kind.
+enum class TaskKind : std::uint8_t {
+  gait,      // forward locomotion along +x (§7.1)
+  directed,  // locomotion towards each of task.directions (§7.2-§7.4)
+  rotate,    // in-place rotation about +z (§7.6)
+};
+// Every kind in enum order, and its config name ("gait", "directed", "rotate").
+const std::vector<TaskKind>& task_kinds();
+const char* to_string(TaskKind kind);
+std::optional<TaskKind> task_kind_from_string(const std::string& name);
+
 struct TaskConfig {
-  std::string kind = "gait";     // "gait" (SPEC 6, §7.1) or "directed" (§7.2, §7.4)
+  TaskKind kind = TaskKind::gait;
   std::string control = "open";  // "open" or "closed" loop (pressure sensors as inputs, §4.1)
   double eval_seconds = 10.0;    // nominal evaluation length [s]; frames = round(60 * seconds)
   double control_rate = 60.0;    // controller rate [Hz] (§4.6)
   // Target directions of the directed task [deg], in the order the thesis summed them (§7.4).
   std::vector<double> directions = {0.0, -40.0, -20.0, 20.0, 40.0};
   double path_penalty_weight = 0.1;  // omega of §7.2
+  // Rotate task (§7.6): fitness lost per body length of horizontal centroid travel
+  // [rad / body length].
+  double rotate_travel_penalty = 1.0;
 };
 
 struct PhysicsConfig {
@@ -162,7 +178,7 @@ std::string hash_hex(std::uint64_t hash);  // 16 lower-case hex digits
 // Structural materials 1..material_count of the thesis: E_k = linspace(E_min, E_max, count)
 // (numpy semantics, pneuvox-model.md §1/§6.4), density as configured. Index k-1 = material k.
 std::vector<StructuralMaterial> material_table(const PhysicsConfig& physics);
-// "gait-open", "gait-closed", "dir-open" or "dir-closed" from task.kind and task.control.
+// "gait-open", "dir-closed", "rotate-open", ... from task.kind and task.control.
 std::string experiment_name(const TaskConfig& task);
 
 }  // namespace softevo

@@ -21,32 +21,29 @@ enum class EvalStatus : std::uint8_t {
 const char* to_string(EvalStatus status);  // "ok", "killed: flipped", ...
 bool is_killed(EvalStatus status);         // anything but ok scores like a killed robot
 
-// Fitness components of one direction of the directed task (§7.2), or of the gait task (§7.1:
-// only distance is meaningful: mean x displacement [cm]).
-struct DirectionComponents {
-  double direction_deg = 0.0;
+// Score of one work unit: its fitness, its status and the values of the task's named
+// components (names and units: tasks::Task::component_names(), values in that order; all 0 for
+// a unit that is not ok).
+struct UnitFitness {
   double fitness = 0.0;
-  double distance = 0.0;               // D [cm], signed distance along the target line
-  double path_length = 0.0;            // L [cm]
-  double angle_error = 0.0;            // delta [rad]
-  double perpendicular_penalty = 0.0;  // P (already x omega) [cm]
   EvalStatus status = EvalStatus::ok;
+  std::vector<double> values;
 };
 
 struct EvalRequest {
   std::uint64_t config_hash = 0;
   std::int64_t generation = 0;
   std::int64_t genome_id = 0;
-  std::int32_t direction_index = -1;  // -1: gait task; 0..4 index into task.directions
-  std::vector<std::uint8_t> genome;   // canonical genome encoding (evo)
+  std::int32_t unit = 0;             // work unit of the genome, 0 .. Task::units() - 1
+  std::vector<std::uint8_t> genome;  // canonical genome encoding (evo)
 };
 
 struct EvalResult {
   std::int64_t genome_id = 0;
-  std::int32_t direction_index = -1;
+  std::int32_t unit = 0;
   EvalStatus status = EvalStatus::ok;
   double fitness = 0.0;
-  std::vector<DirectionComponents> components;  // one per evaluated direction (gait: one)
+  std::vector<UnitFitness> components;  // one per evaluated unit
   std::int32_t voxels = 0;
   std::int32_t chambers = 0;
   std::int64_t steps = 0;        // physics steps simulated

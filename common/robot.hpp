@@ -27,15 +27,26 @@ struct ControllerVectors {
   std::vector<double> freq;                    // 1: oscillator frequency [Hz]
 };
 
+// Controller input layout (§4.1): [sin, cos, task inputs, pressure sensors]; the task inputs
+// are the task's (tasks/task.hpp, e.g. the direction sensor of the directed task), the pressure
+// sensors those of a closed-loop controller (10 slots, one per possible chamber).
+constexpr int kOscillatorInputs = 2;
+constexpr int kPressureSensorInputs = 10;
+constexpr int controller_input_count(int task_inputs, bool closed_loop) {
+  return kOscillatorInputs + task_inputs + (closed_loop ? kPressureSensorInputs : 0);
+}
+
 struct ControllerSpec {
   std::string kind = "elman";
   bool closed_loop = false;  // "control": "closed" feeds chamber pressures (§4.1)
-  bool directed = false;     // feeds the direction sensor (§7.3)
+  // Robot file format 1 records the controller's task inputs as this flag: true = one task
+  // input (the direction sensor of the directed task, §7.3), false = none.
+  bool directed = false;
   int hidden = 4;
   int outputs = 20;
   ControllerVectors vectors;  // freq[0] = frequency [Hz]
-  // Inputs: [sin, cos, (direction), (up to 10 pressure sensors)] (§4.1).
-  int input_count() const { return 2 + (directed ? 1 : 0) + (closed_loop ? 10 : 0); }
+  int task_inputs() const { return directed ? 1 : 0; }
+  int input_count() const { return controller_input_count(task_inputs(), closed_loop); }
   double frequency() const { return vectors.freq.empty() ? 0.0 : vectors.freq[0]; }
 };
 

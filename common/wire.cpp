@@ -172,7 +172,7 @@ std::vector<std::uint8_t> encode_eval_request(const EvalRequest& request) {
   w.u64(request.config_hash);
   w.i64(request.generation);
   w.i64(request.genome_id);
-  w.i32(request.direction_index);
+  w.i32(request.unit);
   w.bytes(request.genome);
   return frame_message(MessageKind::eval_request, w.data());
 }
@@ -183,7 +183,7 @@ EvalRequest decode_eval_request(std::span<const std::uint8_t> message) {
   request.config_hash = r.u64("config_hash");
   request.generation = r.i64("generation");
   request.genome_id = r.i64("genome_id");
-  request.direction_index = r.i32("direction_index");
+  request.unit = r.i32("unit");
   request.genome = r.bytes("genome");
   r.finish();
   return request;
@@ -199,18 +199,14 @@ static EvalStatus checked_status(std::uint8_t value, const char* what) {
 std::vector<std::uint8_t> encode_eval_result(const EvalResult& result) {
   WireWriter w;
   w.i64(result.genome_id);
-  w.i32(result.direction_index);
+  w.i32(result.unit);
   w.u8(static_cast<std::uint8_t>(result.status));
   w.f64(result.fitness);
   w.u32(static_cast<std::uint32_t>(result.components.size()));
   for (const auto& c : result.components) {
-    w.f64(c.direction_deg);
     w.f64(c.fitness);
-    w.f64(c.distance);
-    w.f64(c.path_length);
-    w.f64(c.angle_error);
-    w.f64(c.perpendicular_penalty);
     w.u8(static_cast<std::uint8_t>(c.status));
+    w.f64_vector(c.values);
   }
   w.i32(result.voxels);
   w.i32(result.chambers);
@@ -226,24 +222,21 @@ EvalResult decode_eval_result(std::span<const std::uint8_t> message) {
   WireReader r(unframe_message(message, MessageKind::eval_result), "eval result");
   EvalResult result;
   result.genome_id = r.i64("genome_id");
-  result.direction_index = r.i32("direction_index");
+  result.unit = r.i32("unit");
   result.status = checked_status(r.u8("status"), "eval result");
   result.fitness = r.f64("fitness");
   const std::uint32_t n_components = r.u32("component_count");
-  // Each component is 49 bytes: reject a count the remaining bytes cannot hold before allocating.
-  if (n_components > r.remaining() / 49) {
+  // Each component is at least 17 bytes (fitness, status, value count): reject a count the
+  // remaining bytes cannot hold before allocating.
+  if (n_components > r.remaining() / 17) {
     throw WireError("eval result: component_count " + std::to_string(n_components) +
                     " does not fit in the remaining " + std::to_string(r.remaining()) + " bytes");
   }
   result.components.resize(n_components);
   for (auto& c : result.components) {
-    c.direction_deg = r.f64("component.direction_deg");
     c.fitness = r.f64("component.fitness");
-    c.distance = r.f64("component.distance");
-    c.path_length = r.f64("component.path_length");
-    c.angle_error = r.f64("component.angle_error");
-    c.perpendicular_penalty = r.f64("component.perpendicular_penalty");
     c.status = checked_status(r.u8("component.status"), "eval result component");
+    c.values = r.f64_vector("component.values");
   }
   result.voxels = r.i32("voxels");
   result.chambers = r.i32("chambers");

@@ -40,11 +40,9 @@ std::array<const std::vector<double>*, kControllerVectorCount> vectors_of(
           &v.weights_context, &v.bias_context,      &v.freq};
 }
 
-ControllerShape controller_shape(const Config& config) {
+ControllerShape controller_shape(const Config& config, int task_inputs) {
   ControllerShape s;
-  // §4.1: [sin, cos, (direction), (10 pressure sensors)].
-  s.inputs =
-      2 + (config.task.kind == "directed" ? 1 : 0) + (config.task.control == "closed" ? 10 : 0);
+  s.inputs = controller_input_count(task_inputs, config.task.control == "closed");
   s.hidden = static_cast<int>(config.controller.hidden);
   s.outputs = static_cast<int>(2 * config.body.max_chambers);  // inlet + outlet per chamber (§4.5)
   return s;
@@ -58,7 +56,7 @@ EvoParams::CrossoverMethod crossover_method_from_string(const std::string& name)
                               "' (expected 1pointpl, random or 1point)");
 }
 
-EvoParams evo_params(const Config& config) {
+EvoParams evo_params(const Config& config, int task_inputs) {
   EvoParams p;
   p.neat = config.neat;
   p.num_inputs = 4;   // x, y, z, d (§6.2)
@@ -84,7 +82,7 @@ EvoParams evo_params(const Config& config) {
     }
   }
   p.with_controller = true;
-  p.shape = controller_shape(config);
+  p.shape = controller_shape(config, task_inputs);
   p.controller = config.controller;
   p.crossover_method = crossover_method_from_string(config.controller.crossover_method);
   p.mutate_only_probability = 0.0;  // §8.5 step 5
@@ -314,13 +312,16 @@ Genome decode_genome(std::span<const std::uint8_t> bytes) {
 // ---------------------------------------------------------------------------------------------
 // Robot file
 
-ControllerSpec to_controller_spec(const Genome& genome, const Config& config) {
-  const ControllerShape shape = controller_shape(config);
+ControllerSpec to_controller_spec(const Genome& genome, const Config& config, int task_inputs) {
+  if (task_inputs < 0 || task_inputs > 1)
+    throw std::invalid_argument("a robot file records 0 or 1 task inputs, the task has " +
+                                std::to_string(task_inputs));
+  const ControllerShape shape = controller_shape(config, task_inputs);
   check_controller_shape(genome, shape);
   ControllerSpec spec;
   spec.kind = "elman";
   spec.closed_loop = config.task.control == "closed";
-  spec.directed = config.task.kind == "directed";
+  spec.directed = task_inputs == 1;
   spec.hidden = shape.hidden;
   spec.outputs = shape.outputs;
   spec.vectors = genome.controller;

@@ -80,12 +80,14 @@ struct EvoParams {
   int add_connection_attempts = 1;
 };
 
-// Controller dimensions of a run (§4.1): n_in = 2 (+1 directed) (+10 closed loop),
-// H = controller.hidden, n_out = 2 x body.max_chambers (inlet + outlet valve per chamber).
-ControllerShape controller_shape(const Config& config);
+// Controller dimensions of a run (§4.1): n_in = controller_input_count(task_inputs, closed
+// loop), H = controller.hidden, n_out = 2 x body.max_chambers (inlet + outlet valve per
+// chamber). `task_inputs`: the task's controller inputs (tasks::Task::controller_inputs(); evo
+// knows no task).
+ControllerShape controller_shape(const Config& config, int task_inputs);
 // Resolves a Config into operator parameters; throws std::invalid_argument naming the key for
 // an unknown activation option or crossover method.
-EvoParams evo_params(const Config& config);
+EvoParams evo_params(const Config& config, int task_inputs);
 EvoParams::CrossoverMethod crossover_method_from_string(const std::string& name);
 
 // --- Initialisation (§8.2) -----------------------------------------------------------------
@@ -124,8 +126,9 @@ Genome read_genome_payload(WireReader& r);
 void check_controller_shape(const Genome& genome, const ControllerShape& shape);
 
 // --- Robot file -------------------------------------------------------------------------------
-// Controller part of the robot file (kind elman, loop/directed flags and sizes from the config).
-ControllerSpec to_controller_spec(const Genome& genome, const Config& config);
+// Controller part of the robot file (kind elman, loop flag and sizes from the config, `directed`
+// for one task input).
+ControllerSpec to_controller_spec(const Genome& genome, const Config& config, int task_inputs);
 // "genome" section: CPPN records, step sizes, the lattice and distance input of the config.
 RobotGenomeRecord to_genome_record(const Genome& genome, const Config& config);
 // Inverse: a Genome from a robot file's records (throws std::invalid_argument on bad records).

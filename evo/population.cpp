@@ -33,8 +33,8 @@ Viability robot_viability(const BodyConfig& body) {
 Population::Population(const EvoParams& params, Viability viable, std::uint64_t seed)
     : params_(params), viable_(std::move(viable)), rng_(seed), innovation_(params.num_outputs) {}
 
-Population Population::create(const Config& config, std::uint64_t seed) {
-  return create(evo_params(config), robot_viability(config.body), seed);
+Population Population::create(const Config& config, int task_inputs, std::uint64_t seed) {
+  return create(evo_params(config, task_inputs), robot_viability(config.body), seed);
 }
 
 Population Population::create(const EvoParams& params, Viability viable, std::uint64_t seed) {
@@ -212,8 +212,9 @@ std::vector<std::uint8_t> Population::serialize() const {
   return frame_message(MessageKind::population, w.data());
 }
 
-Population Population::deserialize(std::span<const std::uint8_t> bytes, const Config& config) {
-  return deserialize(bytes, evo_params(config), robot_viability(config.body));
+Population Population::deserialize(std::span<const std::uint8_t> bytes, const Config& config,
+                                   int task_inputs) {
+  return deserialize(bytes, evo_params(config, task_inputs), robot_viability(config.body));
 }
 
 Population Population::deserialize(std::span<const std::uint8_t> bytes, const EvoParams& params,

@@ -51,7 +51,8 @@ class Population {
   };
 
   // Robot run: EvoParams and viability from `config`, Rng seeded with `seed`.
-  static Population create(const Config& config, std::uint64_t seed);
+  // `task_inputs`: the task's controller inputs (evo_params).
+  static Population create(const Config& config, int task_inputs, std::uint64_t seed);
   // Any NEAT experiment.
   static Population create(const EvoParams& params, Viability viable, std::uint64_t seed);
 
@@ -67,7 +68,8 @@ class Population {
   std::vector<std::uint8_t> serialize() const;
   // Throws WireError on malformed bytes, std::invalid_argument when the state does not fit the
   // configuration (CPPN or controller dimensions).
-  static Population deserialize(std::span<const std::uint8_t> bytes, const Config& config);
+  static Population deserialize(std::span<const std::uint8_t> bytes, const Config& config,
+                                int task_inputs);
   static Population deserialize(std::span<const std::uint8_t> bytes, const EvoParams& params,
                                 Viability viable);
 

@@ -13,6 +13,7 @@
 #include "evo/genome.hpp"
 #include "master/signals.hpp"
 #include "physics/revision.hpp"
+#include "tasks/task.hpp"
 
 namespace softevo::master {
 
@@ -40,11 +41,27 @@ double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-int direction_count(const Config& config) {
-  return config.task.kind == "directed" ? static_cast<int>(config.task.directions.size()) : 0;
+int task_inputs(const Config& config) {
+  return tasks::make_task(config)->controller_inputs();
 }
 
 }  // namespace
+
+void append_component_rows(const tasks::Task& task, const std::vector<UnitFitness>& units,
+                           std::vector<double>& out) {
+  const std::vector<tasks::ComponentName> names = task.component_names();
+  for (const UnitFitness& u : units) {
+    auto value = [&](const char* name) {
+      for (std::size_t i = 0; i < names.size() && i < u.values.size(); ++i)
+        if (names[i].name == name) return u.values[i];
+      return 0.0;
+    };
+    out.insert(out.end(), {u.fitness, value("distance"), value("path_length"), value("angle_error"),
+                           value("perpendicular_penalty"), static_cast<double>(u.status)});
+  }
+}
+
+namespace {}  // namespace
 
 std::string iso8601_now() {
   const std::time_t t = std::time(nullptr);
@@ -135,7 +152,8 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
         if (!cp || cp->generation != old.generations_done)
           throw StartupError(out + ": cannot resume: no checkpoint for generation " +
                              std::to_string(old.generations_done));
-        run.population.emplace(evo::Population::deserialize(cp->population, config));
+        run.population.emplace(
+            evo::Population::deserialize(cp->population, config, task_inputs(config)));
         if (run.population->generation() != cp->generation)
           throw StartupError(out + ": cannot resume: checkpoint population is at generation " +
                              std::to_string(run.population->generation()) + ", expected " +
@@ -155,8 +173,8 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
                        "choose another --out");
   }
   if (!run.population)
-    run.population.emplace(
-        evo::Population::create(config, static_cast<std::uint64_t>(config.run.seed)));
+    run.population.emplace(evo::Population::create(config, task_inputs(config),
+                                                   static_cast<std::uint64_t>(config.run.seed)));
   return run;
 }
 
@@ -179,7 +197,7 @@ RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporte
     archive_written = true;
 
     evo::Population& population = *run.population;
-    const int n_directions = direction_count(config);
+    const std::unique_ptr<tasks::Task> task = tasks::make_task(config);
     RunOutcome outcome = RunOutcome::complete;
     while (population.generation() < config.run.generations) {
       if (stop_requested() != StopRequest::none) {
@@ -195,13 +213,13 @@ RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporte
         encoded[i] = evo::encode_genome(members[i].genome);
         ids[i] = members[i].id;
       }
-      GenerationScheduler scheduler(g, ids, n_directions);
+      GenerationScheduler scheduler(g, ids, *task);
       const auto make_request = [&](const WorkUnit& unit) {
         EvalRequest r;
         r.config_hash = run.config_hash;
         r.generation = g;
         r.genome_id = unit.genome_id;
-        r.direction_index = unit.direction_index;
+        r.unit = unit.unit;
         r.genome = encoded[unit.member];
         return r;
       };
@@ -217,7 +235,7 @@ RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporte
         if (!failures.empty()) {
           const EvalResult& f = *failures.front();
           throw RunError("genome " + std::to_string(f.genome_id) + " (generation " +
-                         std::to_string(g) + ", direction " + std::to_string(f.direction_index) +
+                         std::to_string(g) + ", unit " + std::to_string(f.unit) +
                          ") failed on rank " + std::to_string(f.worker_rank) + ": " + f.message +
                          " (run.on_failure = abort)");
         }
@@ -231,7 +249,7 @@ RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporte
                 [&](std::size_t a, std::size_t b) { return members[a].id < members[b].id; });
       GenerationRecord rec;
       rec.generation = g;
-      rec.n_directions = n_directions == 0 ? 1 : n_directions;
+      rec.n_directions = task->units();
       std::vector<evo::Evaluation> evaluations;
       evaluations.reserve(members.size());
       for (std::size_t i : order) {
@@ -248,11 +266,7 @@ RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporte
         rec.wall_seconds.push_back(o.wall_seconds);
         rec.worker_rank.push_back(o.worker_rank);
         rec.genome.push_back(encoded[i]);
-        for (const DirectionComponents& c : o.components) {
-          rec.components.insert(rec.components.end(),
-                                {c.fitness, c.distance, c.path_length, c.angle_error,
-                                 c.perpendicular_penalty, static_cast<double>(c.status)});
-        }
+        append_component_rows(*task, o.components, rec.components);
         evaluations.push_back(evo::Evaluation{m.id, o.fitness, o.status != EvalStatus::ok});
       }
       const FitnessStats fs = fitness_stats(rec.fitness);

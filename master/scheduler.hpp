@@ -1,8 +1,9 @@
 // Self-scheduling of one generation's work units (MPI-free; the MPI master and the single-rank
-// executor both drive it). A work unit is a genome (gait task) or a (genome, direction) pair
-// (directed task, §7.4). Units are handed out in a fixed order to whoever asks next; results are
-// stored by (genome id, direction), never by arrival order, so the combined outcome is the same
-// for any number of workers and any timing (ARCHITECTURE.md section 4).
+// executor both drive it). A work unit is a (genome, unit) pair; the task says how many units a
+// genome has (one for gait, one per direction for directed, §7.4) and how they combine. Units
+// are handed out in a fixed order to whoever asks next; results are stored by (genome id, unit),
+// never by arrival order, so the combined outcome is the same for any number of workers and any
+// timing (ARCHITECTURE.md section 4).
 #pragma once
 
 #include <cstdint>
@@ -12,21 +13,22 @@
 #include <vector>
 
 #include "common/eval_types.hpp"
+#include "tasks/task.hpp"
 
 namespace softevo::master {
 
 struct WorkUnit {
   std::size_t member = 0;  // index into the generation's member list
   std::int64_t genome_id = 0;
-  std::int32_t direction_index = -1;  // -1: gait; 0..n-1: index into task.directions
+  std::int32_t unit = 0;  // 0 .. Task::units()-1
 };
 
-// The combined result of one genome (all its directions).
+// The combined result of one genome (all its units, tasks::combine_units).
 struct GenomeOutcome {
   std::int64_t genome_id = 0;
-  EvalStatus status = EvalStatus::ok;           // first non-ok status in direction order, else ok
-  double fitness = 0.0;                         // §7.1 / §7.4 sum; 0 when any unit is not ok
-  std::vector<DirectionComponents> components;  // one per direction (gait: one)
+  EvalStatus status = EvalStatus::ok;   // first non-ok status in unit order, else ok
+  double fitness = 0.0;                 // Task::combine; 0 when any unit is not ok
+  std::vector<UnitFitness> components;  // one per unit
   std::int32_t voxels = 0;
   std::int32_t chambers = 0;
   double wall_seconds = 0.0;     // [s] summed over units (timing)
@@ -41,10 +43,10 @@ class SchedulerError : public std::runtime_error {
 
 class GenerationScheduler {
  public:
-  // `genome_ids` in member order (need not be sorted, must be unique); `n_directions` = 0 for
-  // the gait task (one unit per genome, direction -1), else the number of target directions.
+  // `genome_ids` in member order (need not be sorted, must be unique); `task` gives the units
+  // per genome and combines them (it must outlive the scheduler).
   GenerationScheduler(std::int64_t generation, std::vector<std::int64_t> genome_ids,
-                      int n_directions);
+                      const tasks::Task& task);
 
   std::int64_t generation() const { return generation_; }
   std::size_t units_total() const { return units_.size(); }
@@ -53,24 +55,25 @@ class GenerationScheduler {
   bool has_next() const { return next_ < units_.size(); }
   bool done() const { return done_count_ == units_.size(); }
 
-  // Next unit to hand out (genome-major, directions in config order), or nullopt.
+  // Next unit to hand out (genome-major, units in task order), or nullopt.
   std::optional<WorkUnit> next();
-  // Stores a result; throws SchedulerError for an unknown (id, direction), a unit that was not
+  // Stores a result; throws SchedulerError for an unknown (id, unit), a unit that was not
   // handed out or a duplicate result.
   void complete(const EvalResult& result);
 
   // Combined outcome of every genome in member order; requires done(). Any non-ok unit makes
-  // the genome score 0 (a killed robot, §7.4; failures per run.on_failure = "killed").
+  // the genome score 0 (Task::combine; failures per run.on_failure = "killed").
   std::vector<GenomeOutcome> outcomes() const;
   // Results of non-ok status `failed` or `timeout` (for run.on_failure = "abort").
   std::vector<const EvalResult*> failures() const;
 
  private:
-  std::size_t slot(std::int64_t genome_id, std::int32_t direction_index) const;
+  std::size_t slot(std::int64_t genome_id, std::int32_t unit) const;
 
   std::int64_t generation_;
   std::vector<std::int64_t> ids_;
-  int n_directions_;  // 0 = gait
+  const tasks::Task& task_;
+  int units_per_genome_;
   std::vector<WorkUnit> units_;
   std::vector<std::optional<EvalResult>> results_;  // by unit slot
   std::vector<bool> handed_out_;

@@ -10,8 +10,8 @@
 #include "evo/genome.hpp"
 #include "io/archive.hpp"
 #include "io/trace.hpp"
-#include "worker/evaluate_robot.hpp"
-#include "worker/evaluate_unit.hpp"
+#include "tasks/task.hpp"
+#include "worker/evaluate.hpp"
 
 namespace softevo::motion {
 
@@ -25,17 +25,6 @@ bool is_json(const std::string& path) {
   return ext == ".json";
 }
 
-// Index of `deg` in the configured directions; appends it when it is not one of them, so any
-// direction can be shown (the fitness then belongs to that direction alone).
-int direction_index(Config& config, double deg) {
-  auto& dirs = config.task.directions;
-  for (std::size_t i = 0; i < dirs.size(); ++i) {
-    if (dirs[i] == deg) return static_cast<int>(i);
-  }
-  dirs.push_back(deg);
-  return static_cast<int>(dirs.size() - 1);
-}
-
 // Re-simulates and records every control frame (60 Hz) as a pose.
 Motion simulate_motion(Config config, const BodyPlan& plan, const ControllerSpec& controller,
                        const MotionRequest& request, const std::string& name) {
@@ -46,15 +35,16 @@ Motion simulate_motion(Config config, const BodyPlan& plan, const ControllerSpec
     if (!(*request.seconds > 0.0)) throw std::invalid_argument("--seconds must be positive");
     config.task.eval_seconds = *request.seconds;
   }
-  int dir = -1;
   if (controller.directed) {
+    // One direction only (any direction can be shown; the fitness then belongs to it alone).
     const double deg = request.direction_deg
                            ? *request.direction_deg
                            : (config.task.directions.empty() ? 0.0 : config.task.directions[0]);
-    dir = direction_index(config, deg);
+    config.task.directions = {deg};
     motion.direction_deg = deg;
   }
-  EvalOptions options;
+  const std::unique_ptr<tasks::Task> task = tasks::make_task(config);
+  worker::EvaluateOptions options;
   options.on_frame = [&motion](const worker::TraceFrame& frame) {
     render::Pose pose;
     pose.time = frame.time;
@@ -64,14 +54,14 @@ Motion simulate_motion(Config config, const BodyPlan& plan, const ControllerSpec
     pose.chamber_pressure.assign(frame.pressures.begin(), frame.pressures.end());
     motion.poses.push_back(std::move(pose));
   };
-  const EvalResult result = evaluate_robot(config, plan, controller, dir, options);
+  const EvalResult result = worker::evaluate(config, *task, plan, controller, 0, options);
   if (motion.poses.empty()) {
     throw std::runtime_error("simulation of " + name + " recorded no frame: " +
                              (result.message.empty() ? to_string(result.status) : result.message));
   }
   char line[160];
   std::snprintf(line, sizeof line, "%s fitness %.17g, status %s, %.2f s simulated",
-                dir >= 0 ? "directed" : "gait", result.fitness, to_string(result.status),
+                to_string(config.task.kind), result.fitness, to_string(result.status),
                 result.sim_seconds);
   motion.summary = line;
   return motion;
@@ -260,8 +250,8 @@ Motion load_motion(const std::string& input, const MotionRequest& request) {
     if (!request.needs_motion || request.static_pose) {
       return static_motion(robot.body, static_cast<int>(config.physics.material_count), name);
     }
-    // The robot file decides the task: its controller's inputs say directed or not.
-    config.task.kind = robot.controller.directed ? "directed" : "gait";
+    // The robot file decides the task: the one its controller's inputs fit.
+    config.task.kind = tasks::default_task_for(robot.controller.task_inputs());
     config.task.control = robot.controller.closed_loop ? "closed" : "open";
     return simulate_motion(config, robot.body, robot.controller, request, name);
   }

@@ -17,12 +17,15 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tasks/task.hpp"
 #include "tools/bench_common.hpp"
-#include "tools/champion_eval.hpp"
 #include "tools/commands.hpp"
+#include "validation/champions.hpp"
 
 namespace softevo::cli {
 namespace {
+
+using validation::ChampionRow;
 
 struct BenchEvalArgs {
   std::string dir = "../shared/reference/bestbots";
@@ -35,10 +38,12 @@ struct BenchEvalArgs {
 
 int run_bench_eval(const BenchEvalArgs& a) {
   std::vector<ChampionRow> rows;
-  for (const std::string& f : robot_files(a.dir)) {
+  for (const std::string& f : validation::robot_files(a.dir)) {
     if (!a.only.empty() && f.find(a.only) == std::string::npos) continue;
-    ChampionRow row = load_champion(f);
-    if (!row.robot.controller.directed) rows.push_back(std::move(row));
+    ChampionRow row = validation::load_champion(f);
+    // The gait robots: those whose controller fits the gait task.
+    if (tasks::default_task_for(row.robot.controller.task_inputs()) == TaskKind::gait)
+      rows.push_back(std::move(row));
   }
   if (rows.empty()) throw std::runtime_error(a.dir + ": no gait robot files selected");
   std::fprintf(stderr,
@@ -48,7 +53,7 @@ int run_bench_eval(const BenchEvalArgs& a) {
   const std::vector<ChampionRow> unevaluated = rows;
   for (int run = 1; run <= a.runs; ++run) {
     std::vector<ChampionRow> again = unevaluated;
-    evaluate_champions(again, {}, a.integrator, true, a.jobs, [&](const ChampionRow& r) {
+    validation::evaluate_champions(again, {}, a.integrator, a.jobs, [&](const ChampionRow& r) {
       std::fprintf(stderr, "  run %d  %-16s %.2f s CPU\n", run, r.robot.name.c_str(),
                    r.cpu_seconds);
     });
@@ -70,7 +75,8 @@ int run_bench_eval(const BenchEvalArgs& a) {
       speedup.push_back(r.ref_cpu_seconds / r.cpu_seconds);
     }
   }
-  const double med_ours = median(ours), med_ref = median(ref), med_speedup = median(speedup);
+  const double med_ours = validation::median(ours), med_ref = validation::median(ref),
+               med_speedup = validation::median(speedup);
   if (a.json) {
     nlohmann::ordered_json j;
     j["integrator"] = a.integrator;
@@ -90,7 +96,7 @@ int run_bench_eval(const BenchEvalArgs& a) {
     j["median_cpu_seconds"] = med_ours;
     j["median_reference_cpu_seconds"] = med_ref;
     j["median_speedup"] = med_speedup;
-    j["median_us_per_voxel_step"] = median(us_per_voxel_step);
+    j["median_us_per_voxel_step"] = validation::median(us_per_voxel_step);
     std::printf("%s\n", j.dump(1).c_str());
     return kExitOk;
   }
@@ -108,7 +114,7 @@ int run_bench_eval(const BenchEvalArgs& a) {
   std::printf(
       "\nmedian CPU seconds: ours %.2f, thesis simulator %.2f; median speed-up %.2fx "
       "(goal >= 5x); median %.3f us per voxel-step (thesis 0.65)\n",
-      med_ours, med_ref, med_speedup, median(us_per_voxel_step));
+      med_ours, med_ref, med_speedup, validation::median(us_per_voxel_step));
   return kExitOk;
 }
 

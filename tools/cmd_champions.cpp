@@ -15,11 +15,14 @@
 
 #include <nlohmann/json.hpp>
 
-#include "tools/champion_eval.hpp"
+#include "tasks/task.hpp"
 #include "tools/commands.hpp"
+#include "validation/champions.hpp"
 
 namespace softevo::cli {
 namespace {
+
+using validation::ChampionRow;
 
 struct ChampionsArgs {
   std::string dir = "../shared/reference/bestbots";
@@ -36,14 +39,14 @@ double rel_diff(double ours, double ref) {
 
 int run_champions(const ChampionsArgs& a) {
   std::vector<ChampionRow> rows;
-  for (const std::string& f : robot_files(a.dir)) {
+  for (const std::string& f : validation::robot_files(a.dir)) {
     if (!a.only.empty() && f.find(a.only) == std::string::npos) continue;
-    rows.push_back(load_champion(f));
+    rows.push_back(validation::load_champion(f));
   }
   if (rows.empty()) throw std::runtime_error(a.dir + ": no robot files selected");
   std::fprintf(stderr, "evaluating %zu robots on %d thread(s), integrator %s\n", rows.size(),
                a.jobs, a.integrator.c_str());
-  evaluate_champions(rows, a.overrides, a.integrator, false, a.jobs, [](const ChampionRow& r) {
+  validation::evaluate_champions(rows, a.overrides, a.integrator, a.jobs, [](const ChampionRow& r) {
     std::fprintf(stderr, "  %-16s ours %12.6f  ref %10.4f  %s  (%.1f s CPU)\n",
                  r.robot.name.c_str(), r.result.fitness, r.ref_fitness, to_string(r.result.status),
                  r.cpu_seconds);
@@ -64,8 +67,8 @@ int run_champions(const ChampionsArgs& a) {
       if (is_killed(r.result.status) || !(r.result.fitness > 0.0)) ++not_walking;
     }
   }
-  const double rho = spearman(ours_all, ref_all);
-  const double open_median = median(open_diff);
+  const double rho = validation::spearman(ours_all, ref_all);
+  const double open_median = validation::median(open_diff);
 
   if (a.json) {
     nlohmann::ordered_json j;
@@ -103,17 +106,18 @@ int run_champions(const ChampionsArgs& a) {
     std::printf("%s\n", j.dump(1).c_str());
     return kExitOk;
   }
-  std::printf("%-16s %-6s %-5s %3s %20s %11s %8s  %-17s %8s %8s\n", "robot", "loop", "task", "ch",
+  std::printf("%-16s %-6s %-8s %3s %20s %11s %8s  %-17s %8s %8s\n", "robot", "loop", "task", "ch",
               "ours", "reference", "rel.diff", "status", "cpu[s]", "ref cpu");
   for (const ChampionRow& r : rows) {
     const double d = r.has_reference && r.ref_fitness != 0.0
                          ? rel_diff(r.result.fitness, r.ref_fitness)
                          : std::nan("");
-    std::printf("%-16s %-6s %-5s %3d %20.12f %11.4f %7.1f%%  %-17s %8.1f %8.1f%s\n",
+    std::printf("%-16s %-6s %-8s %3d %20.12f %11.4f %7.1f%%  %-17s %8.1f %8.1f%s\n",
                 r.robot.name.c_str(), r.robot.controller.closed_loop ? "closed" : "open",
-                r.robot.controller.directed ? "dir" : "gait", r.result.chambers, r.result.fitness,
-                r.ref_fitness, 100.0 * d, to_string(r.result.status), r.cpu_seconds,
-                r.ref_cpu_seconds, r.ref_killed ? "  (ref killed)" : "");
+                to_string(tasks::default_task_for(r.robot.controller.task_inputs())),
+                r.result.chambers, r.result.fitness, r.ref_fitness, 100.0 * d,
+                to_string(r.result.status), r.cpu_seconds, r.ref_cpu_seconds,
+                r.ref_killed ? "  (ref killed)" : "");
   }
   std::printf("\nSpearman rank correlation (%zu robots): %.4f   (goal >= 0.8)\n", ours_all.size(),
               rho);

@@ -1,16 +1,18 @@
-// `softevo eval ROBOT.json [--task gait|directed] [--integrator pneuvox|symplectic]
+// `softevo eval ROBOT.json [--task gait|directed|rotate] [--integrator pneuvox|symplectic]
 //  [--seconds S] [--ablate oscillator|sensors] [--json] [--trace FILE.h5] [--config FILE]
 //  [--set section.key=value ...]`
 //
-// Evaluates one robot file (SPEC.md section 9) and prints fitness, its components (D, L, delta,
-// P per direction), status, simulated time, steps, voxel and chamber counts and wall/CPU time.
+// Evaluates one robot file (SPEC.md section 9) and prints fitness, the task's named components
+// per work unit, status, simulated time, steps, voxel and chamber counts and wall/CPU time.
 // Without --config the built-in thesis defaults of softevo::Config are used, with task.control
-// taken from the robot's controller. Default task: directed if the controller is directed,
-// else gait. Fitness is printed with full double precision (%.17g).
+// taken from the robot's controller. Default task: the one the controller's inputs fit
+// (tasks::default_task_for: directed for a directed controller, else gait). Fitness is printed
+// with full double precision (%.17g). --direction D evaluates the target direction D alone
+// (task.directions = [D]).
 //
 // --trace FILE.h5 records one frame per control frame (60 Hz) plus the state after the last
-// frame: format softevo.trace/1, docs/trace.md (io/trace.hpp). With the directed task the trace
-// records the first direction (or the one of --direction).
+// frame: format softevo.trace/1, docs/trace.md (io/trace.hpp). The trace records the first work
+// unit of the task (directed: the first direction, or the one of --direction).
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -19,14 +21,16 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "common/config.hpp"
 #include "common/eval_types.hpp"
 #include "common/robot.hpp"
 #include "io/trace.hpp"
 #include "physics/model.hpp"
+#include "tasks/task.hpp"
 #include "tools/commands.hpp"
-#include "worker/evaluate_robot.hpp"
-#include "worker/fitness.hpp"
+#include "worker/evaluate.hpp"
 
 namespace softevo::cli {
 namespace {
@@ -83,28 +87,17 @@ void write_trace(const std::string& path, const TraceBuffer& t, const RobotFile&
   io::write_trace(path, trace);
 }
 
-std::string json_number(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
+// JSON has no NaN or infinity: null.
+nlohmann::ordered_json json_number(double v) {
+  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json();
 }
 
-std::string json_string(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
+// The value of component `name` of a unit, 0 when the task has no such component.
+double component(const std::vector<tasks::ComponentName>& names, const UnitFitness& unit,
+                 const char* name) {
+  for (std::size_t i = 0; i < names.size() && i < unit.values.size(); ++i)
+    if (names[i].name == name) return unit.values[i];
+  return 0.0;
 }
 
 int run_eval(const EvalArgs& a) {
@@ -115,11 +108,16 @@ int run_eval(const EvalArgs& a) {
     config.task.control = robot.controller.closed_loop ? "closed" : "open";
     config.run.eval_timeout_seconds = 0.0;  // interactive: no wall-clock limit
   }
-  config.task.kind = a.task.empty() ? (robot.controller.directed ? "directed" : "gait") : a.task;
+  config.task.kind = a.task.empty() ? tasks::default_task_for(robot.controller.task_inputs())
+                                    : *task_kind_from_string(a.task);  // checked by IsMember
   if (!a.integrator.empty()) config.physics.integrator = a.integrator;
   if (a.seconds > 0.0) config.task.eval_seconds = a.seconds;
+  if (a.direction_set) config.task.directions = {a.direction};
+  const std::unique_ptr<tasks::Task> task = tasks::make_task(config);
+  const std::vector<tasks::ComponentName> names = task->component_names();
 
-  EvalOptions opts;
+  worker::EvaluateOptions opts;
+  opts.deadline = worker::deadline_after(config.run.eval_timeout_seconds);
   opts.simd = physics::parse_simd(a.simd).value();  // checked by the option's IsMember
   if (!physics::simd_supported(opts.simd))
     throw std::invalid_argument("--simd " + a.simd + ": not supported by this CPU or build");
@@ -164,85 +162,84 @@ int run_eval(const EvalArgs& a) {
 
   std::timespec cpu0{}, cpu1{};
   ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &cpu0);
-  EvalResult result;
-  const bool directed = config.task.kind == "directed";
-  double trace_direction = 0.0;
-  if (directed && (a.direction_set || !a.trace.empty())) {
-    // One direction only: the one asked for (appended if not configured) or the first.
-    int index = 0;
-    if (a.direction_set) {
-      index = -1;
-      for (std::size_t i = 0; i < config.task.directions.size(); ++i)
-        if (config.task.directions[i] == a.direction) index = static_cast<int>(i);
-      if (index < 0) {
-        config.task.directions.push_back(a.direction);
-        index = static_cast<int>(config.task.directions.size()) - 1;
-      }
-    }
-    trace_direction = config.task.directions.at(static_cast<std::size_t>(index));
-    result = evaluate_robot(config, robot.body, robot.controller, index, opts);
-  } else {
-    result = evaluate_task(config, robot.body, robot.controller, opts);
-  }
+  // A trace records one work unit: the first.
+  const EvalResult result =
+      a.trace.empty()
+          ? worker::evaluate_all_units(config, *task, robot.body, robot.controller, opts)
+          : tasks::combine_units(*task, std::vector<EvalResult>{worker::evaluate(
+                                            config, *task, robot.body, robot.controller, 0, opts)});
   ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &cpu1);
   const double cpu_seconds = static_cast<double>(cpu1.tv_sec - cpu0.tv_sec) +
                              1e-9 * static_cast<double>(cpu1.tv_nsec - cpu0.tv_nsec);
 
+  // The trace names its target direction when the task has one (a component of that name).
+  bool has_direction = false;
+  for (const tasks::ComponentName& n : names) has_direction |= n.name == "direction_deg";
+  const double trace_direction =
+      has_direction ? component(names, result.components.front(), "direction_deg") : 0.0;
   if (!a.trace.empty() && trace.model != nullptr)
     write_trace(a.trace, trace, robot, result, config.task.control_rate,
-                directed ? &trace_direction : nullptr);
+                has_direction ? &trace_direction : nullptr);
 
   const std::string ablation = opts.ablate_oscillator && opts.ablate_sensors ? "oscillator+sensors"
                                : opts.ablate_oscillator                      ? "oscillator"
                                : opts.ablate_sensors                         ? "sensors"
                                                                              : "none";
   if (a.json) {
-    std::string s = "{";
-    s += "\"robot\": " + json_string(robot.name.empty() ? a.robot : robot.name);
-    s += ", \"task\": " + json_string(config.task.kind);
-    s += ", \"integrator\": " + json_string(config.physics.integrator);
-    s += ", \"ablate\": " + json_string(ablation);
-    s += ", \"fitness\": " + json_number(result.fitness);
-    s += ", \"status\": " + json_string(to_string(result.status));
-    s += ", \"killed\": " + std::string(is_killed(result.status) ? "true" : "false");
-    s += ", \"components\": [";
-    for (std::size_t i = 0; i < result.components.size(); ++i) {
-      const DirectionComponents& c = result.components[i];
-      s += i ? ", " : "";
-      s += "{\"direction_deg\": " + json_number(c.direction_deg) +
-           ", \"fitness\": " + json_number(c.fitness) + ", \"D\": " + json_number(c.distance) +
-           ", \"L\": " + json_number(c.path_length) + ", \"delta\": " + json_number(c.angle_error) +
-           ", \"P\": " + json_number(c.perpendicular_penalty) +
-           ", \"status\": " + json_string(to_string(c.status)) + "}";
+    nlohmann::ordered_json j;
+    j["robot"] = robot.name.empty() ? a.robot : robot.name;
+    j["task"] = to_string(config.task.kind);
+    j["integrator"] = config.physics.integrator;
+    j["ablate"] = ablation;
+    j["fitness"] = json_number(result.fitness);
+    j["status"] = to_string(result.status);
+    j["killed"] = is_killed(result.status);
+    nlohmann::ordered_json names_json = nlohmann::ordered_json::array();
+    for (const tasks::ComponentName& n : names)
+      names_json.push_back({{"name", n.name}, {"unit", n.unit}});
+    j["component_names"] = names_json;
+    nlohmann::ordered_json units = nlohmann::ordered_json::array();
+    for (const UnitFitness& u : result.components) {
+      // The fields of the thesis' directed components first (0 where the task has none), then
+      // every named component of the task.
+      nlohmann::ordered_json c;
+      c["direction_deg"] = json_number(component(names, u, "direction_deg"));
+      c["fitness"] = json_number(u.fitness);
+      c["D"] = json_number(component(names, u, "distance"));
+      c["L"] = json_number(component(names, u, "path_length"));
+      c["delta"] = json_number(component(names, u, "angle_error"));
+      c["P"] = json_number(component(names, u, "perpendicular_penalty"));
+      c["status"] = to_string(u.status);
+      for (std::size_t i = 0; i < names.size() && i < u.values.size(); ++i)
+        c[names[i].name] = json_number(u.values[i]);
+      units.push_back(c);
     }
-    s += "], \"sim_seconds\": " + json_number(result.sim_seconds);
-    s += ", \"steps\": " + std::to_string(result.steps);
-    s += ", \"voxels\": " + std::to_string(result.voxels);
-    s += ", \"chambers\": " + std::to_string(result.chambers);
-    s += ", \"wall_seconds\": " + json_number(result.wall_seconds);
-    s += ", \"cpu_seconds\": " + json_number(cpu_seconds);
-    s += ", \"simd\": " + json_string(physics::to_string(simd_used));
-    s += ", \"message\": " + json_string(result.message);
-    s += "}";
-    std::printf("%s\n", s.c_str());
+    j["components"] = units;
+    j["sim_seconds"] = json_number(result.sim_seconds);
+    j["steps"] = result.steps;
+    j["voxels"] = result.voxels;
+    j["chambers"] = result.chambers;
+    j["wall_seconds"] = json_number(result.wall_seconds);
+    j["cpu_seconds"] = json_number(cpu_seconds);
+    j["simd"] = physics::to_string(simd_used);
+    j["message"] = result.message;
+    std::printf("%s\n", j.dump().c_str());
   } else {
     std::printf("robot        %s\n", robot.name.empty() ? a.robot.c_str() : robot.name.c_str());
-    std::printf("task         %s (%s loop%s), integrator %s, ablate %s\n", config.task.kind.c_str(),
-                robot.controller.closed_loop ? "closed" : "open",
+    std::printf("task         %s (%s loop%s), integrator %s, ablate %s\n",
+                to_string(config.task.kind), robot.controller.closed_loop ? "closed" : "open",
                 robot.controller.directed ? ", directed controller" : "",
                 config.physics.integrator.c_str(), ablation.c_str());
     std::printf("fitness      %.17g\n", result.fitness);
     std::printf("status       %s%s%s\n", to_string(result.status),
                 result.message.empty() ? "" : ": ", result.message.c_str());
-    for (const DirectionComponents& c : result.components) {
-      if (config.task.kind == "gait")
-        std::printf("  gait: mean x displacement %.17g cm\n", c.distance);
-      else
-        std::printf(
-            "  direction %+6.1f deg: F %.10g  D %.10g cm  L %.10g cm  delta %.10g rad  "
-            "P %.10g cm  %s\n",
-            c.direction_deg, c.fitness, c.distance, c.path_length, c.angle_error,
-            c.perpendicular_penalty, to_string(c.status));
+    for (std::size_t k = 0; k < result.components.size(); ++k) {
+      const UnitFitness& u = result.components[k];
+      std::printf("  unit %zu: F %.17g", k, u.fitness);
+      for (std::size_t i = 0; i < names.size() && i < u.values.size(); ++i)
+        std::printf("  %s %.10g%s%s", names[i].name.c_str(), u.values[i],
+                    names[i].unit.empty() ? "" : " ", names[i].unit.c_str());
+      std::printf("  %s\n", to_string(u.status));
     }
     std::printf("simulated    %.6f s in %lld steps\n", result.sim_seconds,
                 static_cast<long long>(result.steps));
@@ -261,8 +258,10 @@ void register_eval(CLI::App& app, int& exit_code) {
   auto* cmd = app.add_subcommand("eval", "evaluate a robot file (fitness, components, status)");
   auto a = std::make_shared<EvalArgs>();
   cmd->add_option("ROBOT", a->robot, "robot file (softevo.robot/1 JSON)")->required();
-  cmd->add_option("--task", a->task, "gait or directed (default: from the controller)")
-      ->check(CLI::IsMember({"gait", "directed"}));
+  std::vector<std::string> task_names;
+  for (TaskKind k : task_kinds()) task_names.emplace_back(to_string(k));
+  cmd->add_option("--task", a->task, "the task (default: the one the controller's inputs fit)")
+      ->check(CLI::IsMember(task_names));
   cmd->add_option("--integrator", a->integrator, "physics integrator")
       ->check(CLI::IsMember({"pneuvox", "symplectic"}));
   cmd->add_option("--seconds", a->seconds, "simulated seconds (default task.eval_seconds = 10)")

@@ -11,7 +11,7 @@
 #include "evo/genome.hpp"
 #include "io/archive.hpp"
 #include "tools/commands.hpp"
-#include "worker/evaluate_unit.hpp"
+#include "worker/evaluate.hpp"
 
 namespace softevo::cli {
 

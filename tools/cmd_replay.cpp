@@ -3,8 +3,8 @@
 //
 // Record inputs, not outputs (ARCHITECTURE.md section 1): the archive keeps the resolved config
 // text and every encoded genome, so an evaluation can be repeated exactly. Replay goes through
-// the same code path as a run: worker::evaluate_unit per work unit (genome, or genome x
-// direction) and master::GenerationScheduler to combine the directions (§7.4). A difference in
+// the same code path as a run: worker::evaluate per work unit of the archived config's task and
+// master::GenerationScheduler to combine the units as the task does. A difference in
 // fitness bits, status or any archived fitness component is a mismatch (exit code 1).
 #include <cmath>
 #include <cstdio>
@@ -17,11 +17,13 @@
 #include "common/config.hpp"
 #include "common/eval_types.hpp"
 #include "io/archive.hpp"
+#include "master/run.hpp"
 #include "master/scheduler.hpp"
 #include "motion/robot_source.hpp"
 #include "physics/revision.hpp"
+#include "tasks/task.hpp"
 #include "tools/commands.hpp"
-#include "worker/evaluate_unit.hpp"
+#include "worker/evaluate.hpp"
 
 namespace softevo::cli {
 
@@ -40,34 +42,22 @@ struct ReplayArgs {
   bool all = false;
 };
 
-// The archived component row layout (docs/archive.md): fitness, distance, path_length,
-// angle_error, perpendicular_penalty, status.
-std::array<double, io::kComponentCount> component_row(const DirectionComponents& c) {
-  return {c.fitness,
-          c.distance,
-          c.path_length,
-          c.angle_error,
-          c.perpendicular_penalty,
-          static_cast<double>(static_cast<int>(c.status))};
-}
-
 struct Replayed {
   master::GenomeOutcome outcome;
   std::string mismatch;  // "" = identical (only filled when verifying)
 };
 
-Replayed replay_one(const ArchivedIndividual& ind, std::uint64_t hash, bool verify) {
-  const bool directed = ind.config.task.kind == "directed";
-  const int n_dirs = directed ? static_cast<int>(ind.config.task.directions.size()) : 0;
-  master::GenerationScheduler scheduler(ind.generation, {ind.id}, n_dirs);
+Replayed replay_one(const ArchivedIndividual& ind, const tasks::Task& task, std::uint64_t hash,
+                    bool verify) {
+  master::GenerationScheduler scheduler(ind.generation, {ind.id}, task);
   while (auto unit = scheduler.next()) {
     EvalRequest request;
     request.config_hash = hash;
     request.generation = ind.generation;
     request.genome_id = ind.id;
-    request.direction_index = unit->direction_index;
+    request.unit = unit->unit;
     request.genome = ind.genome;
-    scheduler.complete(worker::evaluate_unit(ind.config, hash, request));
+    scheduler.complete(worker::evaluate(ind.config, task, hash, request));
   }
   Replayed r;
   r.outcome = scheduler.outcomes().at(0);
@@ -87,14 +77,16 @@ Replayed replay_one(const ArchivedIndividual& ind, std::uint64_t hash, bool veri
       r.mismatch = "component rows " + std::to_string(rows) + " != archived " +
                    std::to_string(ind.components.size() / io::kComponentCount);
     }
+    std::vector<double> replayed;
+    master::append_component_rows(task, r.outcome.components, replayed);
     for (std::size_t d = 0; d < rows && r.mismatch.empty(); ++d) {
-      const auto row = component_row(r.outcome.components[d]);
+      const double* row = replayed.data() + d * io::kComponentCount;
       for (int k = 0; k < io::kComponentCount; ++k) {
         const double archived = ind.components[d * io::kComponentCount + k];
         if (!same_bits(row[k], archived) && !(std::isnan(row[k]) && std::isnan(archived))) {
           char buf[160];
-          std::snprintf(buf, sizeof buf, "component %d of direction %zu: %.17g != archived %.17g",
-                        k, d, row[k], archived);
+          std::snprintf(buf, sizeof buf, "component %d of unit %zu: %.17g != archived %.17g", k, d,
+                        row[k], archived);
           r.mismatch = buf;
           break;
         }
@@ -140,11 +132,12 @@ int run_replay(const ReplayArgs& args) {
       std::fprintf(stderr, "note: %s; fitness values will differ slightly\n", what.c_str());
     }
   }
+  const std::unique_ptr<tasks::Task> task = tasks::make_task(config);
   int identical = 0, mismatched = 0, unverifiable = 0;
   for (const ArchivedIndividual& ind : selected) {
     // A timeout depends on the wall clock, not on the inputs: nothing to compare bit for bit.
     const bool can_verify = ind.status != static_cast<std::uint8_t>(EvalStatus::timeout);
-    const Replayed r = replay_one(ind, hash, args.verify && can_verify);
+    const Replayed r = replay_one(ind, *task, hash, args.verify && can_verify);
     std::printf("generation %lld id %lld: fitness %.17g status %s (archived %.17g %s)",
                 static_cast<long long>(ind.generation), static_cast<long long>(ind.id),
                 r.outcome.fitness, to_string(r.outcome.status), ind.fitness,

@@ -133,8 +133,9 @@ int softevo_mpi_main(int argc, char** argv, MPI_Comm parent, const MpiMainHooks&
     master::MasterOptions mo;
     mo.config_path = o.config_path;
     mo.quiet = hooks.quiet;
-    mo.evaluate_alone = [&r, &hooks](const EvalRequest& request) {
-      return worker::evaluate_unit(r.config, r.config_hash, request, hooks.unit_options);
+    const std::unique_ptr<tasks::Task> task = tasks::make_task(r.config);
+    mo.evaluate_alone = [&r, &hooks, &task](const EvalRequest& request) {
+      return worker::evaluate(r.config, *task, r.config_hash, request, hooks.unit_options);
     };
     return master::run_master(comm, r, mo);
   } catch (const std::exception& e) {

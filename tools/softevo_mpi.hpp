@@ -14,13 +14,13 @@
 #pragma once
 
 #include "mpi/communicator.hpp"
-#include "worker/evaluate_unit.hpp"
+#include "worker/evaluate.hpp"
 
 namespace softevo {
 
 struct MpiMainHooks {
-  worker::UnitOptions unit_options;  // tests: stand-in simulator
-  bool quiet = false;                // tests: no progress output
+  worker::EvaluateOptions unit_options;  // tests: stand-in evaluation, injected faults
+  bool quiet = false;                    // tests: no progress output
 };
 
 int softevo_mpi_main(int argc, char** argv, MPI_Comm comm, const MpiMainHooks& hooks = {});

@@ -8,9 +8,10 @@
 namespace softevo::worker {
 
 WorkerOutcome run_worker_loop(const mpi::Communicator& comm, const Config& config,
-                              std::uint64_t config_hash, const UnitOptions& options) {
+                              std::uint64_t config_hash, const EvaluateOptions& options) {
   constexpr int kMaster = 0;
   WorkerOutcome outcome;
+  const std::unique_ptr<tasks::Task> task = tasks::make_task(config);
   for (;;) {
     const mpi::Message message = comm.receive(kMaster);
     if (message.tag == mpi::Tag::stop) {
@@ -25,7 +26,7 @@ WorkerOutcome run_worker_loop(const mpi::Communicator& comm, const Config& confi
     const EvalRequest request = decode_eval_request(message.bytes);
     EvalResult result;
     try {
-      result = evaluate_unit(config, config_hash, request, options);
+      result = evaluate(config, *task, config_hash, request, options);
     } catch (const ConfigMismatch& e) {
       comm.send(kMaster, mpi::Tag::error,
                 "rank " + std::to_string(comm.rank()) + " rejected a request: " + e.what());

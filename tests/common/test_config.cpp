@@ -74,6 +74,37 @@ TEST(Config, HashOfDefaultsIsPinned) {
   EXPECT_EQ(hash_hex(config_hash(Config{})), "33eaaf9fe334a91f");
 }
 
+TEST(Config, TaskKindIsParsedOnceAndItsKeysBelongToIt) {
+  const Config rotate =
+      parse_config("[task]\nkind = \"rotate\"\nrotate_travel_penalty = 2.5\n", "r");
+  EXPECT_EQ(rotate.task.kind, TaskKind::rotate);
+  EXPECT_EQ(rotate.task.rotate_travel_penalty, 2.5);
+  EXPECT_EQ(experiment_name(rotate.task), "rotate-open");
+  EXPECT_EQ(experiment_name(parse_config("[task]\nkind = \"directed\"\n", "d").task), "dir-open");
+  // A task's own key is in the canonical text (and the hash) of that task only, so the hash of
+  // every other task's config stays what it was before the key existed.
+  const std::string text = canonical_text(rotate);
+  EXPECT_NE(text.find("rotate_travel_penalty = 2.5\n"), std::string::npos) << text;
+  EXPECT_EQ(canonical_text(parse_config(text, "canonical")), text);
+  EXPECT_EQ(canonical_text(Config{}).find("rotate_travel_penalty"), std::string::npos);
+  // Setting it for another task is an error naming the key, the task and where it was set.
+  try {
+    parse_config("[task]\nkind = \"gait\"\n", "g.toml", {"task.rotate_travel_penalty=1"});
+    FAIL() << "expected an error";
+  } catch (const ConfigError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("--set task.rotate_travel_penalty=1"), std::string::npos) << m;
+    EXPECT_NE(m.find("applies to task.kind = \"rotate\" only"), std::string::npos) << m;
+  }
+  // The allowed kinds are listed for a typo.
+  try {
+    parse_config("[task]\nkind = \"rotat\"\n", "t.toml");
+    FAIL() << "expected an error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("\"rotate\""), std::string::npos) << e.what();
+  }
+}
+
 TEST(Config, MaterialTableIsNumpyLinspace) {
   const auto table = material_table(PhysicsConfig{});
   ASSERT_EQ(table.size(), 10u);

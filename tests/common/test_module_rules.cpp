@@ -127,14 +127,24 @@ TEST(ModuleRules, PhysicsIncludesNoMpiHdf5OrEvo) {
 TEST(ModuleRules, EvoIncludesNoMpiHdf5OrPhysics) {
   const auto v = forbidden_includes("evo", kMpiOrHdf5);
   EXPECT_TRUE(v.empty()) << describe(v);
-  const auto p = forbidden_includes("evo", std::regex(R"(^(physics|worker|master)/)"));
+  const auto p = forbidden_includes("evo", std::regex(R"(^(physics|tasks|worker|master)/)"));
   EXPECT_TRUE(p.empty()) << describe(p);
 }
 
 TEST(ModuleRules, CommonDependsOnNoOtherModule) {
-  const auto v = forbidden_includes("common", std::regex(R"(^(physics|evo|worker|master)/)"));
+  const auto v = forbidden_includes("common", std::regex(R"(^(physics|tasks|evo|worker|master)/)"));
   EXPECT_TRUE(v.empty()) << describe(v);
   const auto m = forbidden_includes("common", kMpiOrHdf5);
+  EXPECT_TRUE(m.empty()) << describe(m);
+}
+
+TEST(ModuleRules, TasksSeeOnlyCommonAndPhysics) {
+  // A task observes the simulated robot (physics) and is asked by the worker, the master and
+  // the tools; it never reaches up to them, nor into MPI or HDF5.
+  const auto v = forbidden_includes("tasks", kMpiOrHdf5);
+  EXPECT_TRUE(v.empty()) << describe(v);
+  const auto m =
+      forbidden_includes("tasks", std::regex(R"(^(evo|worker|master|validation|tools)/)"));
   EXPECT_TRUE(m.empty()) << describe(m);
 }
 

@@ -48,10 +48,10 @@ TEST(Wire, RoundTripAllFieldTypes) {
 EvalResult sample_result() {
   EvalResult r;
   r.genome_id = 77;
-  r.direction_index = 3;
+  r.unit = 3;
   r.status = EvalStatus::killed_flipped;
   r.fitness = 0.1 + 0.2;
-  r.components.push_back({20.0, 1.5, 2.5, 3.5, 0.25, 0.125, EvalStatus::ok});
+  r.components.push_back({1.5, EvalStatus::ok, {20.0, 2.5, 3.5, 0.25, 0.125}});
   r.voxels = 812;
   r.chambers = 2;
   r.steps = 62400;
@@ -63,12 +63,12 @@ EvalResult sample_result() {
 }
 
 TEST(Wire, EvalRequestRoundTrip) {
-  EvalRequest q{0xDEADBEEFCAFEF00DULL, 12, 345, -1, {1, 2, 3, 250}};
+  EvalRequest q{0xDEADBEEFCAFEF00DULL, 12, 345, 4, {1, 2, 3, 250}};
   const EvalRequest back = decode_eval_request(encode_eval_request(q));
   EXPECT_EQ(back.config_hash, q.config_hash);
   EXPECT_EQ(back.generation, 12);
   EXPECT_EQ(back.genome_id, 345);
-  EXPECT_EQ(back.direction_index, -1);
+  EXPECT_EQ(back.unit, 4);
   EXPECT_EQ(back.genome, q.genome);
 }
 
@@ -80,7 +80,8 @@ TEST(Wire, EvalResultRoundTripIsBitExact) {
   EXPECT_EQ(back.fitness, r.fitness);
   EXPECT_EQ(back.message, r.message);
   ASSERT_EQ(back.components.size(), 1u);
-  EXPECT_EQ(back.components[0].perpendicular_penalty, 0.125);
+  EXPECT_EQ(back.components[0].values, r.components[0].values);
+  EXPECT_EQ(back.components[0].fitness, 1.5);
 }
 
 TEST(Wire, RejectsEveryTruncation) {

@@ -78,7 +78,7 @@ Genome labelled(double base, const EvoParams& p) {
 }
 
 TEST(CrossoverController, OnePointPerLayerCutsEachVectorIndependently) {
-  const EvoParams p = evo_params(Config{});
+  const EvoParams p = evo_params(Config{}, 0);
   const Genome a = labelled(0.0, p);
   const Genome b = labelled(100000.0, p);
   Rng rng(3);
@@ -141,7 +141,7 @@ TEST(CrossoverController, OnePointPerLayerCutsEachVectorIndependently) {
 }
 
 TEST(CrossoverController, RandomCarriesStepSizesAndOnePointCutsTheConcatenation) {
-  const EvoParams p = evo_params(Config{});
+  const EvoParams p = evo_params(Config{}, 0);
   const Genome a = labelled(0.0, p);
   const Genome b = labelled(100000.0, p);
   Rng rng(4);
@@ -172,7 +172,7 @@ TEST(CrossoverController, RandomCarriesStepSizesAndOnePointCutsTheConcatenation)
 }
 
 TEST(CrossoverController, MismatchedParentsAreAnErrorAndNoControllerIsANoOp) {
-  const EvoParams p = evo_params(Config{});
+  const EvoParams p = evo_params(Config{}, 0);
   Genome a = labelled(0.0, p);
   Genome b = labelled(1.0, p);
   b.controller.bias_out.pop_back();

@@ -16,19 +16,17 @@ Config default_config() {
 }
 
 TEST(GenomeShape, GeneCountsOfTheFourExperiments) {
-  // §4.4: 4 n_in + 133 genes for n_in = 2 / 12 / 3 / 13.
+  // §4.4: 4 n_in + 133 genes for n_in = 2 / 12 / 3 / 13 (no task input: gait; one: directed).
   Config c;
-  c.task.kind = "gait";
   c.task.control = "open";
-  EXPECT_EQ(controller_shape(c).gene_count(), 141u);
+  EXPECT_EQ(controller_shape(c, 0).gene_count(), 141u);
   c.task.control = "closed";
-  EXPECT_EQ(controller_shape(c).gene_count(), 181u);
-  c.task.kind = "directed";
+  EXPECT_EQ(controller_shape(c, 0).gene_count(), 181u);
   c.task.control = "open";
-  EXPECT_EQ(controller_shape(c).gene_count(), 145u);
+  EXPECT_EQ(controller_shape(c, 1).gene_count(), 145u);
   c.task.control = "closed";
-  EXPECT_EQ(controller_shape(c).gene_count(), 185u);
-  const auto len = controller_shape(c).lengths();
+  EXPECT_EQ(controller_shape(c, 1).gene_count(), 185u);
+  const auto len = controller_shape(c, 1).lengths();
   EXPECT_EQ(len[0], 13u * 4);  // weights_hidden
   EXPECT_EQ(len[2], 4u * 20);  // weights_out
   EXPECT_EQ(len[8], 1u);       // freq
@@ -38,18 +36,18 @@ TEST(GenomeParams, BadActivationAndCrossoverNamesAreErrorsNamingTheKey) {
   Config c;
   c.neat.activation_options = {"sigmoid", "relu"};
   try {
-    evo_params(c);
+    evo_params(c, 0);
     FAIL() << "expected an error";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("neat.activation_options"), std::string::npos);
   }
   c = Config{};
   c.controller.crossover_method = "2point";
-  EXPECT_THROW(evo_params(c), std::invalid_argument);
+  EXPECT_THROW(evo_params(c, 0), std::invalid_argument);
 }
 
 TEST(GenomeInit, CppnHasOutputsAndFullInputOutputConnectivity) {
-  const EvoParams p = evo_params(default_config());
+  const EvoParams p = evo_params(default_config(), 0);
   Rng rng(7);
   const CppnGenome g = random_cppn(p, rng);
   ASSERT_EQ(g.nodes.size(), 4u);
@@ -65,7 +63,7 @@ TEST(GenomeInit, CppnHasOutputsAndFullInputOutputConnectivity) {
 }
 
 TEST(GenomeInit, ValuesAreClampedGaussiansAndActivationsUniform) {
-  const EvoParams p = evo_params(default_config());
+  const EvoParams p = evo_params(default_config(), 0);
   Rng rng(11);
   std::map<Activation, int> counts;
   double sum = 0.0, sum2 = 0.0;
@@ -101,7 +99,7 @@ TEST(GenomeInit, ValuesAreClampedGaussiansAndActivationsUniform) {
 }
 
 TEST(GenomeInit, ControllerFollowsSection82) {
-  const EvoParams p = evo_params(default_config());
+  const EvoParams p = evo_params(default_config(), 0);
   Rng rng(3);
   double sum2 = 0.0;
   int n = 0, at_limit = 0;
@@ -140,7 +138,7 @@ TEST(GenomeInit, ControllerFollowsSection82) {
 }
 
 Genome sample_genome(std::uint64_t seed) {
-  const EvoParams p = evo_params(default_config());
+  const EvoParams p = evo_params(default_config(), 0);
   Rng rng(seed);
   Genome g = random_genome(p, rng);
   g.cppn.nodes.push_back(NodeGene{7, -0.25, 1.0, Activation::gauss});
@@ -234,12 +232,11 @@ TEST(GenomeEncoding, MalformedBytesAreRejectedWithClearErrors) {
 
 TEST(GenomeRobotFile, RecordsAndControllerSpecRoundTrip) {
   Config c;
-  c.task.kind = "directed";
   c.task.control = "closed";
-  const EvoParams p = evo_params(c);
+  const EvoParams p = evo_params(c, 1);  // one task input (the directed task's)
   Rng rng(9);
   const Genome g = random_genome(p, rng);
-  const ControllerSpec spec = to_controller_spec(g, c);
+  const ControllerSpec spec = to_controller_spec(g, c, 1);
   EXPECT_TRUE(spec.closed_loop);
   EXPECT_TRUE(spec.directed);
   EXPECT_EQ(spec.input_count(), 13);
@@ -252,7 +249,10 @@ TEST(GenomeRobotFile, RecordsAndControllerSpecRoundTrip) {
   EXPECT_TRUE(same_genome(back, g));
   // A controller of another shape does not fit the config.
   Config other;
-  EXPECT_THROW(to_controller_spec(g, other), std::invalid_argument);
+  EXPECT_THROW(to_controller_spec(g, other, 1), std::invalid_argument);
+  EXPECT_THROW(to_controller_spec(g, c, 0), std::invalid_argument);
+  // A robot file records at most one task input.
+  EXPECT_THROW(to_controller_spec(g, c, 2), std::invalid_argument);
 }
 
 }  // namespace

@@ -11,7 +11,7 @@ namespace softevo::evo {
 namespace {
 
 EvoParams params() {
-  return evo_params(Config{});
+  return evo_params(Config{}, 0);
 }
 
 // Binomial check: `hits` of `n` trials agree with probability p within 3 standard errors.

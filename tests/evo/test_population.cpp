@@ -38,7 +38,7 @@ bool stand_in_viable(const Genome& g) {
 }
 
 EvoParams small_params() {
-  EvoParams p = evo_params(Config{});
+  EvoParams p = evo_params(Config{}, 0);
   p.neat.pop_size = 30;
   p.neat.node_add_prob = 0.2;  // more structure to exercise every path
   p.neat.conn_add_prob = 0.3;
@@ -81,14 +81,14 @@ void check_invariants(const Population& pop) {
 
 TEST(Population, RobotGenerationZeroIsViableSpeciatedAndFullSize) {
   const Config config;
-  Population pop = Population::create(config, 42);
+  Population pop = Population::create(config, 0, 42);
   EXPECT_EQ(pop.generation(), 0);
   ASSERT_GE(pop.members().size(), 50u);
   for (const Individual& m : pop.members()) {
     const DevelopedBody body = develop_body(m.genome.cppn, config.body);
     EXPECT_TRUE(body.valid && body.actuatable) << "member " << m.id;
     EXPECT_EQ(m.parent1, -1);
-    check_controller_shape(m.genome, controller_shape(config));
+    check_controller_shape(m.genome, controller_shape(config, 0));
   }
   check_invariants(pop);
   EXPECT_GE(pop.species_count(), 1u);
@@ -192,10 +192,10 @@ TEST(Population, SerialisationRoundTripIsBitIdenticalAndContinuesIdentically) {
 TEST(Population, RobotStateRoundTripsThroughTheConfig) {
   Config config;
   config.neat.pop_size = 12;
-  Population a = Population::create(config, 8);
+  Population a = Population::create(config, 0, 8);
   a.advance(evaluate(a));
   const auto bytes = a.serialize();
-  Population b = Population::deserialize(bytes, config);
+  Population b = Population::deserialize(bytes, config, 0);
   EXPECT_EQ(b.serialize(), bytes);
   a.advance(evaluate(a));
   b.advance(evaluate(b));
@@ -203,7 +203,7 @@ TEST(Population, RobotStateRoundTripsThroughTheConfig) {
   // A configuration with another controller shape does not fit the state.
   Config closed = config;
   closed.task.control = "closed";
-  EXPECT_THROW(Population::deserialize(bytes, closed), std::invalid_argument);
+  EXPECT_THROW(Population::deserialize(bytes, closed, 0), std::invalid_argument);
 }
 
 TEST(Population, MalformedStateIsRejected) {

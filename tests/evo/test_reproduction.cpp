@@ -90,7 +90,7 @@ TEST(Tournament, SizeTwoPicksTheBetterOfTwoDraws) {
 }
 
 TEST(Reproduce, ElitesSpawnAndParentsStayInsideTheSpecies) {
-  EvoParams p = evo_params(Config{});
+  EvoParams p = evo_params(Config{}, 0);
   p.neat.pop_size = 20;
   Rng rng(3);
   InnovationTracker innovation(4);

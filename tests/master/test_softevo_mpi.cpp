@@ -29,7 +29,8 @@
 #include "physics/revision.hpp"
 #include "tests/build_tree.hpp"
 #include "tools/softevo_mpi.hpp"
-#include "worker/evaluate_robot.hpp"
+#include "tasks/task.hpp"
+#include "worker/evaluate.hpp"
 
 extern char** environ;
 
@@ -116,8 +117,10 @@ std::string write_config(const TempDir& dir, const std::string& name, const std:
 }
 
 // Runs softevo-mpi on the first `nranks` ranks of the world (collective over the world).
-// Returns this rank's exit code (-1 on a rank outside the run).
-int run_on_each(int nranks, const std::vector<std::string>& args, bool quiet = true) {
+// Returns this rank's exit code (-1 on a rank outside the run). `unit_options`: the evaluation
+// options of every rank (tests inject faults there).
+int run_on_each(int nranks, const std::vector<std::string>& args, bool quiet = true,
+                const worker::EvaluateOptions& unit_options = {}) {
   const int wr = world_rank();
   MPI_Comm sub;
   MPI_Comm_split(MPI_COMM_WORLD, wr < nranks ? 0 : MPI_UNDEFINED, wr, &sub);
@@ -130,6 +133,7 @@ int run_on_each(int nranks, const std::vector<std::string>& args, bool quiet = t
     argv.push_back(nullptr);
     MpiMainHooks hooks;
     hooks.quiet = quiet;
+    hooks.unit_options = unit_options;
     rc = softevo_mpi_main(static_cast<int>(storage.size()), argv.data(), sub, hooks);
     MPI_Comm_free(&sub);
   }
@@ -138,8 +142,9 @@ int run_on_each(int nranks, const std::vector<std::string>& args, bool quiet = t
 }
 
 // As run_on_each, but returns the exit code of rank 0 on every rank.
-int run_on(int nranks, const std::vector<std::string>& args, bool quiet = true) {
-  int rc = run_on_each(nranks, args, quiet);
+int run_on(int nranks, const std::vector<std::string>& args, bool quiet = true,
+           const worker::EvaluateOptions& unit_options = {}) {
+  int rc = run_on_each(nranks, args, quiet, unit_options);
   MPI_Bcast(&rc, 1, MPI_INT, 0, MPI_COMM_WORLD);
   return rc;
 }
@@ -278,7 +283,8 @@ TEST(SoftevoMpi, TinyRunWritesValidArchive) {
   const RobotFile file = parse_robot_json(
       robot_to_json(worker::robot_file_of(config, evo::decode_genome(last.genome[best]), "best")),
       "exported");
-  const EvalResult again = evaluate_robot(config, file.body, file.controller, -1);
+  const EvalResult again =
+      worker::evaluate(config, *tasks::make_task(config), file.body, file.controller, 0);
   EXPECT_EQ(again.fitness, last.fitness[best]);
   EXPECT_EQ(static_cast<std::uint8_t>(again.status), last.status[best]);
   const auto cp = a.checkpoint();
@@ -477,7 +483,7 @@ TEST(SoftevoMpi, StartupErrorsFailFastAndTouchNothing) {
   }
 }
 
-TEST(SoftevoMpi, AWorkerThatThrowsDoesNotStopTheRun) {
+TEST(SoftevoMpi, AFailingEvaluationDoesNotStopTheRun) {
   TempDir dir;
   const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
   const std::string ref = dir.file("ref.h5");
@@ -485,10 +491,21 @@ TEST(SoftevoMpi, AWorkerThatThrowsDoesNotStopTheRun) {
   std::int64_t victim = -1;
   if (world_rank() == 0) victim = Archive(ref).generation(0).id.at(1);
   MPI_Bcast(&victim, 1, MPI_INT64_T, 0, MPI_COMM_WORLD);
-  setenv("SOFTEVO_TEST_FAIL_GENOME", std::to_string(victim).c_str(), 1);
+  // The victim's evaluation fails on whichever rank gets it; every other genome is evaluated.
+  worker::EvaluateOptions faulty;
+  faulty.evaluate_robot = [victim](const Config& c, const tasks::Task& task,
+                                   const worker::BuiltRobot& robot, const EvalRequest& request,
+                                   const worker::EvaluateOptions& options) {
+    if (request.genome_id != victim)
+      return worker::evaluate(c, task, robot.body, robot.controller, request.unit, options);
+    EvalResult failed;
+    failed.status = EvalStatus::failed;
+    failed.message = "injected fault";
+    return failed;
+  };
   const std::string out = dir.file("run.h5");
-  const int rc = run_on(world_size(), {"--config", cfg, "--out", out, "--generations", "1"});
-  unsetenv("SOFTEVO_TEST_FAIL_GENOME");
+  const int rc =
+      run_on(world_size(), {"--config", cfg, "--out", out, "--generations", "1"}, true, faulty);
   ASSERT_EQ(rc, 0);
   if (world_rank() != 0) return;
   const GenerationRecord a = Archive(ref).generation(0), b = Archive(out).generation(0);

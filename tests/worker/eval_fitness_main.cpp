@@ -10,14 +10,15 @@
 
 #include "common/config.hpp"
 #include "common/robot.hpp"
-#include "worker/evaluate_robot.hpp"
+#include "tasks/task.hpp"
+#include "worker/evaluate.hpp"
 
 int main(int argc, char** argv) {
   if (argc != 3 && argc != 4) {
     std::fprintf(stderr, "usage: %s ROBOT.json SECONDS [sse2|avx2|avx512]\n", argv[0]);
     return 2;
   }
-  softevo::EvalOptions options;
+  softevo::worker::EvaluateOptions options;
   if (argc == 4) {
     const std::optional<softevo::physics::Simd> simd = softevo::physics::parse_simd(argv[3]);
     if (!simd) {
@@ -31,9 +32,10 @@ int main(int argc, char** argv) {
     softevo::Config config;
     config.run.eval_timeout_seconds = 0.0;
     config.task.eval_seconds = std::atof(argv[2]);
-    config.task.kind = robot.controller.directed ? "directed" : "gait";
+    config.task.kind = softevo::tasks::default_task_for(robot.controller.task_inputs());
+    const auto task = softevo::tasks::make_task(config);
     const softevo::EvalResult r =
-        softevo::evaluate_task(config, robot.body, robot.controller, options);
+        softevo::worker::evaluate_all_units(config, *task, robot.body, robot.controller, options);
     std::printf("%a %s\n", r.fitness, softevo::to_string(r.status));
     return 0;
   } catch (const std::exception& e) {

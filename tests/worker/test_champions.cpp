@@ -9,7 +9,8 @@
 
 #include "common/config.hpp"
 #include "common/robot.hpp"
-#include "worker/evaluate_robot.hpp"
+#include "tasks/task.hpp"
+#include "worker/evaluate.hpp"
 
 namespace fs = std::filesystem;
 using namespace softevo;
@@ -30,11 +31,17 @@ TEST(ChampionsFast, ThreeChampionsWalkForwardForTwoSeconds) {
     cfg.run.eval_timeout_seconds = 0.0;  // results must not depend on machine load
     cfg.task.eval_seconds = 2.0;
     cfg.task.control = robot.controller.closed_loop ? "closed" : "open";
-    const int direction = robot.controller.directed ? 0 : -1;
-    const EvalResult r = evaluate_robot(cfg, robot.body, robot.controller, direction);
+    cfg.task.kind = tasks::default_task_for(robot.controller.task_inputs());
+    const auto task = tasks::make_task(cfg);
+    const EvalResult r = worker::evaluate(cfg, *task, robot.body, robot.controller, 0);
     EXPECT_EQ(r.status, EvalStatus::ok) << name << ": " << to_string(r.status) << " " << r.message;
     EXPECT_GT(r.fitness, 0.0) << name;
     ASSERT_FALSE(r.components.empty());
-    EXPECT_GT(r.components[0].distance, 2.0) << name << " moved less than 2 cm in 2 s";
+    // distance: the first component of the gait task, the second of the directed one.
+    const auto names = task->component_names();
+    double distance = 0.0;
+    for (std::size_t k = 0; k < names.size(); ++k)
+      if (names[k].name == "distance") distance = r.components[0].values[k];
+    EXPECT_GT(distance, 2.0) << name << " moved less than 2 cm in 2 s";
   }
 }

@@ -18,7 +18,8 @@
 
 #include "common/config.hpp"
 #include "common/robot.hpp"
-#include "worker/evaluate_robot.hpp"
+#include "tasks/task.hpp"
+#include "worker/evaluate.hpp"
 
 namespace fs = std::filesystem;
 using namespace softevo;
@@ -42,8 +43,9 @@ TEST(ChampionsAll, EveryReferenceWalkerWalksHere) {
       Config cfg;
       cfg.run.eval_timeout_seconds = 0.0;  // results must not depend on machine load
       cfg.task.control = robots[i].controller.closed_loop ? "closed" : "open";
-      cfg.task.kind = robots[i].controller.directed ? "directed" : "gait";
-      results[i] = evaluate_task(cfg, robots[i].body, robots[i].controller);
+      cfg.task.kind = tasks::default_task_for(robots[i].controller.task_inputs());
+      const auto task = tasks::make_task(cfg);
+      results[i] = worker::evaluate_all_units(cfg, *task, robots[i].body, robots[i].controller);
     }
   };
   std::thread t1(work), t2(work);

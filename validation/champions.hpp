@@ -1,5 +1,6 @@
-// Evaluation of a directory of robot files with their `reference` values (the thesis champions of
-// ../shared/reference/bestbots): shared by `softevo champions` and `softevo bench eval`.
+// Validation against reference robots: a directory of robot files with their `reference`
+// values (the thesis champions of ../shared/reference/bestbots) evaluated in parallel, and the
+// rank statistics that compare them. Shared by `softevo champions` and `softevo bench eval`.
 #pragma once
 
 #include <functional>
@@ -10,7 +11,7 @@
 #include "common/eval_types.hpp"
 #include "common/robot.hpp"
 
-namespace softevo::cli {
+namespace softevo::validation {
 
 struct ChampionRow {
   std::string file;
@@ -32,18 +33,18 @@ std::vector<std::string> robot_files(const std::string& dir);
 ChampionRow load_champion(const std::string& path);
 
 // Config of a champion: built-in defaults (+ overrides), task.control from the controller,
-// task.kind = directed for directed controllers (unless gait_only), integrator as given.
+// task.kind the task its controller's inputs fit (tasks::default_task_for), integrator as given.
 Config champion_config(const ChampionRow& row, const std::vector<std::string>& overrides,
-                       const std::string& integrator, bool gait_only);
+                       const std::string& integrator);
 
-// Evaluates every row (directed robots: one work unit per direction, combined as §7.4) on `jobs`
+// Evaluates every row (every work unit of its task on its own, combined by the task) on `jobs`
 // threads; `progress` is called (serialised) when a robot is complete.
 void evaluate_champions(std::vector<ChampionRow>& rows, const std::vector<std::string>& overrides,
-                        const std::string& integrator, bool gait_only, int jobs,
+                        const std::string& integrator, int jobs,
                         const std::function<void(const ChampionRow&)>& progress);
 
 // Spearman rank correlation (average ranks for ties); NaN for fewer than 2 values.
 double spearman(const std::vector<double>& x, const std::vector<double>& y);
 double median(std::vector<double> v);
 
-}  // namespace softevo::cli
+}  // namespace softevo::validation

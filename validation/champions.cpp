@@ -1,5 +1,5 @@
-// Champion-set evaluation for `softevo champions` and `softevo bench eval`.
-#include "tools/champion_eval.hpp"
+// Champion-set evaluation for `softevo champions` and `softevo bench eval`. See champions.hpp.
+#include "validation/champions.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -13,11 +13,20 @@
 
 #include <nlohmann/json.hpp>
 
-#include "tools/bench_common.hpp"
-#include "worker/evaluate_robot.hpp"
-#include "worker/fitness.hpp"
+#include "tasks/task.hpp"
+#include "worker/evaluate.hpp"
 
-namespace softevo::cli {
+namespace softevo::validation {
+namespace {
+
+// CPU seconds of the calling thread: the figure that stays meaningful on a shared machine.
+double thread_cpu_seconds() {
+  timespec t{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+}  // namespace
 
 std::vector<std::string> robot_files(const std::string& dir) {
   namespace fs = std::filesystem;
@@ -52,10 +61,10 @@ ChampionRow load_champion(const std::string& path) {
 }
 
 Config champion_config(const ChampionRow& row, const std::vector<std::string>& overrides,
-                       const std::string& integrator, bool gait_only) {
+                       const std::string& integrator) {
   Config config = parse_config("", "<built-in defaults>", overrides);
   config.task.control = row.robot.controller.closed_loop ? "closed" : "open";
-  config.task.kind = row.robot.controller.directed && !gait_only ? "directed" : "gait";
+  config.task.kind = tasks::default_task_for(row.robot.controller.task_inputs());
   if (!integrator.empty()) config.physics.integrator = integrator;
   // No wall-clock limit: a report must not depend on how busy the machine is.
   config.run.eval_timeout_seconds = 0.0;
@@ -63,31 +72,27 @@ Config champion_config(const ChampionRow& row, const std::vector<std::string>& o
 }
 
 void evaluate_champions(std::vector<ChampionRow>& rows, const std::vector<std::string>& overrides,
-                        const std::string& integrator, bool gait_only, int jobs,
+                        const std::string& integrator, int jobs,
                         const std::function<void(const ChampionRow&)>& progress) {
   struct Unit {
     std::size_t row;
-    int direction;  // -1 gait
+    int unit;
   };
   std::vector<Config> configs;
+  configs.reserve(rows.size());  // the tasks keep references into it
+  std::vector<std::unique_ptr<tasks::Task>> row_tasks;
   std::vector<Unit> units;
   std::vector<std::vector<EvalResult>> results(rows.size());
   std::vector<std::vector<double>> cpu(rows.size());
   std::vector<int> remaining(rows.size(), 0);
   for (std::size_t r = 0; r < rows.size(); ++r) {
-    configs.push_back(champion_config(rows[r], overrides, integrator, gait_only));
-    const Config& c = configs.back();
-    if (c.task.kind == "directed") {
-      for (int d = 0; d < static_cast<int>(c.task.directions.size()); ++d) units.push_back({r, d});
-      results[r].resize(c.task.directions.size());
-      cpu[r].resize(c.task.directions.size());
-      remaining[r] = static_cast<int>(c.task.directions.size());
-    } else {
-      units.push_back({r, -1});
-      results[r].resize(1);
-      cpu[r].resize(1);
-      remaining[r] = 1;
-    }
+    configs.push_back(champion_config(rows[r], overrides, integrator));
+    row_tasks.push_back(tasks::make_task(configs.back()));
+    const int n = row_tasks.back()->units();
+    for (int u = 0; u < n; ++u) units.push_back({r, u});
+    results[r].resize(static_cast<std::size_t>(n));
+    cpu[r].resize(static_cast<std::size_t>(n));
+    remaining[r] = n;
   }
   std::atomic<std::size_t> next{0};
   std::mutex mutex;
@@ -98,16 +103,15 @@ void evaluate_champions(std::vector<ChampionRow>& rows, const std::vector<std::s
       const Unit u = units[i];
       ChampionRow& row = rows[u.row];
       const double c0 = thread_cpu_seconds();
-      EvalResult res =
-          evaluate_robot(configs[u.row], row.robot.body, row.robot.controller, u.direction);
+      EvalResult res = worker::evaluate(configs[u.row], *row_tasks[u.row], row.robot.body,
+                                        row.robot.controller, u.unit);
       const double c1 = thread_cpu_seconds();
-      const std::size_t slot = u.direction < 0 ? 0 : static_cast<std::size_t>(u.direction);
+      const auto slot = static_cast<std::size_t>(u.unit);
       std::lock_guard<std::mutex> lock(mutex);
       results[u.row][slot] = std::move(res);
       cpu[u.row][slot] = c1 - c0;
       if (--remaining[u.row] == 0) {
-        row.result =
-            u.direction < 0 ? results[u.row][0] : worker::combine_directions(results[u.row]);
+        row.result = tasks::combine_units(*row_tasks[u.row], results[u.row]);
         row.cpu_seconds = 0.0;
         for (double c : cpu[u.row]) row.cpu_seconds += c;
         if (progress) progress(row);
@@ -163,4 +167,4 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-}  // namespace softevo::cli
+}  // namespace softevo::validation
