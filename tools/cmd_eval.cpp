@@ -5,8 +5,9 @@
 // Evaluates one robot file (SPEC.md section 9) and prints fitness, the task's named components
 // per work unit, status, simulated time, steps, voxel and chamber counts and wall/CPU time.
 // Without --config the built-in thesis defaults of softevo::Config are used, with task.control
-// taken from the robot's controller. Default task: the one the controller's inputs fit
-// (tasks::default_task_for: directed for a directed controller, else gait). Fitness is printed
+// taken from the robot's controller. The task: --task, else the --config file's, else the one
+// the controller's inputs fit (tasks::default_task_for: directed for a directed controller,
+// else gait). Fitness is printed
 // with full double precision (%.17g). --direction D evaluates the target direction D alone
 // (task.directions = [D]).
 //
@@ -102,14 +103,20 @@ double component(const std::vector<tasks::ComponentName>& names, const UnitFitne
 
 int run_eval(const EvalArgs& a) {
   const RobotFile robot = read_robot_file(a.robot);
-  Config config = a.config_file.empty() ? parse_config("", "<built-in defaults>", a.overrides)
-                                        : load_config(a.config_file, a.overrides);
+  // The task: --task, else the config file's, else the one the controller's inputs fit. It is
+  // applied as the last override, so that a key of that task (--set) is accepted.
+  std::vector<std::string> overrides = a.overrides;
+  if (!a.task.empty())
+    overrides.push_back("task.kind=" + a.task);
+  else if (a.config_file.empty())
+    overrides.push_back(std::string("task.kind=") +
+                        to_string(tasks::default_task_for(robot.controller.task_inputs())));
+  Config config = a.config_file.empty() ? parse_config("", "<built-in defaults>", overrides)
+                                        : load_config(a.config_file, overrides);
   if (a.config_file.empty()) {
     config.task.control = robot.controller.closed_loop ? "closed" : "open";
     config.run.eval_timeout_seconds = 0.0;  // interactive: no wall-clock limit
   }
-  config.task.kind = a.task.empty() ? tasks::default_task_for(robot.controller.task_inputs())
-                                    : *task_kind_from_string(a.task);  // checked by IsMember
   if (!a.integrator.empty()) config.physics.integrator = a.integrator;
   if (a.seconds > 0.0) config.task.eval_seconds = a.seconds;
   if (a.direction_set) config.task.directions = {a.direction};
@@ -172,11 +179,11 @@ int run_eval(const EvalArgs& a) {
   const double cpu_seconds = static_cast<double>(cpu1.tv_sec - cpu0.tv_sec) +
                              1e-9 * static_cast<double>(cpu1.tv_nsec - cpu0.tv_nsec);
 
-  // The trace names its target direction when the task has one (a component of that name).
+  // The trace names its target direction when the task has one (a component of that name): the
+  // first configured one, the direction of the traced unit.
   bool has_direction = false;
   for (const tasks::ComponentName& n : names) has_direction |= n.name == "direction_deg";
-  const double trace_direction =
-      has_direction ? component(names, result.components.front(), "direction_deg") : 0.0;
+  const double trace_direction = has_direction ? config.task.directions.front() : 0.0;
   if (!a.trace.empty() && trace.model != nullptr)
     write_trace(a.trace, trace, robot, result, config.task.control_rate,
                 has_direction ? &trace_direction : nullptr);
@@ -260,7 +267,9 @@ void register_eval(CLI::App& app, int& exit_code) {
   cmd->add_option("ROBOT", a->robot, "robot file (softevo.robot/1 JSON)")->required();
   std::vector<std::string> task_names;
   for (TaskKind k : task_kinds()) task_names.emplace_back(to_string(k));
-  cmd->add_option("--task", a->task, "the task (default: the one the controller's inputs fit)")
+  cmd->add_option("--task", a->task,
+                  "the task (default: the --config file's, else the one the controller's inputs "
+                  "fit)")
       ->check(CLI::IsMember(task_names));
   cmd->add_option("--integrator", a->integrator, "physics integrator")
       ->check(CLI::IsMember({"pneuvox", "symplectic"}));

@@ -86,6 +86,28 @@ TEST_F(CmdEval, DirectedJsonReportsFiveDirections) {
       EXPECT_TRUE(c.contains(key)) << key;
 }
 
+TEST_F(CmdEval, RotateJsonNamesItsComponents) {
+  const auto r = run_command(binary("softevo") + " eval '" + robot_.string() +
+                             "' --task rotate --seconds 0.25 --set task.rotate_travel_penalty=0.5"
+                             " --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["task"], "rotate");
+  ASSERT_EQ(j["component_names"].size(), 3u);
+  EXPECT_EQ(j["component_names"][0]["name"], "heading_change");
+  EXPECT_EQ(j["component_names"][0]["unit"], "rad");
+  ASSERT_EQ(j["components"].size(), 1u);
+  const auto& c = j["components"][0];
+  for (const char* key : {"heading_change", "travel", "travel_penalty", "fitness", "status"})
+    EXPECT_TRUE(c.contains(key)) << key << " missing in " << r.output;
+  if (j["status"] == "ok") {
+    // F = |heading change| - penalty, in the reported components.
+    EXPECT_DOUBLE_EQ(j["fitness"].get<double>(), std::fabs(c["heading_change"].get<double>()) -
+                                                     c["travel_penalty"].get<double>());
+    EXPECT_DOUBLE_EQ(c["travel_penalty"].get<double>(), 0.5 * c["travel"].get<double>());
+  }
+}
+
 // --simd picks the width of the physics passes: the same fitness bits at sse2 as at the best
 // width, the width used is reported, and an unknown width is a usage error.
 TEST_F(CmdEval, SimdWidthChangesNothingButTheReportedWidth) {

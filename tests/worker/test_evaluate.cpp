@@ -162,6 +162,27 @@ TEST(Evaluate, AblationsZeroTheirInputs) {
   EXPECT_NE(no_sens.fitness, base.fitness);
 }
 
+TEST(Evaluate, TaskInputsTheControllerLacksOrTheTaskLacks) {
+  // A directed controller on the gait task reads 0 for its direction input; the directed
+  // task's direction sensor is not fed to a controller without that input.
+  std::vector<float> first;
+  worker::EvaluateOptions opts;
+  opts.on_frame = [&](const worker::TraceFrame& f) {
+    if (f.frame == 5) first.assign(f.inputs.begin(), f.inputs.end());
+  };
+  const ControllerSpec directed = controller(false, true);
+  EXPECT_EQ(evaluate_robot(short_config(0.2), two_chamber_block(), directed, 0, opts).status,
+            EvalStatus::ok);
+  ASSERT_EQ(first.size(), 3u);
+  EXPECT_EQ(first[2], 0.0f);
+  evaluate_robot(short_config(0.2, TaskKind::directed), two_chamber_block(), directed, 3, opts);
+  EXPECT_NE(first[2], 0.0f);  // towards +20 deg
+  const EvalResult blind = evaluate_robot(short_config(0.2, TaskKind::directed),
+                                          two_chamber_block(), controller(false, false), 3, opts);
+  EXPECT_EQ(blind.status, EvalStatus::ok);
+  EXPECT_EQ(first.size(), 2u);
+}
+
 TEST(Evaluate, BodyWithoutChamberIsInvalid) {
   BodyPlan plan = two_chamber_block();
   for (int& c : plan.cells) c = c >= 11 ? 0 : c;
