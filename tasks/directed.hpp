@@ -1,4 +1,4 @@
-// The directed task (pneuvox-model.md §7.2-§7.4): walk towards each target direction of
+// The directed task (docs/model.md §7.2-§7.4): walk towards each target direction of
 // task.directions [deg], one work unit per direction, the fitnesses summed in direction order
 // (§7.4). The controller gets one input, the direction sensor (§7.3). Components per unit:
 // direction_deg [deg], distance D [cm], path_length L [cm], angle_error delta [rad] and

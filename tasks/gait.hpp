@@ -1,4 +1,4 @@
-// The gait task (pneuvox-model.md §7.1): walk along +x. One work unit, no controller input;
+// The gait task (docs/model.md §7.1): walk along +x. One work unit, no controller input;
 // fitness F = 100 x (mean x displacement of the voxels [m]), in cm. Component: distance [cm].
 #pragma once
 

@@ -1,4 +1,4 @@
-// The rotate task (pneuvox-model.md §7.6; thesis section 5.3.3 proposes in-place rotation as a
+// The rotate task (docs/model.md §7.6; thesis section 5.3.3 proposes in-place rotation as a
 // further objective): turn about +z on the spot. One work unit, no controller input.
 //
 //   F = |Theta| - w d / l

@@ -1,4 +1,4 @@
-// The Task seam: what a robot is evaluated for (pneuvox-model.md §7). One module per task
+// The Task seam: what a robot is evaluated for (docs/model.md §7). One module per task
 // (gait.cpp, directed.cpp, rotate.cpp), registered in registry.cpp. Everything that depends on
 // the task asks it:
 //   - the simulation loop (worker/evaluate.cpp) asks for the controller inputs of every frame,
@@ -33,7 +33,7 @@ struct ComponentName {
 };
 
 // The score of one work unit while it is simulated. The simulation loop calls, per control
-// frame f = 0 .. frames-1 (pneuvox-model.md §5):
+// frame f = 0 .. frames-1 (docs/model.md §5):
 //   controller_inputs  when the controller reads its inputs (step 1, before the network);
 //   observe            after the kill checks, before the physics steps of the frame (step 4);
 // and, when the frame loop ended ok, finish once on the final state.

@@ -1,4 +1,4 @@
-// The one evaluation entry (pneuvox-model.md §5). See evaluate.hpp.
+// The one evaluation entry (docs/model.md §5). See evaluate.hpp.
 #include "worker/evaluate.hpp"
 
 #include <algorithm>

@@ -2,7 +2,7 @@
 // MPI worker loop, the single-rank master, `softevo eval` / `replay` / `champions` and the
 // tests. MPI-free, HDF5-free; deterministic (same inputs -> bit-identical result).
 //
-// One evaluation is the main loop of pneuvox-model.md §5 on a built robot. Per control frame
+// One evaluation is the main loop of docs/model.md §5 on a built robot. Per control frame
 // f = 0 .. frames-1 (Appendix B item 1):
 //   1. inputs [sin, cos, task inputs, pressure sensors] (§4.1): the oscillator, then the task's
 //      inputs (tasks::UnitScore::controller_inputs, e.g. the direction sensor of §7.3), then the

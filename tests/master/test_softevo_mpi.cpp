@@ -27,9 +27,9 @@
 #include "io/archive.hpp"
 #include "master/signals.hpp"
 #include "physics/revision.hpp"
+#include "tasks/task.hpp"
 #include "tests/build_tree.hpp"
 #include "tools/softevo_mpi.hpp"
-#include "tasks/task.hpp"
 #include "worker/evaluate.hpp"
 
 extern char** environ;

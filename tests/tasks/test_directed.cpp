@@ -1,4 +1,4 @@
-// The directed task (tasks/directed.hpp, pneuvox-model.md §7.2-§7.4): components with analytic
+// The directed task (tasks/directed.hpp, docs/model.md §7.2-§7.4): components with analytic
 // paths, the direction sensor, one unit per direction and their names.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// The gait task (tasks/gait.hpp, pneuvox-model.md §7.1).
+// The gait task (tasks/gait.hpp, docs/model.md §7.1).
 #include <gtest/gtest.h>
 
 #include "tasks/gait.hpp"

@@ -1,4 +1,4 @@
-// The rotate task (tasks/rotate.hpp, pneuvox-model.md §7.6) against analytic cases: a body
+// The rotate task (tasks/rotate.hpp, docs/model.md §7.6) against analytic cases: a body
 // turned by a known angle about z gives that angle (several full turns included), a pure
 // translation gives only the travel penalty.
 #include <gtest/gtest.h>
