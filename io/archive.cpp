@@ -117,17 +117,51 @@ std::string generation_group_name(std::int64_t generation) {
   return buf;
 }
 
+const std::vector<std::string>& legacy_component_columns() {
+  static const std::vector<std::string> columns = {
+      "fitness", "distance", "path_length", "angle_error", "perpendicular_penalty", "status"};
+  return columns;
+}
+
+namespace {
+
+// The attribute "columns" of a components dataset: the names joined by commas.
+constexpr const char* kColumnsAttribute = "columns";
+
+std::string join_columns(const std::vector<std::string>& columns) {
+  std::string out;
+  for (std::size_t i = 0; i < columns.size(); ++i) out += (i ? "," : "") + columns[i];
+  return out;
+}
+
+std::vector<std::string> split_columns(const std::string& text) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t comma = text.find(',', start);
+    out.push_back(text.substr(start, comma - start));
+    if (comma == std::string::npos) return out;
+    start = comma + 1;
+  }
+}
+
+}  // namespace
+
 void GenerationRecord::check() const {
   const std::size_t n = id.size();
-  const bool same = parent1.size() == n && parent2.size() == n && species.size() == n &&
-                    status.size() == n && fitness.size() == n && voxels.size() == n &&
-                    chambers.size() == n && wall_seconds.size() == n && worker_rank.size() == n &&
-                    genome.size() == n && n_directions >= 1 &&
-                    components.size() == n * static_cast<std::size_t>(n_directions) *
-                                             static_cast<std::size_t>(kComponentCount);
+  const bool same =
+      parent1.size() == n && parent2.size() == n && species.size() == n && status.size() == n &&
+      fitness.size() == n && voxels.size() == n && chambers.size() == n &&
+      wall_seconds.size() == n && worker_rank.size() == n && genome.size() == n && units >= 1 &&
+      !component_columns.empty() &&
+      components.size() == n * static_cast<std::size_t>(units) * component_columns.size();
   if (!same)
     throw ArchiveError("generation " + std::to_string(generation) +
                        ": record columns have different lengths");
+  for (const std::string& c : component_columns)
+    if (c.empty() || c.find(',') != std::string::npos)
+      throw ArchiveError("generation " + std::to_string(generation) + ": component column '" + c +
+                         "' is empty or contains a comma");
   for (std::size_t i = 1; i < n; ++i)
     if (id[i] <= id[i - 1])
       throw ArchiveError("generation " + std::to_string(generation) +
@@ -200,8 +234,11 @@ void append_generation(const std::string& path, const RunInfo& info, const Gener
     g.write_dataset<std::int32_t>("worker_rank", {n}, record.worker_rank);
     g.write_byte_rows("genome", record.genome);
     g.write_dataset<double>("components",
-                            {n, static_cast<hsize_t>(record.n_directions), kComponentCount},
-                            record.components);
+                            {n, static_cast<hsize_t>(record.units),
+                             static_cast<hsize_t>(record.component_columns.size())},
+                            record.components)
+        .write_string_attribute(kColumnsAttribute, join_columns(record.component_columns),
+                                h5::Charset::ascii);
     g.write_attribute<double>("best", record.best);
     g.write_attribute<double>("mean", record.mean);
     g.write_attribute<double>("sd", record.sd);
@@ -308,11 +345,17 @@ GenerationRecord Archive::generation(std::int64_t gen) const {
     r.wall_seconds = g.read_dataset<double>("wall_seconds");
     r.worker_rank = g.read_dataset<std::int32_t>("worker_rank");
     r.genome = g.open_dataset("genome").read_byte_rows();
-    std::vector<hsize_t> dims;
-    r.components = g.read_dataset<double>("components", &dims);
-    if (dims.size() != 3 || dims[2] != kComponentCount)
-      throw ArchiveError(path_ + ": /" + name + "/components is not [n, n_directions, 6]");
-    r.n_directions = static_cast<int>(dims[1]);
+    const h5::Dataset components = g.open_dataset("components");
+    const std::vector<hsize_t> dims = components.dims();
+    r.components = components.read<double>();
+    r.component_columns = components.has_attribute(kColumnsAttribute)
+                              ? split_columns(components.read_string_attribute(kColumnsAttribute))
+                              : legacy_component_columns();
+    if (dims.size() != 3 || dims[2] != r.component_columns.size())
+      throw ArchiveError(path_ + ": /" + name + "/components is not [n, units, " +
+                         std::to_string(r.component_columns.size()) + "] (columns " +
+                         join_columns(r.component_columns) + ")");
+    r.units = static_cast<int>(dims[1]);
     r.best = g.read_attribute<double>("best");
     r.mean = g.read_attribute<double>("mean");
     r.sd = g.read_attribute<double>("sd");
@@ -392,7 +435,11 @@ std::uint64_t content_digest(const Archive& archive) {
     const GenerationRecord r = archive.generation(gen);
     h.i64(gen);
     h.u64(r.size());
-    h.i64(r.n_directions);
+    h.i64(r.units);
+    // Named columns are part of the content; an archive without names (the legacy six) keeps
+    // the digest it always had.
+    if (r.component_columns != legacy_component_columns())
+      for (const std::string& c : r.component_columns) h.str(c);
     for (std::size_t i = 0; i < r.size(); ++i) {
       h.i64(r.id[i]);
       h.i64(r.parent1[i]);

@@ -24,8 +24,9 @@ class File;
 }
 
 inline constexpr const char* kArchiveFormat = "softevo.run/1";
-// Per direction: fitness, distance, path_length, angle_error, perpendicular_penalty, status.
-inline constexpr int kComponentCount = 6;
+// The component columns of an archive written before the columns were named (no attribute
+// "columns" on /generations/G/components): six per work unit.
+const std::vector<std::string>& legacy_component_columns();
 // Columns of /stats: generation, best, mean, sd, species_count, evaluations_per_second.
 inline constexpr int kStatsColumns = 6;
 
@@ -68,8 +69,11 @@ struct GenerationRecord {
   std::vector<double> wall_seconds;               // [s] summed over the genome's work units
   std::vector<std::int32_t> worker_rank;          // rank that evaluated the first work unit
   std::vector<std::vector<std::uint8_t>> genome;  // evo::encode_genome bytes
-  int n_directions = 1;                           // gait: 1
-  std::vector<double> components;                 // row-major [n][n_directions][kComponentCount]
+  int units = 1;  // work units per genome (tasks::Task::units(): directed = directions)
+  // Names of the components' last axis, in order (the task's: "fitness", its named components,
+  // "status"; legacy_component_columns() for an archive that does not name them).
+  std::vector<std::string> component_columns = legacy_component_columns();
+  std::vector<double> components;  // row-major [n][units][component_columns.size()]
   // Group attributes.
   double best = 0.0;
   double mean = 0.0;

@@ -47,22 +47,6 @@ int task_inputs(const Config& config) {
 
 }  // namespace
 
-void append_component_rows(const tasks::Task& task, const std::vector<UnitFitness>& units,
-                           std::vector<double>& out) {
-  const std::vector<tasks::ComponentName> names = task.component_names();
-  for (const UnitFitness& u : units) {
-    auto value = [&](const char* name) {
-      for (std::size_t i = 0; i < names.size() && i < u.values.size(); ++i)
-        if (names[i].name == name) return u.values[i];
-      return 0.0;
-    };
-    out.insert(out.end(), {u.fitness, value("distance"), value("path_length"), value("angle_error"),
-                           value("perpendicular_penalty"), static_cast<double>(u.status)});
-  }
-}
-
-namespace {}  // namespace
-
 std::string iso8601_now() {
   const std::time_t t = std::time(nullptr);
   std::tm tm{};
@@ -249,7 +233,8 @@ RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporte
                 [&](std::size_t a, std::size_t b) { return members[a].id < members[b].id; });
       GenerationRecord rec;
       rec.generation = g;
-      rec.n_directions = task->units();
+      rec.units = task->units();
+      rec.component_columns = tasks::component_columns(*task);
       std::vector<evo::Evaluation> evaluations;
       evaluations.reserve(members.size());
       for (std::size_t i : order) {
@@ -266,7 +251,10 @@ RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporte
         rec.wall_seconds.push_back(o.wall_seconds);
         rec.worker_rank.push_back(o.worker_rank);
         rec.genome.push_back(encoded[i]);
-        append_component_rows(*task, o.components, rec.components);
+        for (const UnitFitness& u : o.components) {
+          const std::vector<double> row = tasks::component_row(u);
+          rec.components.insert(rec.components.end(), row.begin(), row.end());
+        }
         evaluations.push_back(evo::Evaluation{m.id, o.fitness, o.status != EvalStatus::ok});
       }
       const FitnessStats fs = fitness_stats(rec.fitness);

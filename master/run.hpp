@@ -19,7 +19,6 @@
 #include "io/archive.hpp"
 #include "master/progress.hpp"
 #include "master/scheduler.hpp"
-#include "tasks/task.hpp"
 
 namespace softevo::master {
 
@@ -94,12 +93,6 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
 // The loop. Creates or updates the archive; throws RunError (the archive then holds the last
 // consistent checkpoint; its state is set to "interrupted" when possible).
 RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporter& progress);
-
-// The archive's fixed component columns of `units` appended to `out` (docs/archive.md: fitness,
-// distance, path_length, angle_error, perpendicular_penalty, status per unit): the task's
-// components of these names, 0 where the task has none.
-void append_component_rows(const tasks::Task& task, const std::vector<UnitFitness>& units,
-                           std::vector<double>& out);
 
 // Helpers shared with the tools.
 std::string iso8601_now();  // "2026-11-22T05:02:53Z"

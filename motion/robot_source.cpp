@@ -165,8 +165,10 @@ ArchivedIndividual individual_at(const io::GenerationRecord& record, std::size_t
   ind.voxels = record.voxels[row];
   ind.chambers = record.chambers[row];
   ind.genome = record.genome[row];
-  ind.n_directions = record.n_directions;
-  const std::size_t per_row = static_cast<std::size_t>(record.n_directions) * io::kComponentCount;
+  ind.units = record.units;
+  ind.component_columns = record.component_columns;
+  const std::size_t per_row =
+      static_cast<std::size_t>(record.units) * record.component_columns.size();
   if (record.components.size() == per_row * record.size()) {
     ind.components.assign(
         record.components.begin() + static_cast<std::ptrdiff_t>(row * per_row),

@@ -63,9 +63,9 @@ struct ArchivedIndividual {
   std::int32_t voxels = 0;
   std::int32_t chambers = 0;
   std::vector<std::uint8_t> genome;  // encoded genome
-  int n_directions = 1;              // rows of `components` (gait: 1)
-  // Archived fitness components [n_directions][6]: fitness, distance, path_length,
-  // angle_error, perpendicular_penalty, status (docs/archive.md).
+  int units = 1;                     // rows of `components`: work units of the genome
+  // Archived fitness components [units][component_columns.size()] (docs/archive.md).
+  std::vector<std::string> component_columns;
   std::vector<double> components;
 };
 

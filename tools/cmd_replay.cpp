@@ -6,6 +6,7 @@
 // the same code path as a run: worker::evaluate per work unit of the archived config's task and
 // master::GenerationScheduler to combine the units as the task does. A difference in
 // fitness bits, status or any archived fitness component is a mismatch (exit code 1).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -17,7 +18,6 @@
 #include "common/config.hpp"
 #include "common/eval_types.hpp"
 #include "io/archive.hpp"
-#include "master/run.hpp"
 #include "master/scheduler.hpp"
 #include "motion/robot_source.hpp"
 #include "physics/revision.hpp"
@@ -72,23 +72,29 @@ Replayed replay_one(const ArchivedIndividual& ind, const tasks::Task& task, std:
                   r.outcome.fitness, ind.fitness);
     r.mismatch = buf;
   } else if (!ind.components.empty()) {
+    // By name: every component the task has and the archive recorded (an archive of an older
+    // build may lack some, e.g. direction_deg, and have others, e.g. the gait's path_length).
     const std::size_t rows = r.outcome.components.size();
-    if (rows * io::kComponentCount != ind.components.size()) {
+    const std::size_t archived_width = ind.component_columns.size();
+    if (rows * archived_width != ind.components.size()) {
       r.mismatch = "component rows " + std::to_string(rows) + " != archived " +
-                   std::to_string(ind.components.size() / io::kComponentCount);
+                   std::to_string(ind.components.size() / std::max<std::size_t>(1, archived_width));
     }
-    std::vector<double> replayed;
-    master::append_component_rows(task, r.outcome.components, replayed);
+    const std::vector<std::string> columns = tasks::component_columns(task);
     for (std::size_t d = 0; d < rows && r.mismatch.empty(); ++d) {
-      const double* row = replayed.data() + d * io::kComponentCount;
-      for (int k = 0; k < io::kComponentCount; ++k) {
-        const double archived = ind.components[d * io::kComponentCount + k];
+      const std::vector<double> row = tasks::component_row(r.outcome.components[d]);
+      for (std::size_t k = 0; k < columns.size() && r.mismatch.empty(); ++k) {
+        const auto at =
+            std::find(ind.component_columns.begin(), ind.component_columns.end(), columns[k]);
+        if (at == ind.component_columns.end()) continue;
+        const double archived =
+            ind.components[d * archived_width +
+                           static_cast<std::size_t>(at - ind.component_columns.begin())];
         if (!same_bits(row[k], archived) && !(std::isnan(row[k]) && std::isnan(archived))) {
-          char buf[160];
-          std::snprintf(buf, sizeof buf, "component %d of unit %zu: %.17g != archived %.17g", k, d,
-                        row[k], archived);
+          char buf[200];
+          std::snprintf(buf, sizeof buf, "component %s of unit %zu: %.17g != archived %.17g",
+                        columns[k].c_str(), d, row[k], archived);
           r.mismatch = buf;
-          break;
         }
       }
     }

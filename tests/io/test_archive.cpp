@@ -44,7 +44,8 @@ RunInfo sample_info() {
 GenerationRecord sample_record(std::int64_t g, int n, int ndir) {
   GenerationRecord r;
   r.generation = g;
-  r.n_directions = ndir;
+  r.units = ndir;
+  r.component_columns = {"fitness", "direction_deg", "distance", "status"};
   for (int i = 0; i < n; ++i) {
     r.id.push_back(10 * g + i);
     r.parent1.push_back(i == 0 ? -1 : i - 1);
@@ -58,7 +59,7 @@ GenerationRecord sample_record(std::int64_t g, int n, int ndir) {
     r.worker_rank.push_back(1 + i % 2);
     r.genome.push_back(
         std::vector<std::uint8_t>(static_cast<std::size_t>(5 + i), static_cast<std::uint8_t>(i)));
-    for (int d = 0; d < ndir * kComponentCount; ++d) r.components.push_back(i * 100.0 + d);
+    for (int d = 0; d < ndir * 4; ++d) r.components.push_back(i * 100.0 + d);
   }
   const FitnessStats s = fitness_stats(r.fitness);
   r.best = s.best;
@@ -101,7 +102,8 @@ TEST(Archive, RoundTripsEveryField) {
   EXPECT_EQ(g.wall_seconds, r0.wall_seconds);
   EXPECT_EQ(g.worker_rank, r0.worker_rank);
   EXPECT_EQ(g.genome, r0.genome);
-  EXPECT_EQ(g.n_directions, 5);
+  EXPECT_EQ(g.units, 5);
+  EXPECT_EQ(g.component_columns, r0.component_columns);
   EXPECT_EQ(g.components, r0.components);
   EXPECT_EQ(g.best, 1.5);
   EXPECT_EQ(g.evaluations, 20);
@@ -166,6 +168,11 @@ TEST(Archive, DigestsSeeResultsButNotTiming) {
       make("d.h5", [](RunInfo&, GenerationRecord& r, StatsRow&) { r.genome[1][0] ^= 1; });
   EXPECT_EQ(base.first, genome.first);  // fitness digest: only (generation, id, status, fitness)
   EXPECT_NE(base.second, genome.second);
+  const auto names = make("e.h5", [](RunInfo&, GenerationRecord& r, StatsRow&) {
+    r.component_columns[1] = "heading_change";
+  });
+  EXPECT_EQ(base.first, names.first);
+  EXPECT_NE(base.second, names.second);  // the component names are content
 }
 
 TEST(Archive, RejectsForeignAndMissingFiles) {
@@ -190,6 +197,47 @@ TEST(Archive, MissingPhysicsRevisionReadsAsRevisionOne) {
   ASSERT_GE(H5Adelete(file, "physics_revision"), 0);
   H5Fclose(file);
   EXPECT_EQ(Archive(p).info().physics_revision, 1);
+}
+
+// Archives written before the components were named hold six columns per unit without the
+// attribute "columns": they read as the legacy names, and a malformed one is refused.
+TEST(Archive, ComponentsWithoutNamesReadAsTheLegacySix) {
+  TmpDir d;
+  const std::string p = d.path + "/old.h5";
+  RunInfo info = sample_info();
+  create_archive(p, info, "cfg");
+  GenerationRecord r = sample_record(0, 3, 2);
+  r.component_columns = legacy_component_columns();
+  r.components.clear();
+  for (int k = 0; k < 3 * 2 * 6; ++k) r.components.push_back(0.5 * k);
+  info.generations_done = 1;
+  append_generation(p, info, r, StatsRow{0, r.best, r.mean, r.sd, 2, 1.0}, Checkpoint{1, {7}});
+  const std::uint64_t named_digest = content_digest(Archive(p));
+  const hid_t file = H5Fopen(p.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  ASSERT_GE(H5Adelete_by_name(file, "/generations/000000/components", "columns", H5P_DEFAULT), 0);
+  H5Fclose(file);
+  const GenerationRecord g = Archive(p).generation(0);
+  EXPECT_EQ(g.component_columns, legacy_component_columns());
+  EXPECT_EQ(g.units, 2);
+  EXPECT_EQ(g.components, r.components);
+  // The legacy layout's digest does not depend on whether its names were written.
+  EXPECT_EQ(content_digest(Archive(p)), named_digest);
+
+  const std::string q = d.path + "/odd.h5";
+  create_archive(q, info, "cfg");
+  append_generation(q, info, sample_record(0, 3, 2), StatsRow{0, 0, 0, 0, 2, 1.0},
+                    Checkpoint{1, {7}});
+  const hid_t odd = H5Fopen(q.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  ASSERT_GE(odd, 0);
+  ASSERT_GE(H5Adelete_by_name(odd, "/generations/000000/components", "columns", H5P_DEFAULT), 0);
+  H5Fclose(odd);
+  try {
+    Archive(q).generation(0);  // four columns without names: not the legacy layout
+    FAIL() << "expected an error";
+  } catch (const ArchiveError& e) {
+    EXPECT_NE(std::string(e.what()).find("components"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Archive, StaleTemporaryCopiesOfDeadProcessesAreRemoved) {

@@ -262,7 +262,8 @@ TEST(SoftevoMpi, TinyRunWritesValidArchive) {
   for (std::int64_t g : a.generations()) {
     const GenerationRecord r = a.generation(g);
     EXPECT_GE(r.size(), 6u);  // pop_size, plus possible excess immigrants (§8.1 step 2)
-    EXPECT_EQ(r.n_directions, 1);
+    EXPECT_EQ(r.units, 1);
+    EXPECT_EQ(r.component_columns, (std::vector<std::string>{"fitness", "distance", "status"}));
     EXPECT_EQ(r.evaluations, static_cast<std::int64_t>(r.size()));
     for (std::size_t i = 0; i < r.size(); ++i) {
       EXPECT_FALSE(r.genome[i].empty());
@@ -318,7 +319,7 @@ TEST(SoftevoMpi, IdenticalArchivesForAnyRankCount) {
     }
     if (world_rank() == 0 && std::string(kind) == "directed") {  // NOLINT
       const GenerationRecord r = Archive(dir.file("directed-np1.h5")).generation(0);
-      EXPECT_EQ(r.n_directions, 5);
+      EXPECT_EQ(r.units, 5);
       EXPECT_EQ(r.evaluations, static_cast<std::int64_t>(5 * r.size()));
     }
   }
