@@ -1,4 +1,4 @@
-// Lane traits of the 4-lane step passes (physics/step_kernels.hpp), for the translation units
+// Lane traits of the 4-lane step passes (contract: physics/lanes.hpp), for the translation units
 // built with AVX2 (step_avx2.cpp) and with AVX-512VL (step_avx512.cpp: the same 256-bit
 // operations, encoded with 32 vector registers instead of 16). Internal to physics/.
 #pragma once
@@ -21,17 +21,17 @@ struct LanesAvx2 {
   static D sqrt(D x) { return _mm256_sqrt_pd(x); }
   static int bits(M m) { return _mm256_movemask_pd(reinterpret_cast<__m256d>(m)); }
   static void to_floats(D x, float* out) { _mm_storeu_ps(out, _mm256_cvtpd_ps(x)); }
-  // Lane k of (x, y, z) as the floats (x_k, y_k, z_k, 0), k = 0..3 (round to nearest).
-  static void float_rows(D x, D y, D z, __m128 (&rows)[4]) {
+  // Lane k of (x, y, z) as the floats (x_k, y_k, z_k, 0) at out[k], k = 0..3 (round to nearest).
+  static void store_float_rows(D x, D y, D z, float* const* out) {
     __m128 r0 = _mm256_cvtpd_ps(x), r1 = _mm256_cvtpd_ps(y), r2 = _mm256_cvtpd_ps(z);
     __m128 r3 = _mm_setzero_ps();
     _MM_TRANSPOSE4_PS(r0, r1, r2, r3);
-    rows[0] = r0;
-    rows[1] = r1;
-    rows[2] = r2;
-    rows[3] = r3;
+    _mm_storeu_ps(out[0], r0);
+    _mm_storeu_ps(out[1], r1);
+    _mm_storeu_ps(out[2], r2);
+    _mm_storeu_ps(out[3], r3);
   }
-  // Transposing record loads / stores (see step_kernels.hpp). A Vec3 record is read and written
+  // Transposing record loads / stores (see physics/lanes.hpp). A Vec3 record is read and written
   // with a 3-lane mask, so nothing beyond it is touched.
   static __m256i mask3() { return _mm256_setr_epi64x(-1, -1, -1, 0); }
   static void gather3(const double* const* p, D& x, D& y, D& z) {

@@ -32,18 +32,25 @@ enum class Integrator : std::uint8_t {
 };
 
 // SIMD width of the step passes (physics/step_kernels.hpp). Every width gives bit-identical
-// results (same IEEE operations per lane); only the speed differs. `best` = the widest this CPU
-// runs (resolved by build_model; Model::simd never holds `best`).
+// results (same IEEE operations per lane, on x86-64 and AArch64 alike); only the speed differs.
+// `best` = the widest this CPU runs (resolved by build_model; Model::simd never holds `best`).
+// A build contains the scalar passes and those of its architecture (simd_widths()).
 enum class Simd : std::uint8_t {
   best = 0,
   sse2 = 1,    // 2 lanes, every x86-64 CPU
-  avx2 = 2,    // 4 lanes
-  avx512 = 3,  // 4 lanes, AVX-512VL encoding (32 vector registers)
+  avx2 = 2,    // 4 lanes, x86-64
+  avx512 = 3,  // 4 lanes, x86-64, AVX-512VL encoding (32 vector registers)
+  scalar = 4,  // 1 lane, any CPU: no instruction-set extension
+  neon = 5,    // 2 lanes, every AArch64 CPU
 };
 const char* to_string(Simd simd);
-// The width named by to_string (best, sse2, avx2, avx512); nullopt for any other name.
+// The width named by to_string (best, sse2, avx2, avx512, scalar, neon), also one this build does
+// not contain; nullopt for any other name.
 std::optional<Simd> parse_simd(std::string_view name);
-// Every name parse_simd accepts, in enum order (the choices of the CLIs' --simd options).
+// The widths this build contains (never `best`), narrowest first; each runs where
+// simd_supported() says so.
+std::vector<Simd> simd_widths();
+// "best" and the names of simd_widths(): the choices of the CLIs' --simd options.
 std::vector<std::string> simd_names();
 // True if this build contains the passes for `simd` and this CPU (and OS) can run them.
 bool simd_supported(Simd simd);
@@ -98,7 +105,7 @@ struct Model {
   double dt = 0.0;             // = dt_f: §2.14 recommended step x dt_fraction [s]
   bool floor = true;           // floor contact at z = 0 (voxel centres, §2.8)
   bool self_collision = true;  // §2.10
-  Simd simd = Simd::sse2;      // SIMD width of the step passes (never `best`)
+  Simd simd = Simd::scalar;    // SIMD width of the step passes (never `best`)
 
   // ---- voxels (index = voxel id, insertion order x outer, y, z inner; §2.1, §5 step 4) -----
   int voxel_count = 0;

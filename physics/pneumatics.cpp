@@ -1,10 +1,9 @@
 // Pneumatic chambers, conduits and valves (pneuvox-model.md §3). See pneumatics.hpp.
 #include "physics/pneumatics.hpp"
 
-#include <xmmintrin.h>
-
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -186,14 +185,18 @@ void pneumatics_update(const PneumaticsModel& pm, PneumaticsState& ps, Pneumatic
   }
   // Each wall voxel's force: the float sum, from 0, of its triangles' shares in triangle order
   // (chamber by chamber, mesh order: the order of the reference's additions). Summed per slot, so
-  // that the slots' sums are independent chains.
+  // that the slots' sums are independent chains; the four floats of a share are added as one
+  // vector (element-wise IEEE float additions: the bits of four scalar sums, on any target).
+  using Float4 = float __attribute__((vector_size(16)));
+  static_assert(sizeof(Float4) == sizeof(scratch.triangle_force[0]));
   for (std::size_t s = 0; s < pm.wall_voxel.size(); ++s) {
-    __m128 sum = _mm_setzero_ps();
-    for (int k = pm.slot_triangle_begin[s]; k < pm.slot_triangle_begin[s + 1]; ++k)
-      sum = _mm_add_ps(sum, _mm_loadu_ps(scratch.triangle_force[pm.slot_triangles[k]].data()));
-    alignas(16) float f[4];
-    _mm_store_ps(f, sum);
-    external_force[pm.wall_voxel[s]] = Vec3(f[0], f[1], f[2]);
+    Float4 sum{};
+    for (int k = pm.slot_triangle_begin[s]; k < pm.slot_triangle_begin[s + 1]; ++k) {
+      Float4 share;
+      std::memcpy(&share, scratch.triangle_force[pm.slot_triangles[k]].data(), sizeof share);
+      sum += share;
+    }
+    external_force[pm.wall_voxel[s]] = Vec3(sum[0], sum[1], sum[2]);
   }
 
   // 4. Conduits in creation order: low-pass the opening, then transfer gas (§3.5).

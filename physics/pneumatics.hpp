@@ -74,7 +74,7 @@ struct PneumaticsModel {
   BiquadCoeffs filter;          // one section of the valve low-pass (f_c = valve_cutoff at 1/dt)
   // SIMD width of the mesh passes (volumes, pressure forces): the model's, never `best`.
   // Results do not depend on it.
-  Simd simd = Simd::sse2;
+  Simd simd = Simd::scalar;
 
   // External reservoir pressure of conduit k (even = inlet/supply, odd = outlet/ambient) [bar].
   float reservoir_bar(int conduit) const { return (conduit & 1) == 0 ? supply_bar : ambient_bar; }

@@ -33,16 +33,23 @@ struct StepKernels {
                           std::span<const Vec3> positions, PneumaticsScratch&);
 };
 
-// The table of a width (`best` resolved to the widest this CPU runs; an unsupported width gives
-// the SSE2 table, but Model and PneumaticsModel only ever hold supported widths).
+// The table of a width (`best` resolved to the widest this CPU runs; a width this build does not
+// contain gives the scalar table, but Model and PneumaticsModel only ever hold supported widths).
 const StepKernels& step_kernels(Simd simd);
 
+// One per step_<ISA>.cpp of this build (physics/CMakeLists.txt).
+const StepKernels& step_kernels_scalar();
+#if defined(SOFTEVO_HAVE_SSE2_KERNELS)
 const StepKernels& step_kernels_sse2();
+#endif
 #if defined(SOFTEVO_HAVE_AVX2_KERNELS)
 const StepKernels& step_kernels_avx2();
 #endif
 #if defined(SOFTEVO_HAVE_AVX512_KERNELS)
 const StepKernels& step_kernels_avx512();
+#endif
+#if defined(SOFTEVO_HAVE_NEON_KERNELS)
+const StepKernels& step_kernels_neon();
 #endif
 
 }  // namespace softevo::physics

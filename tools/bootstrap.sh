@@ -8,6 +8,8 @@
 #                                   without GoogleTest, libpng and the system's Eigen, CLI11 and
 #                                   nlohmann-json (downloaded instead), and the core libraries
 #                                   without MPI and HDF5
+#   tools/bootstrap.sh aarch64      the same bits on AArch64: the core cross-compiled with Debian's
+#                                   g++-aarch64-linux-gnu, its bit tests run under qemu-user
 # Idempotent: packages already installed are not touched, builds are incremental.
 set -euo pipefail
 
@@ -134,8 +136,70 @@ case "${1:-}" in
       -DCMAKE_DISABLE_FIND_PACKAGE_HDF5=ON -DSOFTEVO_REQUIRE_TESTS=ON
     build_timed "$ROOT/build-minimal-core" common physics evo worker
     ;;
+  aarch64)
+    # The core (common, physics, evo, worker) cross-compiled for AArch64 (toolchain:
+    # cmake/aarch64-linux-gnu.cmake) and its bit tests run under user-mode qemu: the golden
+    # hashes at the scalar and NEON widths, the reproducible math, the floor, the C library's
+    # functions of the evaluation and short champion evaluations, all against the x86-64 bits.
+    PACKAGES+=(g++-aarch64-linux-gnu libc6-arm64-cross qemu-user-static)
+    install_dependencies
+    toolchain="$ROOT/cmake/aarch64-linux-gnu.cmake"
+    gtest="$ROOT/build-aarch64-gtest"
+    if [ ! -f "$gtest/install/lib/cmake/GTest/GTestConfig.cmake" ]; then
+      # GoogleTest for AArch64, from the sources libgtest-dev ships
+      t0=$SECONDS
+      cmake -S /usr/src/googletest -B "$gtest/build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+        -DCMAKE_TOOLCHAIN_FILE="$toolchain" -DBUILD_GMOCK=OFF \
+        -DCMAKE_INSTALL_PREFIX="$gtest/install" >/dev/null
+      cmake --build "$gtest/build" -j"$JOBS" >/dev/null
+      cmake --install "$gtest/build" >/dev/null
+      echo "== built GoogleTest for AArch64 in $((SECONDS - t0)) s"
+    fi
+    configure_timed "$ROOT/build-aarch64" -DCMAKE_TOOLCHAIN_FILE="$toolchain" \
+      -DGTest_DIR="$gtest/install/lib/cmake/GTest" -DSOFTEVO_REQUIRE_TESTS=ON
+    build_timed "$ROOT/build-aarch64" physics_golden_hash test_physics_determinism \
+      test_reproducible_math test_floor test_libm_bits test_champion_bits
+    # No fused multiply-add anywhere in the physics (it would round differently from x86-64):
+    # -ffp-contract=off must keep GCC from fusing the NEON lanes' products and sums.
+    fused=$(aarch64-linux-gnu-objdump -d "$ROOT"/build-aarch64/physics/CMakeFiles/physics.dir/*.o |
+      grep -cE '[[:space:]](fmla|fmls|fmadd|fmsub|fnmadd|fnmsub|fnmla|fnmls)[[:space:]]' || true)
+    echo "== fused multiply-add instructions in the AArch64 physics objects: $fused"
+    [ "$fused" -eq 0 ]
+    # run_aarch64 LOG EXE [ARGS...]: EXE under qemu, its output to LOG; returns its exit code.
+    run_aarch64() {
+      local log=$1 t0=$SECONDS rc=0
+      shift
+      (cd "$ROOT" && SOFTEVO_SOURCE_DIR="$ROOT" qemu-aarch64-static -L /usr/aarch64-linux-gnu "$@") \
+        >"$log" 2>&1 || rc=$?
+      echo "== $(basename "$1") ${2:-} under qemu-aarch64: $((SECONDS - t0)) s, exit $rc" >>"$log"
+      return $rc
+    }
+    tests="$ROOT/build-aarch64/tests"
+    logs="$ROOT/build-aarch64/qemu-logs"
+    mkdir -p "$logs"
+    # Two streams of about equal length, one per core (qemu runs one thread per test).
+    (run_aarch64 "$logs/1" "$tests/test_physics_determinism" &&
+      run_aarch64 "$logs/2" "$tests/test_reproducible_math" &&
+      run_aarch64 "$logs/3" "$tests/test_floor") &
+    first=$!
+    (run_aarch64 "$logs/4" "$tests/test_champion_bits" &&
+      run_aarch64 "$logs/5" "$tests/test_libm_bits" --gtest_filter=-LibmBits.TanhOfFloats) &
+    second=$!
+    # tanhf (worker/controller.cpp) is known to differ on AArch64 (test_libm_bits.cpp): shown,
+    # not fatal, until the controller uses a reproducible tanh.
+    tanh_rc=0
+    run_aarch64 "$logs/6" "$tests/test_libm_bits" --gtest_filter=LibmBits.TanhOfFloats || tanh_rc=$?
+    rc=0
+    wait $first || rc=1
+    wait $second || rc=1
+    for log in "$logs"/[1-6]; do grep -vE '^\[ RUN|^$' "$log" || true; done
+    if [ $tanh_rc -ne 0 ]; then
+      echo "== KNOWN DIFFERENCE on AArch64: tanhf of the controller (see test_libm_bits.cpp)"
+    fi
+    [ $rc -eq 0 ]
+    ;;
   *)
-    echo "usage: $0 quickstart|test|sanitize|clang|minimal" >&2
+    echo "usage: $0 quickstart|test|sanitize|clang|minimal|aarch64" >&2
     exit 2
     ;;
 esac

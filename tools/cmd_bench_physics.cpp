@@ -75,18 +75,16 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--scene", *only, "only scenes whose name contains this");
   auto simd_name = std::make_shared<std::string>("best");
-  cmd->add_option("--simd", *simd_name,
-                  "SIMD width of the step passes: best (default), sse2, avx2, avx512 or all "
-                  "(results are bit-identical; only the speed differs)")
-      ->check(CLI::IsMember([] {
-        std::vector<std::string> names = physics::simd_names();
-        names.emplace_back("all");
-        return names;
-      }()));
+  std::vector<std::string> simd_choices = physics::simd_names();
+  simd_choices.emplace_back("all");
+  std::string simd_help = "SIMD width of the step passes:";
+  for (const std::string& name : simd_choices) simd_help += " " + name;
+  simd_help += " (default best; results are bit-identical, only the speed differs)";
+  cmd->add_option("--simd", *simd_name, simd_help)->check(CLI::IsMember(simd_choices));
   cmd->callback([&exit_code, json, steps, runs, only, simd_name] {
     std::vector<physics::Simd> widths;
     if (*simd_name == "all") {
-      for (physics::Simd s : {physics::Simd::sse2, physics::Simd::avx2, physics::Simd::avx512})
+      for (physics::Simd s : physics::simd_widths())
         if (physics::simd_supported(s)) widths.push_back(s);
     } else {
       // the name is checked by IsMember

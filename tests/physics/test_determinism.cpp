@@ -5,7 +5,9 @@
 #include <array>
 #include <cinttypes>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "physics/observables.hpp"
 #include "tests/physics/golden_scene.hpp"
@@ -66,10 +68,11 @@ TEST(Determinism, GoldenHashInProcess) {
 }
 
 // Every SIMD width of the step passes this build and CPU can run gives the same bits (the
-// lanes perform the scalar path's operations; only the grouping of links and voxels differs).
+// lanes perform the scalar path's operations; only the grouping of links and voxels differs):
+// the 1-lane passes of every build, SSE2 / AVX2 / AVX-512 on x86-64, NEON on AArch64.
 TEST(Determinism, GoldenHashAtEverySimdWidth) {
   int widths = 0;
-  for (Simd simd : {Simd::sse2, Simd::avx2, Simd::avx512}) {
+  for (Simd simd : simd_widths()) {
     if (!simd_supported(simd)) {
       std::printf("SIMD width %s: not supported here, not checked\n", to_string(simd));
       continue;
@@ -84,14 +87,15 @@ TEST(Determinism, GoldenHashAtEverySimdWidth) {
     EXPECT_EQ(hex(golden::run_scene("symplectic", simd, golden::Motion::tumbling)),
               hex(kGoldenTumblingSymplectic))
         << to_string(simd);
+    std::printf("SIMD width %s: golden hashes checked\n", to_string(simd));
   }
-  EXPECT_GE(widths, 1);
+  EXPECT_GE(widths, 2);  // the 1-lane passes and those of this architecture
   std::printf("best SIMD width here: %s\n", to_string(best_simd()));
 }
 
 // A refused (diverged) step leaves the link state its link pass computed, at every width.
 TEST(Determinism, DivergedStepKeepsItsLinkPassState) {
-  for (Simd simd : {Simd::sse2, Simd::avx2, Simd::avx512}) {
+  for (Simd simd : simd_widths()) {
     if (!simd_supported(simd)) continue;
     const std::uint64_t hp = golden::run_scene("pneuvox", simd, golden::Motion::tumbling, true);
     const std::uint64_t hs = golden::run_scene("symplectic", simd, golden::Motion::tumbling, true);
@@ -108,13 +112,41 @@ TEST(Determinism, SimdWidthIsResolvedAtBuild) {
   EXPECT_EQ(best.simd, best_simd());
   EXPECT_NE(best.simd, Simd::best);
   BuildOptions options;
-  options.simd = Simd::sse2;
-  EXPECT_EQ(build_model(solid_block(2, 2, 2, 1e5), PhysicsConfig{}, options).simd, Simd::sse2);
+  options.simd = Simd::scalar;
+  EXPECT_EQ(build_model(solid_block(2, 2, 2, 1e5), PhysicsConfig{}, options).simd, Simd::scalar);
+}
+
+// The widths of this build: the 1-lane passes first, every one named by simd_names(), and a width
+// of another architecture is known by name but not supported.
+TEST(Determinism, SimdWidthsOfThisBuild) {
+  const std::vector<Simd> widths = simd_widths();
+  ASSERT_FALSE(widths.empty());
+  EXPECT_EQ(widths.front(), Simd::scalar);
+  const std::vector<std::string> names = simd_names();
+  ASSERT_EQ(names.size(), widths.size() + 1);
+  EXPECT_EQ(names.front(), "best");
+  for (std::size_t i = 0; i < widths.size(); ++i) EXPECT_EQ(names[i + 1], to_string(widths[i]));
+#if defined(__x86_64__)
+  EXPECT_TRUE(simd_supported(Simd::sse2));
+  EXPECT_FALSE(simd_supported(Simd::neon));
+#elif defined(__aarch64__)
+  EXPECT_TRUE(simd_supported(Simd::neon));
+  EXPECT_FALSE(simd_supported(Simd::sse2));
+  EXPECT_EQ(best_simd(), Simd::neon);
+#endif
+  BuildOptions options;
+  for (Simd simd : {Simd::sse2, Simd::avx2, Simd::avx512, Simd::scalar, Simd::neon}) {
+    if (simd_supported(simd)) continue;
+    options.simd = simd;
+    EXPECT_THROW(build_model(solid_block(2, 2, 2, 1e5), PhysicsConfig{}, options),
+                 std::invalid_argument)
+        << to_string(simd);
+  }
 }
 
 // Width names (command lines, test helpers) round-trip through to_string / parse_simd.
 TEST(Determinism, SimdNamesRoundTrip) {
-  for (Simd simd : {Simd::best, Simd::sse2, Simd::avx2, Simd::avx512})
+  for (Simd simd : {Simd::best, Simd::sse2, Simd::avx2, Simd::avx512, Simd::scalar, Simd::neon})
     EXPECT_EQ(parse_simd(to_string(simd)), simd) << to_string(simd);
   EXPECT_FALSE(parse_simd("avx"));
   EXPECT_FALSE(parse_simd("AVX2"));

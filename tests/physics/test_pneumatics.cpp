@@ -312,7 +312,7 @@ TEST(Pneumatics, MeshPassesGiveTheReferenceBitsAtEverySimdWidth) {
     }
   }
   int widths = 0;
-  for (Simd simd : {Simd::sse2, Simd::avx2, Simd::avx512}) {
+  for (Simd simd : simd_widths()) {
     if (!simd_supported(simd)) continue;
     ++widths;
     pm.simd = simd;
@@ -332,7 +332,7 @@ TEST(Pneumatics, MeshPassesGiveTheReferenceBitsAtEverySimdWidth) {
     }
     EXPECT_GT(largest, 1.0) << "forces of a 0.15 bar gauge pressure on 1 cm^2 faces [N]";
   }
-  EXPECT_GE(widths, 1);
+  EXPECT_GE(widths, 2);  // the 1-lane passes and those of this architecture
 }
 
 TEST(Pneumatics, SensorNormalisation) {

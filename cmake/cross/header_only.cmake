@@ -1,0 +1,20 @@
+# softevo_cross_header_library(TARGET t HEADERS dir [DEFINITIONS ...]): the INTERFACE target `t`
+# over the host's header directory /usr/include/<dir> alone, seen through a directory of the
+# build tree that holds only a link to it (for the cross toolchain cmake/aarch64-linux-gnu.cmake).
+function(softevo_cross_header_library)
+  cmake_parse_arguments(H "" "TARGET;HEADERS" "DEFINITIONS" ${ARGN})
+  if(TARGET ${H_TARGET})
+    return()
+  endif()
+  if(NOT EXISTS /usr/include/${H_HEADERS})
+    message(FATAL_ERROR "/usr/include/${H_HEADERS} not found: install the host's Debian package")
+  endif()
+  set(dir ${CMAKE_BINARY_DIR}/cross-headers)
+  file(MAKE_DIRECTORY ${dir})
+  if(NOT EXISTS ${dir}/${H_HEADERS})
+    file(CREATE_LINK /usr/include/${H_HEADERS} ${dir}/${H_HEADERS} SYMBOLIC)
+  endif()
+  add_library(${H_TARGET} INTERFACE IMPORTED GLOBAL)
+  target_include_directories(${H_TARGET} SYSTEM INTERFACE ${dir})
+  target_compile_definitions(${H_TARGET} INTERFACE ${H_DEFINITIONS})
+endfunction()

@@ -1,0 +1,409 @@
+// The link pass (§2.3-2.6) W links at a time: links in small-angle and in large-angle mode in
+// separate groups, one link per lane; every lane performs link_scalar's IEEE operations in the
+// same order (physics/link_scalar.hpp). Internal to physics/ (see physics/lanes.hpp).
+//
+// Memory layout the groups rely on: link ids run axis by axis (Model), so the full groups of a
+// link pass are consecutive ids; the per-link state that the groups read and write (mode and
+// velocity flags, strains, pos2 / angle vectors by component), the link damping multipliers and
+// the constants by member (Model::link_const_members) are then plain vector loads and stores.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstring>
+
+#include "physics/lane_math.hpp"
+#include "physics/lanes.hpp"
+#include "physics/link_mode.hpp"
+#include "physics/link_scalar.hpp"
+#include "physics/model.hpp"
+#include "physics/state.hpp"
+#include "physics/step.hpp"
+
+namespace softevo::physics {
+namespace {
+
+// The float constants of W links / voxels as double lanes (exact), indexed by member.
+template <class L>
+struct LinkConstL {
+  DV<L> e_area, area, a2, b1, b2, b3, sq_a1, sq_a2xip, sq_b1, sq_b2xfmp, sq_b3xip;
+};
+template <class L, bool kContig>
+[[gnu::always_inline]] inline LinkConstL<L> gather_link_const(const Model& m, const int* id) {
+  static_assert(offsetof(LinkConst, e_area) == 0 && offsetof(LinkConst, sq_b3xip) == 40);
+  DV<L> d[11];
+  if constexpr (kContig) {  // by member, already doubles (Model::link_const_members)
+    for (int j = 0; j < 11; ++j) d[j] = load_lanes<L>(&m.link_const_members[j][id[0]]);
+  } else {
+    const float* p[L::W];
+    for (int k = 0; k < L::W; ++k) p[k] = &m.link_const[id[k]].e_area;
+    DV<L> all[12];
+    gather_f12<L>(p, all);
+    for (int j = 0; j < 11; ++j) d[j] = all[j];
+  }
+  return {d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8], d[9], d[10]};
+}
+
+// §2.2 permutations on lanes (to_x_c / from_x_c, as the scalar to_x / from_x)
+template <Axis A, class L>
+[[gnu::always_inline]] inline VL<L> to_x_lanes(DV<L> x, DV<L> y, DV<L> z) {
+  VL<L> r;
+  to_x_c<A>(x, y, z, r.x, r.y, r.z);
+  return r;
+}
+template <Axis A, class L>
+[[gnu::always_inline]] inline QL<L> to_x_lanes(const QL<L>& q) {
+  QL<L> r;
+  r.w = q.w;
+  to_x_c<A>(q.x, q.y, q.z, r.x, r.y, r.z);
+  return r;
+}
+template <Axis A, class L>
+[[gnu::always_inline]] inline VL<L> from_x_lanes(const VL<L>& v) {
+  VL<L> r;
+  from_x_c<A>(v.x, v.y, v.z, r.x, r.y, r.z);
+  return r;
+}
+
+// Links ids[0..W) of axis A, all in the same mode at their last update: small-angle mode
+// (kLarge false) or large-angle mode (kLarge true), the caller's choice. With kContig the ids are
+// consecutive (ids[k] = ids[0] + k), so the per-link flags and strains are read and written as
+// runs. Each lane whose link stays in that mode (§2.3 hysteresis) is updated like link_scalar
+// (or link_scalar_state_only without forces), its strain > 100 ORed into `diverged`; returns those
+// lanes (bit k = lane k). Lanes that switch mode are left unchanged for the caller's link_scalar.
+// A link may fill several lanes (padding of a partial group): all loads precede all stores, so
+// its lanes compute and store the same values.
+// Invariant used for small-angle links: a link whose last update was in small-angle mode has
+// angle1v = (+0, +0, +0) stored (every small-angle update stores rotvec(identity) = 0, and so
+// does initial_state), so the old angle1v is the constant zero and the new one need not be
+// stored again. The mode flag of a lane that stays in its mode need not be stored either.
+template <class L, Axis A, LinkPass K, bool kLarge, bool kContig>
+[[gnu::always_inline]] inline int link_group(const Model& m, State& st, Scratch& sc, const int* ids,
+                                             bool& diverged) {
+  constexpr int W = L::W;
+  using D = DV<L>;
+  using M = MV<L>;
+  int n[W], p[W];
+  for (int k = 0; k < W; ++k) {
+    n[k] = m.link_neg[ids[k]];
+    p[k] = m.link_pos[ids[k]];
+  }
+  // §2.3 orient link (see orient_link)
+  const VL<L> pn = gather<L>(st.pos, n);
+  const VL<L> pp = gather<L>(st.pos, p);
+  const VL<L> d0 = to_x_lanes<A, L>(pp.x - pn.x, pp.y - pn.y, pp.z - pn.z);
+  const QL<L> qn = to_x_lanes<A, L>(gather<L>(st.orient, n));
+  const QL<L> r{qn.w, -qn.x, -qn.y, -qn.z};  // conj
+  VL<L> d;
+  rotate_c(r.w, r.x, r.y, r.z, d0.x, d0.y, d0.z, d.x, d.y, d.z);
+  const QL<L> qp = to_x_lanes<A, L>(gather<L>(st.orient, p));
+  QL<L> q2;
+  mul_c(r.w, r.x, r.y, r.z, qp.w, qp.x, qp.y, qp.z, q2.w, q2.x, q2.y, q2.z);
+  const D l = splat<L>(m.rest_length);
+  // §2.3 mode test (see orient_link), from products where they decide it (link_mode.hpp)
+  const auto mode =
+      link_mode::test_without_division<kLarge, LaneMathOps<L>>(d.x, d.y, d.z, m.inv_rest_length);
+  int done;  // lanes that stay in their mode
+  if (L::bits(reinterpret_cast<M>(mode.decided)) == kAllLanes<L>) [[likely]] {
+    done = ~L::bits(reinterpret_cast<M>(mode.switches)) & kAllLanes<L>;
+  } else {
+    const D turn = L::round_to_float((abs_lanes<L>(d.z) + abs_lanes<L>(d.y)) / d.x);
+    const D ext = L::round_to_float(abs_lanes<L>(1.0 - d.x / l));
+    if constexpr (kLarge) {
+      done = ~L::bits((turn < splat<L>(kSmallBend)) & (ext < splat<L>(kSmallExt))) & kAllLanes<L>;
+    } else {
+      done = ~L::bits((turn > splat<L>(kHysteresis * kSmallBend)) |
+                      (ext > splat<L>(kHysteresis * kSmallExt))) &
+             kAllLanes<L>;
+    }
+  }
+  if (!done) return 0;
+
+  const D zero = splat<L>(0.0);
+  VL<L> pos2, a1;
+  QL<L> q1;  // large-angle mode: rotation of the link frame onto +X
+  if constexpr (kLarge) {
+    const D len = L::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);  // |d|
+    frame_to_pos_x_lanes<L>(d, len, q1, a1);
+    QL<L> q12;
+    mul_c(q1.w, q1.x, q1.y, q1.z, q2.w, q2.x, q2.y, q2.z, q12.w, q12.x, q12.y, q12.z);
+    q2 = q12;
+    pos2 = {len - l, zero, zero};
+  } else {
+    pos2 = {d.x - l, d.y, d.z};
+    a1 = {zero, zero, zero};  // rotvec(identity)
+  }
+  const VL<L> a2 = rotvec_lanes<L>(q2);
+  const D strain = L::round_to_float(pos2.x / l);
+
+  int valid = 0;  // lanes whose local velocity was valid (the forces pass reads it)
+  if constexpr (computes_forces(K)) {
+    if (L::bits(strain > splat<L>(kStrainDiverged)) & done) diverged = true;
+    const LinkConstL<L> c = gather_link_const<L, kContig>(m, ids);
+    // §2.4 (see link_scalar)
+    const D stress = L::round_to_float(c.e_area * strain);
+    const D b1 = c.b1;
+    const D b2 = c.b2;
+    const D b3 = c.b3;
+    const D a2c = c.a2;
+    VL<L> fn{L::round_to_float(stress * c.area), b1 * pos2.y - b2 * (a1.z + a2.z),
+             b1 * pos2.z + b2 * (a1.y + a2.y)};
+    VL<L> fp{-fn.x, -fn.y, -fn.z};
+    VL<L> mn{a2c * (a2.x - a1.x), -b2 * pos2.z - b3 * (2.0 * a1.y + a2.y),
+             b2 * pos2.y - b3 * (2.0 * a1.z + a2.z)};
+    VL<L> mp{a2c * (a1.x - a2.x), -b2 * pos2.z - b3 * (a1.y + 2.0 * a2.y),
+             b2 * pos2.y - b3 * (a1.z + 2.0 * a2.z)};
+
+    // §2.5 damping in the lanes with a valid local velocity (none switched mode)
+    if constexpr (kContig) {
+      valid = nonzero_flags<L>(&st.link_vel_valid[ids[0]]);
+    } else {
+      for (int k = 0; k < W; ++k) valid |= st.link_vel_valid[ids[k]] != 0 ? 1 << k : 0;
+    }
+    if (valid) {
+      const VL<L> old_pos2 = gather<L, kContig>(st.link_pos2, ids);
+      VL<L> old_a1{zero, zero, zero};  // small-angle links: see the invariant above
+      if constexpr (kLarge) old_a1 = gather<L, kContig>(st.link_angle1v, ids);
+      const VL<L> old_a2 = gather<L, kContig>(st.link_angle2v, ids);
+      const D dpx = 0.5 * (pos2.x - old_pos2.x), dpy = 0.5 * (pos2.y - old_pos2.y),
+              dpz = 0.5 * (pos2.z - old_pos2.z);
+      const D d1x = 0.5 * (a1.x - old_a1.x), d1y = 0.5 * (a1.y - old_a1.y),
+              d1z = 0.5 * (a1.z - old_a1.z);
+      const D d2x = 0.5 * (a2.x - old_a2.x), d2y = 0.5 * (a2.y - old_a2.y),
+              d2z = 0.5 * (a2.z - old_a2.z);
+      const D sq_a1 = c.sq_a1;
+      const D sq_a2 = c.sq_a2xip;
+      const D sq_b1 = c.sq_b1;
+      const D sq_b2 = c.sq_b2xfmp;
+      const D sq_b3 = c.sq_b3xip;
+      const D vx = sq_a1 * dpx, vy = sq_b1 * dpy - sq_b2 * (d1z + d2z),
+              vz = sq_b1 * dpz + sq_b2 * (d1y + d2y);
+      D cn, cp;
+      if constexpr (kContig) {
+        cn = load_lanes<L>(&sc.link_damping_neg[ids[0]]);
+        cp = load_lanes<L>(&sc.link_damping_pos[ids[0]]);
+      } else {
+        cn = make_lanes<L>([&](int k) { return sc.link_damping_neg[ids[k]]; });
+        cp = make_lanes<L>([&](int k) { return sc.link_damping_pos[ids[k]]; });
+      }
+      const D hn = 0.5 * cn, hp = 0.5 * cp;
+      const VL<L> fn_d{fn.x + cn * vx, fn.y + cn * vy, fn.z + cn * vz};
+      const VL<L> fp_d{fp.x - cp * vx, fp.y - cp * vy, fp.z - cp * vz};
+      const VL<L> mn_d{mn.x - hn * (-sq_a2 * (d2x - d1x)),
+                       mn.y - hn * (sq_b2 * dpz + sq_b3 * (2.0 * d1y + d2y)),
+                       mn.z - hn * (-sq_b2 * dpy + sq_b3 * (2.0 * d1z + d2z))};
+      const VL<L> mp_d{mp.x - hp * (sq_a2 * (d2x - d1x)),
+                       mp.y - hp * (sq_b2 * dpz + sq_b3 * (d1y + 2.0 * d2y)),
+                       mp.z - hp * (-sq_b2 * dpy + sq_b3 * (d1z + 2.0 * d2z))};
+      if (valid == kAllLanes<L>) {  // every lane (the usual case)
+        fn = fn_d;
+        fp = fp_d;
+        mn = mn_d;
+        mp = mp_d;
+      } else {
+        const M on = mask_of<L>(valid);
+        fn = {select<L>(on, fn_d.x, fn.x), select<L>(on, fn_d.y, fn.y),
+              select<L>(on, fn_d.z, fn.z)};
+        fp = {select<L>(on, fp_d.x, fp.x), select<L>(on, fp_d.y, fp.y),
+              select<L>(on, fp_d.z, fp.z)};
+        mn = {select<L>(on, mn_d.x, mn.x), select<L>(on, mn_d.y, mn.y),
+              select<L>(on, mn_d.z, mn.z)};
+        mp = {select<L>(on, mp_d.x, mp.x), select<L>(on, mp_d.y, mp.y),
+              select<L>(on, mp_d.z, mp.z)};
+      }
+    }
+    // §2.6: in small-angle mode F_N and M_N are already in N's frame, in large-angle mode they
+    // rotate by q1*; F_P, M_P rotate by q2*
+    if constexpr (kLarge) {
+      VL<L> fnl, mnl;
+      rotate_c(q1.w, -q1.x, -q1.y, -q1.z, fn.x, fn.y, fn.z, fnl.x, fnl.y, fnl.z);
+      rotate_c(q1.w, -q1.x, -q1.y, -q1.z, mn.x, mn.y, mn.z, mnl.x, mnl.y, mnl.z);
+      fn = fnl;
+      mn = mnl;
+    }
+    VL<L> fpl, mpl;
+    rotate_c(q2.w, -q2.x, -q2.y, -q2.z, fp.x, fp.y, fp.z, fpl.x, fpl.y, fpl.z);
+    rotate_c(q2.w, -q2.x, -q2.y, -q2.z, mp.x, mp.y, mp.z, mpl.x, mpl.y, mpl.z);
+    const VL<L> fn_g = from_x_lanes<A, L>(fn), mn_g = from_x_lanes<A, L>(mn);
+    const VL<L> fp_g = from_x_lanes<A, L>(fpl), mp_g = from_x_lanes<A, L>(mpl);
+    // end loads of the lanes in `done`: (force, moment) of end N, then of end P; consecutive
+    // links have consecutive records (2 ends x 6 doubles each)
+    static_assert(sizeof(Scratch::EndLoad) == 6 * sizeof(double));
+    if (kContig && done == kAllLanes<L>) {
+      const DV<L> records[12] = {fn_g.x, fn_g.y, fn_g.z, mn_g.x, mn_g.y, mn_g.z,
+                                 fp_g.x, fp_g.y, fp_g.z, mp_g.x, mp_g.y, mp_g.z};
+      store_records<L>(records,
+                       sc.link_end_load[2 * static_cast<std::size_t>(ids[0])].force.data());
+    } else {
+      double* out[4][W];
+      for (int k = 0; k < W; ++k) {
+        Scratch::EndLoad* load = &sc.link_end_load[2 * static_cast<std::size_t>(ids[k])];
+        out[0][k] = load[0].force.data();
+        out[1][k] = load[0].moment.data();
+        out[2][k] = load[1].force.data();
+        out[3][k] = load[1].moment.data();
+      }
+      scatter3<L>(out[0], fn_g.x, fn_g.y, fn_g.z, done);
+      scatter3<L>(out[1], mn_g.x, mn_g.y, mn_g.z, done);
+      scatter3<L>(out[2], fp_g.x, fp_g.y, fp_g.z, done);
+      scatter3<L>(out[3], mp_g.x, mp_g.y, mp_g.z, done);
+    }
+  }
+  // float(strain) per lane (exact: strain is a float value); the local velocity becomes valid
+  // (already is, after a step)
+  if (kContig && done == kAllLanes<L>) {
+    if constexpr (stores_link_state(K)) to_floats<L>(strain, &st.link_strain[ids[0]]);
+    if (marks_velocity_valid(K) && valid != kAllLanes<L>)
+      std::memset(&st.link_vel_valid[ids[0]], 1, W);
+  } else {
+    if constexpr (stores_link_state(K)) {
+      float strain_f[W];
+      to_floats<L>(strain, strain_f);
+      for (int k = 0; k < W; ++k) {
+        if (!(done >> k & 1)) continue;
+        st.link_strain[ids[k]] = strain_f[k];
+      }
+    }
+    if (marks_velocity_valid(K) && (valid & done) != done) {
+      for (int k = 0; k < W; ++k)
+        if (done >> k & 1) st.link_vel_valid[ids[k]] = 1;
+    }
+  }
+  if constexpr (stores_link_state(K)) {
+    scatter<L, kContig>(pos2, st.link_pos2, ids, done);
+    if constexpr (kLarge) scatter<L, kContig>(a1, st.link_angle1v, ids, done);  // else stays 0
+    scatter<L, kContig>(a2, st.link_angle2v, ids, done);
+  }
+  return done;
+}
+
+// The lanes of a group that link_group left undone (they switched mode) through link_scalar (or
+// link_scalar_state_only without forces). Out of line: rare.
+template <Axis A, LinkPass K>
+[[gnu::noinline]] void links_switching_mode(const Model& m, State& st, Scratch& sc,
+                                            const int* group, int count, int done, bool& diverged) {
+  for (int k = 0; k < count; ++k) {
+    if (done >> k & 1) continue;
+    if constexpr (computes_forces(K)) {
+      if (link_scalar<A>(m, st, sc, group[k])) diverged = true;
+    } else {
+      link_scalar_state_only<A>(m, st, group[k]);
+    }
+  }
+}
+
+// The links list[0..count) of axis A, all in small-angle (!kLarge) or large-angle (kLarge) mode at
+// their last update, W at a time (the last group padded with its last link).
+template <class L, Axis A, LinkPass K, bool kLarge>
+[[gnu::noinline]] void run_link_list(const Model& m, State& st, Scratch& sc, const int* list,
+                                     int count, bool& diverged) {
+  constexpr int W = L::W;
+  int j = 0;
+  for (; j + W <= count; j += W) {
+    const int done = link_group<L, A, K, kLarge, false>(m, st, sc, list + j, diverged);
+    if (done != kAllLanes<L>) links_switching_mode<A, K>(m, st, sc, list + j, W, done, diverged);
+  }
+  if (j < count) {
+    int group[W];
+    for (int k = 0; k < W; ++k) group[k] = list[std::min(j + k, count - 1)];
+    const int done = link_group<L, A, K, kLarge, false>(m, st, sc, group, diverged);
+    if (done != kAllLanes<L>)
+      links_switching_mode<A, K>(m, st, sc, group, count - j, done, diverged);
+  }
+}
+
+// Full groups of consecutive links from link j on, as long as all W links of the next group are
+// in small-angle mode (!kLarge) or all in large-angle mode (kLarge); returns the first link not
+// handled. One call runs a whole stretch of groups (the usual case: a solid body is one stretch
+// per axis), so the call and its register saves are paid once per stretch.
+template <class L, Axis A, LinkPass K, bool kLarge>
+[[gnu::noinline]] int run_link_stretch(const Model& m, State& st, Scratch& sc, int j, int end,
+                                       bool& diverged) {
+  constexpr int W = L::W;
+  constexpr int kMode = kLarge ? 0 : kAllLanes<L>;  // small-angle flags of the whole group
+  for (; j + W <= end && nonzero_flags<L>(&st.link_small_angle[j]) == kMode; j += W) {
+    int group[W];
+    for (int k = 0; k < W; ++k) group[k] = j + k;
+    const int done = link_group<L, A, K, kLarge, true>(m, st, sc, group, diverged);
+    if (done != kAllLanes<L>) links_switching_mode<A, K>(m, st, sc, group, W, done, diverged);
+  }
+  return j;
+}
+
+// Link pass (§2.3-2.6) over the links of axis A: links go through link_group W at a time, those
+// in small-angle mode at their last update and those in large-angle mode in separate groups (a
+// lane that switches mode falls back to link_scalar). W consecutive links of the axis (ids are
+// contiguous per axis, see Model) that share a mode, the usual case, form a group as they are;
+// the others are collected per mode into lists (Scratch) and run after the axis's stretches.
+// Links are independent within a pass, so this order gives the same results as list order.
+// With forces (computes_forces(K)) the end loads are computed and the return value is true if any
+// strain > 100; without, only the link state (LinkPass::state and restore_state).
+template <class L, Axis A, LinkPass K>
+bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
+  constexpr int W = L::W;
+  bool diverged = false;
+  const int begin = m.axis_link_begin[static_cast<int>(A)];
+  const int end = m.axis_link_begin[static_cast<int>(A) + 1];
+  // links of mixed groups, collected per mode (without a branch: mixed groups have no pattern)
+  int* small = sc.link_list_small.data();
+  int* large = sc.link_list_large.data();
+  int small_count = 0, large_count = 0;
+  auto collect = [&](int i) {
+    const int is_small = st.link_small_angle[i] != 0;
+    small[small_count] = i;
+    large[large_count] = i;
+    small_count += is_small;
+    large_count += 1 - is_small;
+  };
+  int j = begin;
+  while (j + W <= end) {
+    const int small_lanes = nonzero_flags<L>(&st.link_small_angle[j]);
+    if (small_lanes == kAllLanes<L>) {
+      j = run_link_stretch<L, A, K, false>(m, st, sc, j, end, diverged);
+    } else if (small_lanes == 0) {
+      j = run_link_stretch<L, A, K, true>(m, st, sc, j, end, diverged);
+    } else {
+      for (int k = 0; k < W; ++k) collect(j + k);
+      j += W;
+    }
+  }
+  for (; j < end; ++j) collect(j);
+  if (small_count > 0) run_link_list<L, A, K, false>(m, st, sc, small, small_count, diverged);
+  if (large_count > 0) run_link_list<L, A, K, true>(m, st, sc, large, large_count, diverged);
+  return diverged;
+}
+
+// Full link pass (§2.3-2.6) over all links with forces (K = forces_and_state or forces). Returns
+// true if any strain > 100. (The passes are kept out of line, once per step, so that profiles
+// attribute their cost.)
+template <class L, LinkPass K>
+[[gnu::noinline]] bool link_pass_forces(const Model& m, State& st, Scratch& sc) {
+  static_assert(computes_forces(K));
+  // c_V = 2 sqrt(m_V) zeta_int / previousDt_V (float, §2.5); only read by links with a valid
+  // local velocity, i.e. after a step has set previous_dt
+  const float prev_dt = st.previous_dt;
+  if (!(prev_dt == sc.link_damping_dt)) {  // a pure function of prev_dt: recompute on change only
+    for (int i = 0; i < m.link_count; ++i) {
+      sc.link_damping_neg[i] = m.voxel_const[m.link_neg[i]].damp_base / prev_dt;
+      sc.link_damping_pos[i] = m.voxel_const[m.link_pos[i]].damp_base / prev_dt;
+    }
+    sc.link_damping_dt = prev_dt;
+  }
+  const bool dx = link_pass_axis<L, Axis::x, K>(m, st, sc);
+  const bool dy = link_pass_axis<L, Axis::y, K>(m, st, sc);
+  const bool dz = link_pass_axis<L, Axis::z, K>(m, st, sc);
+  return dx || dy || dz;
+}
+
+// Link pass without forces (K = state: the mid-step pass of the fork, §2.9 item 6; K =
+// restore_state: the link state a refused pneuvox step's `forces` pass left out).
+template <class L, LinkPass K>
+[[gnu::noinline]] void link_pass_state(const Model& m, State& st, Scratch& sc) {
+  static_assert(!computes_forces(K));
+  link_pass_axis<L, Axis::x, K>(m, st, sc);
+  link_pass_axis<L, Axis::y, K>(m, st, sc);
+  link_pass_axis<L, Axis::z, K>(m, st, sc);
+}
+
+}  // namespace
+}  // namespace softevo::physics
