@@ -110,7 +110,7 @@ def fitness_figure(task: str, by_exp: dict[str, list[Run]], out: pathlib.Path,
         return
     ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
     ax.set_xlabel("generation")
-    # Gait fitness is the distance covered in task.eval_seconds (10 s in the thesis), SPEC §7.1.
+    # Gait fitness is the distance covered in task.eval_seconds (10 s in the thesis), docs/model.md §7.1.
     ax.set_ylabel("fitness" + (" [cm covered in one evaluation]" if task == "gait" else ""))
     ax.set_title(f"{TASK_TITLES[task]}: mean and best fitness, averaged over runs (+-1 sd)")
     ax.grid(True, alpha=0.3)

@@ -9,7 +9,7 @@
 
 namespace softevo {
 
-// Cell values of a body plan (SPEC.md section 9).
+// Cell values of a body plan (docs/model.md §10).
 inline constexpr int kEmptyCell = 0;
 inline constexpr int kFirstChamberCell = 11;  // 11..20 = chamber q = value - 11 (controller order)
 

@@ -1,4 +1,4 @@
-// Chamber wall meshes derived from a body plan's cells (pneuvox-model.md §6.7, `make_pneu_quads`).
+// Chamber wall meshes derived from a body plan's cells (docs/model.md §6.7, `make_pneu_quads`).
 // Plain lattice logic: lives in common/ because physics (pneumatics) needs it and must not
 // depend on evo/.
 #pragma once

@@ -3,9 +3,9 @@
 // Configs are TOML files (configs/*.toml) parsed strictly by load_config(): an unknown section or
 // key, a wrong type or an out-of-range value is a ConfigError naming file, line, key and the
 // allowed values. Everything inside the code is SI; pressures enter in bar and are converted to
-// Pa here, at the config boundary (SPEC.md section 1). Key names follow neat-python where the
+// Pa here, at the config boundary (docs/model.md §1). Key names follow neat-python where the
 // thesis parameter has one. Defaults are the thesis experiment values of
-// ../shared/reference/pneuvox-model.md §1 and §8.8.
+// docs/model.md §1 and §8.8.
 #pragma once
 
 #include <cstdint>
@@ -79,7 +79,7 @@ struct PneumaticsConfig {
   double valve_cutoff = 10.0;       // low-pass cut-off of the valve opening [Hz] (§3.5)
   std::int64_t valve_filter_stages = 4;
   double valve_filter_q = 0.707;
-  // First-frame pressure sensor reading, absolute [Pa] (config: bar; SPEC 3, default 0.0 bar).
+  // First-frame pressure sensor reading, absolute [Pa] (config: bar; §3.7, default 0.0 bar).
   double initial_sensor_pressure = 0.0;
 };
 
@@ -95,7 +95,7 @@ struct ControllerConfig {
 
 struct BodyConfig {
   std::vector<std::int64_t> lattice = {10, 10, 10};  // CPPN query lattice X, Y, Z
-  std::string distance_input = "center";             // "center" or "pneuvox" (SPEC 5)
+  std::string distance_input = "center";             // "center" or "pneuvox" (§6.2)
   double presence_threshold = 0.1;
   double pneumatic_threshold = 0.1;
   std::int64_t max_chambers = 10;  // chambers beyond this stay unactuated voids (§6.5 step 9)
@@ -176,7 +176,7 @@ std::uint64_t config_hash(const Config& config);
 std::string hash_hex(std::uint64_t hash);  // 16 lower-case hex digits
 
 // Structural materials 1..material_count of the thesis: E_k = linspace(E_min, E_max, count)
-// (numpy semantics, pneuvox-model.md §1/§6.4), density as configured. Index k-1 = material k.
+// (numpy semantics, docs/model.md §1/§6.4), density as configured. Index k-1 = material k.
 std::vector<StructuralMaterial> material_table(const PhysicsConfig& physics);
 // "gait-open", "dir-closed", "rotate-open", ... from task.kind and task.control.
 std::string experiment_name(const TaskConfig& task);

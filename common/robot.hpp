@@ -1,4 +1,4 @@
-// The robot file `softevo.robot/1` (SPEC.md section 9) as plain data, plus its strict reader
+// The robot file `softevo.robot/1` (docs/model.md §10) as plain data, plus its strict reader
 // and writer (robot_file.cpp). What `softevo eval` reads and `softevo export` writes.
 #pragma once
 
@@ -13,7 +13,7 @@
 
 namespace softevo {
 
-// The 9 named controller vectors of pneuvox-model.md §4.4, in canonical order. The same layout
+// The 9 named controller vectors of docs/model.md §4.4, in canonical order. The same layout
 // carries the values and (in the genome) their per-gene mutation step sizes.
 struct ControllerVectors {
   std::vector<double> weights_hidden;          // n_in*H,  index c*H + i: input c -> hidden i

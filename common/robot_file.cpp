@@ -1,4 +1,4 @@
-// Strict reader and writer of the robot file `softevo.robot/1` (SPEC.md section 9).
+// Strict reader and writer of the robot file `softevo.robot/1` (docs/model.md §10).
 //
 // Strictness rules: every object is checked for unknown keys; every value is type-checked; the
 // controller vector lengths follow from the input count of §4.1 (2 + directed + 10 x closed) and
@@ -25,7 +25,7 @@ namespace {
 using Json = nlohmann::ordered_json;
 
 constexpr const char* kFormat = "softevo.robot/1";
-constexpr int kDefaultMaterialCount = 10;             // materials 1..10 (pneuvox-model.md §1)
+constexpr int kDefaultMaterialCount = 10;             // materials 1..10 (docs/model.md §1)
 constexpr double kDefaultModulusStep = 10000.0;       // E_k = 10 kPa x k [Pa]
 constexpr double kDefaultDensity = 1000.0;            // [kg/m^3]
 constexpr int kMaxCellValue = kFirstChamberCell + 9;  // chambers 11..20
@@ -56,7 +56,7 @@ class Reader {
     if (!j.is_object()) fail(key, std::string("expected an object, got ") + type_name(j));
   }
 
-  // Unknown keys are errors (SPEC section 9).
+  // Unknown keys are errors (§10).
   void check_keys(const Json& obj, const std::string& key,
                   std::initializer_list<const char*> allowed) const {
     for (const auto& item : obj.items()) {

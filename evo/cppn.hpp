@@ -1,5 +1,5 @@
 // CPPN genome (node + connection genes) and its feed-forward evaluation with neat-python 0.92
-// semantics (pneuvox-model.md §6.1). Used by body development (§6) and by the NEAT operators.
+// semantics (docs/model.md §6.1). Used by body development (§6) and by the NEAT operators.
 #pragma once
 
 #include <cstdint>

@@ -1,4 +1,4 @@
-// Crossover operators (pneuvox-model.md §8.6).
+// Crossover operators (docs/model.md §8.6).
 #pragma once
 
 #include "common/rng.hpp"

@@ -1,5 +1,5 @@
 // Body development: CPPN queried on the lattice, thresholds, stiffness binning and the
-// post-processing of pneuvox-model.md §6.2-6.6. Output is a BodyPlan in robot-file encoding.
+// post-processing of docs/model.md §6.2-6.6. Output is a BodyPlan in robot-file encoding.
 #pragma once
 
 #include <array>

@@ -1,4 +1,4 @@
-// The robot genome: a CPPN (body, pneuvox-model.md §6) plus the Elman controller sub-genome
+// The robot genome: a CPPN (body, docs/model.md §6) plus the Elman controller sub-genome
 // (§4.4: 9 named real vectors, each with a parallel vector of per-gene mutation step sizes).
 //
 // The same type carries plain NEAT genomes (XOR benchmark): their controller vectors are all

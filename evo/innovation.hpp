@@ -5,7 +5,7 @@
 // so two genomes that split the same connection independently get different node keys (there is
 // no per-generation innovation matching as in the NEAT paper). Genome ids come from
 // DefaultReproduction.genome_indexer and species ids from DefaultSpeciesSet.indexer; both start
-// at 1. Unlike the thesis system (§11 item 31) nothing here ever restarts: the counters are part
+// at 1. Unlike the thesis system (§8.10) nothing here ever restarts: the counters are part
 // of the population state and are checkpointed with it.
 #pragma once
 

@@ -1,4 +1,4 @@
-// Mutation operators (pneuvox-model.md §8.7): neat-python 0.92 DefaultGenome.mutate for the CPPN
+// Mutation operators (docs/model.md §8.7): neat-python 0.92 DefaultGenome.mutate for the CPPN
 // (single_structural_mutation = False) and the thesis' additive self-adaptive mutation of the
 // controller sub-genome. Every child is mutated (§8.5 step 5). All randomness from `rng`.
 #pragma once

@@ -1,4 +1,4 @@
-// The NEAT population of a run and its whole state (pneuvox-model.md §8.1, SPEC.md section 7).
+// The NEAT population of a run and its whole state (docs/model.md §8.1, docs/model.md §8.10).
 //
 // Generation loop as the thesis system ran it (§8.1), split at the evaluation:
 //   create():  random genomes, speciate (generation 0), then step 2 (random immigrants replace

@@ -1,5 +1,5 @@
 // Stagnation, adjusted fitness, spawn allocation, per-species elitism and tournament selection
-// (pneuvox-model.md §8.5: neat-python 0.92 DefaultStagnation + DefaultReproduction with the
+// (docs/model.md §8.5: neat-python 0.92 DefaultStagnation + DefaultReproduction with the
 // thesis' MIPReproduction tournament).
 #pragma once
 

@@ -1,4 +1,4 @@
-// Genome distance and speciation (pneuvox-model.md §8.4: neat-python 0.92 DefaultSpeciesSet).
+// Genome distance and speciation (docs/model.md §8.4: neat-python 0.92 DefaultSpeciesSet).
 #pragma once
 
 #include <cstdint>

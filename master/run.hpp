@@ -1,4 +1,4 @@
-// The generation loop of a distributed run, MPI-free (pneuvox-model.md §8.1, SPEC.md section 7):
+// The generation loop of a distributed run, MPI-free (docs/model.md §8.1, docs/model.md §8.10):
 //   members = population.members()           (generation g, immigrants included)
 //   evaluate every work unit                 (UnitExecutor: in-process or over MPI)
 //   archive generation g, population.advance(results), checkpoint the NEXT population,

@@ -59,7 +59,7 @@ inline Vec3 from_x(const Vec3& v) {
   return r;
 }
 
-constexpr float kStrainDiverged = 100.0f;  // §2.12 item 1
+constexpr float kStrainDiverged = 100.0f;  // §2.12 step 1
 
 // What a link pass computes and stores (the link kernels' template argument).
 enum class LinkPass {
@@ -71,7 +71,7 @@ enum class LinkPass {
   forces,
   // the link state without loads: the pneuvox mid-step pass (§2.9 item 6)
   state,
-  // pos2, angles and strain only, after a pneuvox step refused by its `forces` pass (§2.12 item
+  // pos2, angles and strain only, after a pneuvox step refused by its `forces` pass (§2.12 step
   // 1): the state that pass left out. Mode and validity are as that pass left them; every link
   // stays in the mode that pass gave it (it decided on the same positions), so each link's values
   // are those of the reference's pass.

@@ -5,7 +5,7 @@
 // references as integer ids / CSR offsets, no pointers. Everything that changes during a
 // simulation lives in State (physics/state.hpp), per-step buffers in Scratch (physics/step.hpp).
 //
-// Precision follows the reference (pneuvox-model.md §1, §2.1, §11 item 9): the voxel size goes
+// Precision follows the reference (docs/model.md §1, §2.1): the voxel size goes
 // through a float, material constants are computed and stored in float32, positions and momenta
 // are double. Float constants are kept as `float` members so that every product the reference
 // does in float is done in float here too.

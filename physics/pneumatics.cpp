@@ -1,4 +1,4 @@
-// Pneumatic chambers, conduits and valves (pneuvox-model.md §3). See pneumatics.hpp.
+// Pneumatic chambers, conduits and valves (docs/model.md §3). See pneumatics.hpp.
 #include "physics/pneumatics.hpp"
 
 #include <algorithm>

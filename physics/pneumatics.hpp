@@ -1,4 +1,4 @@
-// Pneumatic chambers, conduits and valves of pneuvox-model.md §3 (th555/pneuvox PV_Chamber,
+// Pneumatic chambers, conduits and valves of docs/model.md §3 (th555/pneuvox PV_Chamber,
 // PV_Pneunet, PV_Conduit, PV_Valve, Biquad), split like the voxel physics:
 //  - PneumaticsModel: immutable chamber meshes (triangles through wall-voxel centres, §3.1),
 //    reservoir pressures, conductivity and the valve low-pass coefficients;
@@ -8,7 +8,7 @@
 //
 // Precision follows the reference: the gas model is float32 (n, V, p, conductivity, transfer),
 // the volume and pressure-force geometry is double with float accumulation, the biquad keeps a
-// double state with float input/output (§3.2-3.5, §11 item 9). Pressures are in bar inside this
+// double state with float input/output (§3.2-3.5, §1). Pressures are in bar inside this
 // module (the reference's unit; n is "m^3 at 1 bar"); the config boundary and the accessors
 // below speak Pa.
 //

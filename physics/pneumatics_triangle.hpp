@@ -1,4 +1,4 @@
-// The per-triangle formulas of the chamber meshes (pneuvox-model.md §3.2, §3.4), written once,
+// The per-triangle formulas of the chamber meshes (docs/model.md §3.2, §3.4), written once,
 // generic over the number type T: double in the scalar path (pneumatics.cpp), a vector of W
 // doubles in the lane passes (step_kernels.hpp). Both perform the same IEEE operations in the
 // same order (-ffp-contract=off), so every SIMD width gives the same bits. Internal to physics/.

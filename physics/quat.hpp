@@ -1,5 +1,5 @@
 // Vector and quaternion helpers of the voxel physics, written to the exact formulas of
-// pneuvox-model.md §2.11 (the reference never renormalises a quaternion, and its Taylor branches
+// docs/model.md §2.11 (the reference never renormalises a quaternion, and its Taylor branches
 // leave orientations slightly non-unit; the gaits depend on that, so we reproduce it).
 //
 // Vec3 is Eigen::Vector3d (three packed doubles, no alignment requirement). The hot loops use

@@ -1,7 +1,7 @@
 // One physics time step: step(model, state, scratch, external_force).
 //
 // Integrator (Model::integrator, from physics.integrator):
-//  - pneuvox:    the thesis fork's two-part step of pneuvox-model.md §2.12-2.13, exactly: link
+//  - pneuvox:    the thesis fork's two-part step of docs/model.md §2.12-2.13, exactly: link
 //                pass, collisions, CoG + L_A, part 1 (link + external forces, doubled position
 //                term), mid-step link pass, L_B, angular-momentum correction, part 2 (gravity,
 //                collision, floor; static-friction capture of §2.8).
@@ -20,7 +20,7 @@ namespace softevo::physics {
 
 enum class StepStatus : std::uint8_t {
   ok = 0,
-  diverged = 1,    // some link strain > 100: voxels not advanced (§2.12 item 1)
+  diverged = 1,    // some link strain > 100: voxels not advanced (§2.12 step 1)
   non_finite = 2,  // a NaN/inf appeared in the state (the reference would abort, §2.6/§2.15)
 };
 

@@ -71,7 +71,7 @@ class CellIndex {
   std::vector<int> items_;
 };
 
-// Face directions in the link order of pneuvox-model.md §2.1: X+, X-, Y+, Y-, Z+, Z-.
+// Face directions in the link order of docs/model.md §2.1: X+, X-, Y+, Y-, Z+, Z-.
 const std::array<Eigen::Vector3i, 6> kFaceSteps = {
     Eigen::Vector3i(1, 0, 0),  Eigen::Vector3i(-1, 0, 0), Eigen::Vector3i(0, 1, 0),
     Eigen::Vector3i(0, -1, 0), Eigen::Vector3i(0, 0, 1),  Eigen::Vector3i(0, 0, -1)};

@@ -46,7 +46,7 @@ void require_png_support(const std::string& path);
 struct Body {
   double voxel_size = 0.01;  // [m]
   int material_count = 10;   // structural materials 1..material_count (colour scale)
-  // Structural voxels in simulator order (x outer, y, z inner; pneuvox-model.md §2.1).
+  // Structural voxels in simulator order (x outer, y, z inner; docs/model.md §2.1).
   std::vector<Eigen::Vector3i> voxel_cells;
   std::vector<int> voxel_material;  // 1..material_count (voxels)
   // Chamber cells (no voxel in the simulation) and their chamber index q = value - 11.
@@ -64,7 +64,7 @@ struct Pose {
   std::vector<Eigen::Quaterniond> orientation;  // unit quaternions (voxels)
   std::vector<double> chamber_pressure;         // [Pa] absolute (chambers); may be empty
 };
-// The lattice at rest: centre = s * (i, j, k), identity orientation (pneuvox-model.md §2.1).
+// The lattice at rest: centre = s * (i, j, k), identity orientation (docs/model.md §2.1).
 Pose rest_pose(const Body& body);
 // Mean voxel position [m] (the centroid of §5, but absolute rather than a displacement).
 Eigen::Vector3d centroid(const Pose& pose);

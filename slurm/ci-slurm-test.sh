@@ -9,8 +9,9 @@
 #      the aggregation table (4 runs, 4 experiments);
 #   4. tears the cluster down (trap: also on failure or timeout).
 # Usage: slurm/ci-slurm-test.sh [BUILD_DIR]   (default: build; softevo and softevo-mpi built)
-# Exit 0 = pass. The approach follows ../shared/notes/slurm-ci.md (pmix vs pmi2, the
-# DependencyParameters pitfall, running as root).
+# Exit 0 = pass. Debian's Open MPI launches under Slurm with pmix, not pmi2; an afterok
+# dependency on a failed array needs DependencyParameters=kill_invalid_depend; root needs the
+# OMPI_ALLOW_RUN_AS_ROOT pair.
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 BUILD=$(cd "${1:-$ROOT/build}" && pwd)

@@ -146,7 +146,7 @@ DirectedScore directed_score(std::span<const Vec3d> waypoints_cm, double directi
     perpendicular += length(w - dot(t, w) * t);
   }
   c.perpendicular_penalty = path_penalty_weight * perpendicular;  // P (x omega)
-  // F = |D| / (L + eps) * (D / (delta + 1) - P)   (the code's delta + 1, SPEC 6)
+  // F = |D| / (L + eps) * (D / (delta + 1) - P)   (the code's delta + 1, §7.2)
   c.fitness = std::fabs(c.distance) / (c.path_length + kEpsilon) *
               (c.distance / (c.angle_error + 1.0) - c.perpendicular_penalty);
   return c;

@@ -23,7 +23,7 @@ Vec3d target_direction(double direction_deg);
 // centroid: current centroid displacement [m]; heading: mean rotvec z [rad]; voxel_size [m]
 // (the target point is 20 voxel lengths ahead of the centroid's projection on the target line).
 // acos arguments are clamped to [-1, 1] (the reference does not clamp and aborts on the NaN,
-// §11 item 10; clamping changes nothing else).
+// §7.3; clamping changes nothing else).
 float direction_sensor(const Vec3d& centroid, double heading, double direction_deg,
                        double voxel_size);
 

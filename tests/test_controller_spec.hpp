@@ -1,4 +1,4 @@
-// A complete, active Elman controller (SPEC §4) for tests that need one: every weight vector
+// A complete, active Elman controller (§4) for tests that need one: every weight vector
 // sized for the controller's inputs and filled from a smooth pattern.
 #pragma once
 

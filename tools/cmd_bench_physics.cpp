@@ -1,7 +1,7 @@
 // `softevo bench physics [--json] [--steps N] [--runs R] [--scene NAME] [--simd W]`: raw physics
 // speed (issue 3). Named scenes of 1 cm voxels, E = 100 kPa, the thesis material settings, floor,
-// gravity and self-collision on (../shared/reference/measurements.md "Raw physics speed"), for
-// both integrators. Each figure is the best of R runs of N steps from the initial state, in CPU
+// gravity and self-collision on (the scenes the thesis system's raw-physics speed was measured on),
+// for both integrators. Each figure is the best of R runs of N steps from the initial state, in CPU
 // seconds of this thread (the machine is shared; wall time is printed alongside).
 #include <ctime>
 #include <memory>

@@ -1,5 +1,5 @@
 // `softevo develop ROBOT.json [--json]`: rebuild the body from the file's `genome` (CPPN + body
-// settings, SPEC section 9) with evo::develop_body (pneuvox-model.md §6) and compare it with the
+// settings, §10) with evo::develop_body (docs/model.md §6) and compare it with the
 // file's lattice/cells. Exit 0 when equal, 1 with a cell-level diff, 2 on bad input.
 #include <array>
 #include <cstdio>

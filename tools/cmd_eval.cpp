@@ -2,7 +2,7 @@
 //  [--seconds S] [--ablate oscillator|sensors] [--json] [--trace FILE.h5] [--config FILE]
 //  [--set section.key=value ...]`
 //
-// Evaluates one robot file (SPEC.md section 9) and prints fitness, the task's named components
+// Evaluates one robot file (docs/model.md §10) and prints fitness, the task's named components
 // per work unit, status, simulated time, steps, voxel and chamber counts and wall/CPU time.
 // Without --config the built-in thesis defaults of softevo::Config are used, with task.control
 // taken from the robot's controller. The task: --task, else the --config file's, else the one

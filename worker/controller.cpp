@@ -1,4 +1,4 @@
-// Elman network controller (pneuvox-model.md §4). See controller.hpp.
+// Elman network controller (docs/model.md §4). See controller.hpp.
 #include "worker/controller.hpp"
 
 #include <cmath>

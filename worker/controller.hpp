@@ -1,7 +1,7 @@
-// Elman network controller with oscillator (pneuvox-model.md §4), float32 as the reference
+// Elman network controller with oscillator (docs/model.md §4), float32 as the reference
 // (tiny-dnn with float_t = float).
 //
-// Per control frame (§5 steps 1-2): advance the oscillator phase (§4.2), assemble the inputs
+// Per control frame (§5 frame steps 1-2): advance the oscillator phase (§4.2), assemble the inputs
 // [sin, cos, (direction), (pressure sensors)] (§4.1), run the network (§4.3) and map the outputs
 // to valve commands u = (y + 1)/2 (§4.5).
 #pragma once

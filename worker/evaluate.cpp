@@ -19,7 +19,7 @@ namespace softevo::worker {
 namespace {
 
 constexpr int kOscillatorInputs = 2;  // sin, cos (§4.1)
-constexpr int kMaxSensorValues = 10;  // §4.1/§11 item 15: cap after the oscillator inputs
+constexpr int kMaxSensorValues = 10;  // §4.1: cap after the oscillator inputs
 
 EvalStatus status_of(physics::StepStatus s) {
   return s == physics::StepStatus::ok ? EvalStatus::ok : EvalStatus::diverged;
@@ -44,7 +44,7 @@ EvalResult simulate(const Config& config, const tasks::Task& task, const BodyPla
   EvalResult result;
   result.unit = unit;
 
-  // ---- setup (§5 setup 1-8) -------------------------------------------------------------------
+  // ---- setup (§5 steps 1-8) -------------------------------------------------------------------
   physics::BuildOptions build_options;
   build_options.simd = opts.simd;
   const physics::Model model = physics::build_model(plan, config.physics, build_options);
@@ -79,11 +79,11 @@ EvalResult simulate(const Config& config, const tasks::Task& task, const BodyPla
   const auto fed_task_inputs =
       static_cast<std::size_t>(std::min(task.controller_inputs(), controller.task_inputs()));
 
-  // §5 setup 8: stepsPerFrame = (int)(1.0f / 60.0f / dt) in float arithmetic.
+  // §5 step 8: stepsPerFrame = (int)(1.0f / 60.0f / dt) in float arithmetic.
   const float frame_seconds_f = 1.0f / static_cast<float>(tc.control_rate);
   const int steps_per_frame = static_cast<int>(frame_seconds_f / model.dt_f);
   const int frames = static_cast<int>(std::lround(tc.control_rate * tc.eval_seconds));
-  // First sensor reading (SPEC section 3): config value for every chamber, in bar.
+  // First sensor reading (§3.7): config value for every chamber, in bar.
   const float initial_sensor_bar =
       static_cast<float>(config.pneumatics.initial_sensor_pressure / physics::kPascalPerBar);
 

@@ -1,4 +1,4 @@
-// Chamber quad generation (pneuvox-model.md §6.7) and the mesh properties §3.1/§3.2 rely on.
+// Chamber quad generation (docs/model.md §6.7) and the mesh properties §3.1/§3.2 rely on.
 #include "common/chamber_quads.hpp"
 
 #include <gtest/gtest.h>
@@ -133,13 +133,13 @@ TEST(ChamberQuads, NoChamberNoQuadsAndBadSizeRejected) {
   EXPECT_THROW(chamber_quads(bad), std::invalid_argument);
 }
 
-// §13 acceptance test 2 on the thesis champions.
+// §9.8 on the thesis champions.
 TEST(ChamberQuadsReference, ChampionMeshesClosedOrientedAndVolumesMatch) {
   const std::filesystem::path dir = "../shared/reference/bestbots";
   if (!std::filesystem::is_directory(dir))
     GTEST_SKIP() << "reference data not found at " << dir
                  << " (relative to the repo root); skipping the champion mesh test";
-  // Reference initial volumes [cm^3], rounded to whole cm^3 in §13.
+  // Reference initial volumes [cm^3], rounded to whole cm^3 in §9.8.
   const std::map<std::string, std::vector<double>> expected = {
       {"gait-closed-10", {12, 12, 12, 12, 20}},
       {"gait-open-03", {171}},

@@ -1,4 +1,4 @@
-// Robot file `softevo.robot/1` (SPEC.md section 9): strict reader, writer round trip, and the
+// Robot file `softevo.robot/1` (docs/model.md §10): strict reader, writer round trip, and the
 // thesis champions of ../shared/reference/bestbots parse.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// CPPN genome and neat-python 0.92 feed-forward semantics (pneuvox-model.md §6.1).
+// CPPN genome and neat-python 0.92 feed-forward semantics (docs/model.md §6.1).
 #include "evo/cppn.hpp"
 
 #include <gtest/gtest.h>

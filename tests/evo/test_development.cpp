@@ -1,4 +1,4 @@
-// Body development (pneuvox-model.md §6.2-6.6): morphology helpers with scipy.ndimage semantics,
+// Body development (docs/model.md §6.2-6.6): morphology helpers with scipy.ndimage semantics,
 // binning, rounding, hand-made CPPNs, and the 40 thesis champions rebuilt from their CPPNs.
 #include "evo/development.hpp"
 

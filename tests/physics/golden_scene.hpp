@@ -28,7 +28,7 @@ enum class Motion { gentle, tumbling };
 // exercises links in both angle modes, damping, floor contact, friction and self-collision.
 // `simd` picks the width of the step passes (results must not depend on it).
 // `diverge` adds a last step that diverges (one voxel moved 2 m away, a strain of about 200): the
-// state after a refused step keeps the link state of its link pass (§2.12 item 1).
+// state after a refused step keeps the link state of its link pass (§2.12 step 1).
 inline std::uint64_t run_scene(const std::string& integrator, Simd simd = Simd::best,
                                Motion motion = Motion::gentle, bool diverge = false) {
   const double spin = motion == Motion::tumbling ? 1000.0 : 1.0;

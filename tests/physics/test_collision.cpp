@@ -1,4 +1,4 @@
-// Voxel-voxel self-collision (pneuvox-model.md §2.10): the grid broadphase produces exactly the
+// Voxel-voxel self-collision (docs/model.md §2.10): the grid broadphase produces exactly the
 // reference's O(N^2) pair list, and the contact keeps a folding body's voxels apart.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// Model construction (pneuvox-model.md §2.1, §2.14, §5 step 4, Appendix A) and the rotation
+// Model construction (docs/model.md §2.1, §2.14, §5 step 4, Appendix A) and the rotation
 // utilities of §2.11.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// Pneumatic chambers (pneuvox-model.md §3) and the pneumatic validation of SPEC.md section 8:
+// Pneumatic chambers (docs/model.md §3) and the pneumatic validation of docs/model.md §9:
 // analytic chamber volumes, sealed chamber (gas conserved exactly, p V = n at every step), inlet
 // (pressure rises monotonically to the 1.2 bar supply), outlet (back to 1.0 bar), both open
 // (analytic 1.1 bar), the valve low-pass (-12 dB at 10 Hz), the sensor mapping, and a
@@ -86,7 +86,7 @@ double s3() {
 
 TEST(Pneumatics, MeshVolumesMatchTheWallCentreBoxes) {
   // §3.2: the mesh runs through wall-voxel centres, so a cavity of a x b x c cells encloses
-  // (a+1)(b+1)(c+1) s^3 (one cell: 8 cm^3; two cells: 12 cm^3, §13 acceptance test 2).
+  // (a+1)(b+1)(c+1) s^3 (one cell: 8 cm^3; two cells: 12 cm^3, §3.2).
   struct Case {
     std::array<int, 3> size, lo, hi;
     double cells;

@@ -1,6 +1,6 @@
-// Physical validation of the voxel physics (SPEC.md section 8) for both integrators. Every test
+// Physical validation of the voxel physics (docs/model.md §9) for both integrators. Every test
 // prints its measured error. Scenes use damping/time settings that let statics settle; the
-// tolerances are the SPEC ones.
+// tolerances are those of docs/model.md §9.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -279,7 +279,7 @@ INSTANTIATE_TEST_SUITE_P(Integrators, Validation, ::testing::Values("pneuvox", "
 namespace softevo::physics {
 namespace {
 
-// Status, not crash: a link strain > 100 refuses the step (voxels untouched, §2.12 item 1); a
+// Status, not crash: a link strain > 100 refuses the step (voxels untouched, §2.12 step 1); a
 // NaN in the state is reported as non_finite.
 TEST(StepStatusTest, DivergedAndNonFinite) {
   PhysicsConfig cfg;

@@ -1,5 +1,5 @@
 // Thesis champions (../shared/reference/bestbots): a fast subset for the default suite. Three
-// champions that are not chaotic in the thesis simulator (§13) are evaluated for 2 simulated
+// champions that are not chaotic in the thesis simulator (§9.8) are evaluated for 2 simulated
 // seconds (gait task; directed: direction 0 only): not killed and moving forward. The full
 // 10 s evaluation of all 40 is test_champions_all (LABELS long) and `softevo champions`.
 #include <gtest/gtest.h>

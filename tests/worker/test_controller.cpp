@@ -1,4 +1,4 @@
-// Elman controller (pneuvox-model.md §4): network equations in float32, weight layouts, the
+// Elman controller (docs/model.md §4): network equations in float32, weight layouts, the
 // oscillator phase, input counts.
 #include <gtest/gtest.h>
 

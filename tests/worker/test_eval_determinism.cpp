@@ -1,6 +1,6 @@
-// Determinism (SPEC.md section 8): the same robot file gives bit-identical fitness in different
+// Determinism (docs/model.md §9): the same robot file gives bit-identical fitness in different
 // processes, including closed-loop multi-chamber robots (whose first sensor reading was
-// uninitialised memory in the thesis simulator, SPEC section 3).
+// uninitialised memory in the thesis simulator, §3.7).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -102,7 +102,7 @@ TEST(EvalDeterminism, ChampionSameBitsAtEverySimdWidth) {
 
 TEST(EvalDeterminism, FiveChamberClosedLoopChampionInTwoProcesses) {
   // gait-closed-10: 5 chambers, closed loop; the thesis simulator gave 29.65 / 182.97 / 29.65 in
-  // three runs of the same file (§13). Here: identical bits in every process.
+  // three runs of the same file (§3.7). Here: identical bits in every process.
   const fs::path robot = shared_dir() / "reference" / "bestbots" / "gait-closed-10.robot.json";
   if (!fs::exists(robot)) GTEST_SKIP() << "../shared not found (" << robot << ")";
   const std::string a = run(robot.string(), "1"), b = run(robot.string(), "1");

@@ -1,6 +1,6 @@
 // The evaluation entry (worker/evaluate.hpp): the main loop of §5 on a small synthetic robot
 // (step and frame counts, determinism, the first sensor reading, ablations, the trace observer,
-// invalid bodies, every unit of a task, the thesis champions' setup of §13), and work units
+// invalid bodies, every unit of a task, the thesis champions' setup of §9.8), and work units
 // from requests (genome decoding, config hash, deadline, injected faults). Failures are statuses
 // with messages, never exceptions; only a config-hash mismatch throws.
 #include <gtest/gtest.h>
@@ -109,7 +109,7 @@ TEST(Evaluate, RepeatableBitForBit) {
 
 TEST(Evaluate, FirstSensorReadingIsTheConfiguredPressure) {
   // Closed loop: the first frame reads pneumatics.initial_sensor_pressure for every chamber
-  // (SPEC section 3). 0 bar (default) and 1 bar must drive the controller differently.
+  // (§3.7). 0 bar (default) and 1 bar must drive the controller differently.
   Config c0 = short_config(0.5), c1 = short_config(0.5);
   c1.pneumatics.initial_sensor_pressure = 1.0e5;
   std::vector<float> first_inputs;
@@ -218,7 +218,7 @@ TEST(Evaluate, EveryUnitOfTheTask) {
 }
 
 TEST(Evaluate, ChampionTimeStepsMatchTheThesisSimulator) {
-  // §13 acceptance test 3: dt and steps per frame per champion (`reference.dt`), without
+  // §9.8: dt and steps per frame per champion (`reference.dt`), without
   // simulating more than one frame.
   const fs::path dir = shared_dir() / "reference" / "bestbots";
   if (!fs::exists(dir)) GTEST_SKIP() << "../shared/reference/bestbots not found (" << dir << ")";
