@@ -10,6 +10,7 @@
 #include "common/config.hpp"
 #include "common/robot.hpp"
 #include "tasks/task.hpp"
+#include "tests/reference_data.hpp"
 #include "worker/evaluate.hpp"
 
 namespace fs = std::filesystem;
@@ -17,8 +18,7 @@ using namespace softevo;
 
 namespace {
 fs::path bestbots() {
-  const char* env = std::getenv("SOFTEVO_SOURCE_DIR");
-  return (env ? fs::path(env) : fs::current_path()) / ".." / "shared" / "reference" / "bestbots";
+  return test::reference_bestbots();
 }
 }  // namespace
 

@@ -19,15 +19,14 @@
 #include "common/config.hpp"
 #include "common/robot.hpp"
 #include "tasks/task.hpp"
+#include "tests/reference_data.hpp"
 #include "worker/evaluate.hpp"
 
 namespace fs = std::filesystem;
 using namespace softevo;
 
 TEST(ChampionsAll, EveryReferenceWalkerWalksHere) {
-  const char* env = std::getenv("SOFTEVO_SOURCE_DIR");
-  const fs::path dir =
-      (env ? fs::path(env) : fs::current_path()) / ".." / "shared" / "reference" / "bestbots";
+  const fs::path dir = test::reference_bestbots();
   if (!fs::exists(dir)) GTEST_SKIP() << "../shared not found (" << dir << ")";
   std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(dir))
