@@ -4,6 +4,7 @@
 #include "io/archive.hpp"
 
 #include <fcntl.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -54,29 +55,69 @@ void write_run_info(const h5::File& file, const RunInfo& info) {
   file.write_attribute<std::int64_t>("generations_done", info.generations_done);
 }
 
+// Calls the fault-injection hook (archive.hpp) before a write step.
+class WriteSteps {
+ public:
+  explicit WriteSteps(const WriteStepHook& hook) : hook_(hook) {}
+  void operator()(const std::string& step) const {
+    if (hook_) hook_(step);
+  }
+
+ private:
+  const WriteStepHook& hook_;
+};
+
+// When a write into `directory` failed, the reason HDF5 reports is often generic ("file write
+// failed", "flush failed", "Input/output error"): it does not pass errno on. A full file system
+// is by far the most common cause and the one the user must act on, so say so when it is the
+// case (less than kLowSpaceBytes left for the writer).
+std::string with_space_diagnosis(const std::string& message, const std::string& directory) {
+  constexpr std::uint64_t kLowSpaceBytes = 1 << 20;
+  if (message.find(std::strerror(ENOSPC)) != std::string::npos) return message;
+  struct statvfs vfs {};
+  if (::statvfs(directory.c_str(), &vfs) != 0) return message;
+  const std::uint64_t free_bytes =
+      static_cast<std::uint64_t>(vfs.f_bavail) * static_cast<std::uint64_t>(vfs.f_frsize);
+  if (free_bytes >= kLowSpaceBytes && vfs.f_favail != 0) return message;
+  return message + " (" + std::strerror(ENOSPC) + ": " + directory + " has " +
+         std::to_string(free_bytes) + " bytes free)";
+}
+
 // Runs `edit` on a copy of `path` (or on a new file if `fresh`), then swaps the copy in
 // (io/atomic_file.hpp). Messages name `path`, not the copy.
 template <typename Edit>
-void atomic_edit(const std::string& path, bool fresh, Edit&& edit) {
-  archive_errors([&] {
-    if (!fresh && !fs::exists(path)) throw ArchiveError(path + ": archive does not exist");
-    replace_atomically(path, [&](const std::string& temp) {
-      h5::File file = [&] {
-        if (fresh) {
-          // Persistent free-space tracking: space freed by replacing /checkpoint is reused on
-          // the next generation instead of growing the file forever.
-          h5::PropertyList creation = h5::PropertyList::file_creation();
-          creation.persist_free_space();
-          return h5::File::create(temp, &creation, path);
-        }
-        fs::copy_file(path, temp, fs::copy_options::overwrite_existing);
-        return h5::File::open(temp, h5::File::Access::read_write, path);
-      }();
-      edit(file);
-      file.flush();
-      file.close();
+void atomic_edit(const std::string& path, bool fresh, const WriteStepHook& hook, Edit&& edit) {
+  const WriteSteps step(hook);
+  try {
+    archive_errors([&] {
+      if (!fresh && !fs::exists(path)) throw ArchiveError(path + ": archive does not exist");
+      replace_atomically(
+          path,
+          [&](const std::string& temp) {
+            h5::File file = [&] {
+              if (fresh) {
+                // Persistent free-space tracking: space freed by replacing /checkpoint is reused
+                // on the next generation instead of growing the file forever.
+                h5::PropertyList creation = h5::PropertyList::file_creation();
+                creation.persist_free_space();
+                step("create");
+                return h5::File::create(temp, &creation, path);
+              }
+              step("copy");
+              copy_file_contents(path, temp);
+              return h5::File::open(temp, h5::File::Access::read_write, path);
+            }();
+            edit(file, step);
+            step("flush");
+            file.flush();
+            step("close");
+            file.close();
+          },
+          step);
     });
-  });
+  } catch (const ArchiveError& e) {
+    throw ArchiveError(with_space_diagnosis(e.what(), directory_of(path)));
+  }
 }
 
 // ---- FNV-1a 64 ---------------------------------------------------------------------------------
@@ -199,10 +240,14 @@ void check_output_path(const std::string& path) {
   ::unlink(probe.c_str());
 }
 
-void create_archive(const std::string& path, const RunInfo& info, const std::string& config_text) {
-  atomic_edit(path, true, [&](const h5::File& file) {
+void create_archive(const std::string& path, const RunInfo& info, const std::string& config_text,
+                    const WriteStepHook& hook) {
+  atomic_edit(path, true, hook, [&](const h5::File& file, const WriteSteps& step) {
+    step("attributes");
     write_run_info(file, info);
+    step("/config");
     file.write_string_dataset("config", config_text, Charset::utf8);
+    step("/stats");
     // /stats: chunked, unlimited rows, extended by one row per generation.
     h5::PropertyList creation = h5::PropertyList::dataset_creation();
     creation.chunk({64, kStatsColumns});
@@ -215,11 +260,13 @@ void create_archive(const std::string& path, const RunInfo& info, const std::str
 }
 
 void append_generation(const std::string& path, const RunInfo& info, const GenerationRecord& record,
-                       const StatsRow& stats, const Checkpoint& checkpoint) {
+                       const StatsRow& stats, const Checkpoint& checkpoint,
+                       const WriteStepHook& hook) {
   record.check();
-  atomic_edit(path, false, [&](const h5::File& file) {
+  atomic_edit(path, false, hook, [&](const h5::File& file, const WriteSteps& step) {
     const std::string name = "generations/" + generation_group_name(record.generation);
     if (file.has_link(name)) throw ArchiveError(path + ": /" + name + " already exists");
+    step("/" + name);
     const h5::Group g = file.create_group(name);
     const hsize_t n = record.size();
     g.write_dataset<std::int64_t>("id", {n}, record.id);
@@ -247,6 +294,7 @@ void append_generation(const std::string& path, const RunInfo& info, const Gener
     g.write_attribute<double>("eval_wall_seconds", record.eval_wall_seconds);
 
     // /stats: one more row.
+    step("/stats");
     const h5::Dataset table = file.open_dataset("stats");
     const hsize_t rows = table.dims().at(0);
     table.set_extent({rows + 1, kStatsColumns});
@@ -255,18 +303,30 @@ void append_generation(const std::string& path, const RunInfo& info, const Gener
                                stats.species_count, stats.evaluations_per_second});
 
     // /checkpoint: replaced as a whole.
+    step("/checkpoint");
     if (file.has_link("checkpoint")) file.delete_link("checkpoint");
     const h5::Group cg = file.create_group("checkpoint");
     cg.write_dataset<std::uint8_t>(
         "population", {static_cast<hsize_t>(checkpoint.population.size())}, checkpoint.population);
     cg.write_attribute<std::int64_t>("generation", checkpoint.generation);
 
+    step("attributes");
     write_run_info(file, info);
   });
 }
 
-void update_run_info(const std::string& path, const RunInfo& info) {
-  atomic_edit(path, false, [&](const h5::File& file) { write_run_info(file, info); });
+void update_run_info(const std::string& path, const RunInfo& info, const WriteStepHook& hook) {
+  atomic_edit(path, false, hook, [&](const h5::File& file, const WriteSteps& step) {
+    // A state change must not claim a generation the archive does not hold (a failed append
+    // followed by "interrupted" once left an archive no --resume would accept).
+    const std::int64_t stored = file.read_attribute<std::int64_t>("generations_done");
+    if (stored != info.generations_done)
+      throw ArchiveError(
+          path + ": refusing to set generations_done = " + std::to_string(info.generations_done) +
+          " in a state change (archive has " + std::to_string(stored) + ")");
+    step("attributes");
+    write_run_info(file, info);
+  });
 }
 
 // ---- Archive (reader) --------------------------------------------------------------------------

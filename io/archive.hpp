@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -113,16 +114,27 @@ FitnessStats fitness_stats(const std::vector<double>& fitness);
 
 // ---- writing (rank 0 only; every call is atomic, see the file comment) -------------------------
 
+// Fault injection, for tests only: called with a step name ("copy", "/generations/000003/id",
+// "flush", "rename", ...) before every write step of an archive update. A hook that throws
+// (e.g. std::system_error(ENOSPC)) makes that step fail as a full disk would; the update then
+// fails like a real one (ArchiveError, temporary removed, archive unchanged). Empty = no hook.
+using WriteStepHook = std::function<void(const std::string& step)>;
+
 // Throws ArchiveError unless a file can be created next to `path` (directory exists and is
 // writable, `path` is not a directory). Touches nothing that exists.
 void check_output_path(const std::string& path);
 // New archive with root attributes, /config, an empty /stats and no generation.
-void create_archive(const std::string& path, const RunInfo& info, const std::string& config_text);
+void create_archive(const std::string& path, const RunInfo& info, const std::string& config_text,
+                    const WriteStepHook& hook = {});
 // Adds /generations/<G>, appends a /stats row, replaces /checkpoint and the root attributes.
+// `info.generations_done` should be record.generation + 1 (master/run.cpp counts a
+// generation only once this call has succeeded).
 void append_generation(const std::string& path, const RunInfo& info, const GenerationRecord& record,
-                       const StatsRow& stats, const Checkpoint& checkpoint);
-// Replaces the root attributes (state changes, end time).
-void update_run_info(const std::string& path, const RunInfo& info);
+                       const StatsRow& stats, const Checkpoint& checkpoint,
+                       const WriteStepHook& hook = {});
+// Replaces the root attributes (state changes, end time). `info.generations_done` must equal
+// the archive's: a state change never claims generations (ArchiveError otherwise).
+void update_run_info(const std::string& path, const RunInfo& info, const WriteStepHook& hook = {});
 
 // ---- reading ---------------------------------------------------------------------------------
 

@@ -45,6 +45,40 @@ int task_inputs(const Config& config) {
   return tasks::make_task(config)->controller_inputs();
 }
 
+// generations_done of the archive at `out`, -1 if it cannot be read.
+std::int64_t generations_on_disk(const std::string& out) {
+  try {
+    return Archive(out).info().generations_done;
+  } catch (const std::exception&) {
+    return -1;
+  }
+}
+
+// Archives generation `record.generation`; `info` counts it only once it is on disk. A failed
+// write (full disk, I/O error) leaves the archive and `info` at the previous generation, so the
+// error path's state change and a later --resume see a consistent archive: a failure loses at
+// most the generation in flight.
+void commit_generation(const std::string& out, RunInfo& info, const GenerationRecord& record,
+                       const StatsRow& stats, const Checkpoint& checkpoint,
+                       const io::WriteStepHook& fault) {
+  RunInfo next = info;
+  next.generations_done = record.generation + 1;
+  try {
+    append_generation(out, next, record, stats, checkpoint, fault);
+  } catch (const ArchiveError& e) {
+    // A failure after the rename (syncing the directory) has left the new archive in place:
+    // what is on disk, not what was intended, is what the state change and --resume build on.
+    if (generations_on_disk(out) == next.generations_done) info = next;
+    const std::string kept = info.generations_done == 0
+                                 ? "no generation yet"
+                                 : "generations 0-" + std::to_string(info.generations_done - 1);
+    throw RunError("generation " + std::to_string(record.generation) + " could not be archived (" +
+                   out + " still holds " + kept +
+                   " and can be continued with --resume): " + e.what());
+  }
+  info = next;
+}
+
 }  // namespace
 
 std::string iso8601_now() {
@@ -97,12 +131,18 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
   info.state = "running";
 
   std::error_code ec;
-  const bool exists = fs::exists(out, ec);
   try {
     check_output_path(out);
   } catch (const ArchiveError& e) {
     throw StartupError(e.what());
   }
+  try {
+    run.lock.emplace(out, info.host);
+  } catch (const io::RunLockError& e) {
+    throw StartupError(e.what());
+  }
+  // Only now, under the lock, is "does the archive exist" an answer that stays true.
+  const bool exists = fs::exists(out, ec);
   if (exists && options.resume) {
     try {
       const Archive archive(out);
@@ -174,9 +214,9 @@ RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporte
     if (run.resumed) {
       info.state = "running";
       info.end_time.clear();
-      update_run_info(out, info);
+      update_run_info(out, info, run.options.archive_fault);
     } else {
-      create_archive(out, info, run.config_text);
+      create_archive(out, info, run.config_text, run.options.archive_fault);
     }
     archive_written = true;
 
@@ -276,9 +316,9 @@ RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporte
                      rec.sd,
                      static_cast<double>(rec.species_count),
                      eval_seconds > 0 ? static_cast<double>(rec.evaluations) / eval_seconds : 0.0};
-      info.generations_done = g + 1;
-      append_generation(out, info, rec, stats,
-                        Checkpoint{population.generation(), population.serialize()});
+      commit_generation(out, info, rec, stats,
+                        Checkpoint{population.generation(), population.serialize()},
+                        run.options.archive_fault);
       progress.generation_finished(GenerationSummary{g, rec.best, rec.mean, rec.species_count,
                                                      rec.evaluations, eval_seconds,
                                                      seconds_since(t_generation)});
@@ -290,7 +330,7 @@ RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporte
     }
     info.state = outcome == RunOutcome::complete ? "complete" : "interrupted";
     info.end_time = iso8601_now();
-    update_run_info(out, info);
+    update_run_info(out, info, run.options.archive_fault);
     return outcome;
   } catch (const std::exception& e) {
     // Leave the archive marked as not running (best effort: it already holds the last
@@ -299,7 +339,7 @@ RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporte
       try {
         info.state = "interrupted";
         info.end_time = iso8601_now();
-        update_run_info(out, info);
+        update_run_info(out, info, run.options.archive_fault);
       } catch (...) {
       }
     }

@@ -17,6 +17,7 @@
 #include "common/eval_types.hpp"
 #include "evo/population.hpp"
 #include "io/archive.hpp"
+#include "io/run_lock.hpp"
 #include "master/progress.hpp"
 #include "master/scheduler.hpp"
 
@@ -66,6 +67,8 @@ struct RunOptions {
   bool resume = false;     // continue `out_path` if it exists (a new run otherwise)
   bool overwrite = false;  // replace an existing `out_path` (at the first archive write)
   std::string host;        // "" = gethostname()
+  // Fault injection for tests only (io/archive.hpp): passed to every archive write of the run.
+  io::WriteStepHook archive_fault;
 };
 
 enum class RunOutcome {
@@ -84,11 +87,14 @@ struct PreparedRun {
   std::optional<evo::Population> population;
   bool already_complete = false;
   bool resumed = false;
+  // Held from start-up to the end of the run (io/run_lock.hpp): no other run writes the archive.
+  std::optional<io::RunLock> lock;
 };
 
-// Start-up: validates the output path, loads the checkpoint for --resume (the config hash must
-// match the archive's), creates the population. Throws StartupError (nothing touched) or
-// ConfigError. Writes nothing.
+// Start-up: validates the output path, takes the run lock (a second run on the same archive
+// fails here, naming the holder), loads the checkpoint for --resume (the config hash must match
+// the archive's), creates the population. Throws StartupError (nothing touched) or
+// ConfigError. Writes nothing but the lock file.
 PreparedRun prepare_run(const Config& config, const RunOptions& options, int ranks);
 // The loop. Creates or updates the archive; throws RunError (the archive then holds the last
 // consistent checkpoint; its state is set to "interrupted" when possible).

@@ -9,6 +9,7 @@
 #include <mpi.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/mount.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -522,6 +523,101 @@ TEST(SoftevoMpi, AFailingEvaluationDoesNotStopTheRun) {
     }
   }
   EXPECT_EQ(Archive(out).info().state, "complete");
+}
+
+// A real full disk (a 300 kB tmpfs; CI runs as root, elsewhere the test is skipped): the run
+// fails naming the cause, the archive keeps every generation it claims, and a --resume once
+// space is freed completes with the digest of an uninterrupted run.
+TEST(SoftevoMpi, FullDiskLosesAtMostTheGenerationInFlight) {
+  TempDir dir;
+  const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
+  const std::vector<std::string> common = {"--config", cfg, "--generations", "6"};
+  const std::string ref = dir.file("ref.h5");
+  std::vector<std::string> args = common;
+  args.insert(args.end(), {"--out", ref});
+  ASSERT_EQ(run_on(world_size(), args), 0);
+  const Digests expected = digests(ref);
+  std::string skip;
+  if (world_rank() == 0) {
+    const std::string small = dir.file("small");
+    fs::create_directory(small);
+    if (::mount("tmpfs", small.c_str(), "tmpfs", 0, "size=300k") != 0) {
+      skip = "cannot mount a small tmpfs (" + std::string(std::strerror(errno)) +
+             "; needs root): no real full-disk test here";
+    } else {
+      const std::string out = small + "/run.h5";
+      std::vector<std::string> cargs = common;
+      cargs.insert(cargs.end(), {"--out", out});
+      const pid_t child = spawn_child(cargs, dir.file("full.log"));
+      EXPECT_NE(wait_exit(child), 0) << "the run fit into 300 kB: make it longer";
+      const std::string log = file_bytes(dir.file("full.log"));
+      EXPECT_NE(log.find("No space left on device"), std::string::npos) << log;
+      {
+        const Archive a(out);
+        const RunInfo info = a.info();
+        EXPECT_GE(info.generations_done, 1);
+        EXPECT_LT(info.generations_done, 6);
+        EXPECT_EQ(static_cast<std::int64_t>(a.generations().size()), info.generations_done);
+        ASSERT_TRUE(a.checkpoint().has_value());
+        EXPECT_EQ(a.checkpoint()->generation, info.generations_done);
+      }
+      EXPECT_EQ(::mount("tmpfs", small.c_str(), "tmpfs", MS_REMOUNT, "size=8m"), 0)
+          << std::strerror(errno);
+      cargs.push_back("--resume");
+      const pid_t again = spawn_child(cargs, dir.file("resume.log"));
+      EXPECT_EQ(wait_exit(again), 0) << file_bytes(dir.file("resume.log"));
+      const Archive a(out);
+      EXPECT_EQ(a.info().state, "complete");
+      EXPECT_EQ(hash_hex(fitness_digest(a)), expected.fitness);
+      EXPECT_EQ(hash_hex(content_digest(a)), expected.content);
+      ::umount2(small.c_str(), MNT_DETACH);
+    }
+  }
+  skip = bcast_string(skip);
+  if (!skip.empty()) GTEST_SKIP() << skip;
+}
+
+// Two runs on one --out: while the first runs, a second (with or without --resume) fails at
+// once naming the first's pid and host, and touches nothing; the first's archive equals a solo
+// run's.
+TEST(SoftevoMpi, SecondRunOnTheSameOutIsRefusedWhileTheFirstRuns) {
+  TempDir dir;
+  const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
+  const std::vector<std::string> common = {"--config", cfg, "--generations", "40"};
+  const std::string ref = dir.file("ref.h5");
+  std::vector<std::string> args = common;
+  args.insert(args.end(), {"--out", ref});
+  ASSERT_EQ(run_on(world_size(), args), 0);
+  const Digests expected = digests(ref);
+  if (world_rank() != 0) return;
+  const std::string out = dir.file("shared.h5");
+  std::vector<std::string> cargs = common;
+  cargs.insert(cargs.end(), {"--out", out});
+  const pid_t first = spawn_child(cargs, dir.file("first.log"));
+  ASSERT_TRUE(wait_for_generations(out, 1, first)) << file_bytes(dir.file("first.log"));
+  for (const char* extra : {"", "--resume"}) {
+    std::vector<std::string> second_args = cargs;
+    if (*extra != '\0') second_args.push_back(extra);
+    const std::string log = dir.file("second.log");
+    const auto t0 = std::chrono::steady_clock::now();
+    const pid_t second = spawn_child(second_args, log);
+    EXPECT_EQ(wait_exit(second), 2) << file_bytes(log);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_LT(seconds, 30.0);
+    int st = 0;
+    ASSERT_EQ(waitpid(first, &st, WNOHANG), 0) << "the first run ended before the second "
+                                                  "started: make it longer";
+    const std::string text = file_bytes(log);
+    EXPECT_NE(
+        text.find("another run is writing this archive (pid " + std::to_string(first) + " on "),
+        std::string::npos)
+        << text;
+  }
+  EXPECT_EQ(wait_exit(first), 0) << file_bytes(dir.file("first.log"));
+  const Archive a(out);
+  EXPECT_EQ(hash_hex(fitness_digest(a)), expected.fitness);
+  EXPECT_EQ(hash_hex(content_digest(a)), expected.content);
 }
 
 }  // namespace

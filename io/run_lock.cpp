@@ -1,0 +1,81 @@
+#include "io/run_lock.hpp"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <utility>
+
+namespace softevo::io {
+namespace {
+
+// What the lock file says about its holder; "" when it cannot be read (the holder may be
+// between taking the lock and writing its name).
+std::string read_holder(int fd) {
+  char buf[512];
+  const ssize_t n = ::pread(fd, buf, sizeof buf - 1, 0);
+  if (n <= 0) return "";
+  std::string text(buf, static_cast<std::size_t>(n));
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\0')) text.pop_back();
+  // The file is ours to read but anyone's to write: keep the message one printable line.
+  for (char& c : text)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '?';
+  return text;
+}
+
+}  // namespace
+
+std::string lock_path_for(const std::string& archive_path) {
+  return archive_path + ".lock";
+}
+
+RunLock::RunLock(const std::string& archive_path, const std::string& host)
+    : path_(lock_path_for(archive_path)) {
+  // O_NOFOLLOW: a planted symlink must not make us create or truncate another file.
+  fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
+  if (fd_ < 0)
+    throw RunLockError(path_ + ": cannot open the run lock of " + archive_path + ": " +
+                       std::strerror(errno));
+  int rc = 0;
+  do {
+    rc = ::flock(fd_, LOCK_EX | LOCK_NB);
+  } while (rc != 0 && errno == EINTR);
+  if (rc != 0) {
+    const int err = errno;
+    const std::string holder = err == EWOULDBLOCK ? read_holder(fd_) : "";
+    ::close(fd_);
+    fd_ = -1;
+    if (err == EWOULDBLOCK)
+      throw RunLockError(archive_path + ": another run is writing this archive (" +
+                         (holder.empty() ? std::string("holder unknown") : holder) + ", lock " +
+                         path_ + "); wait for it to end or choose another --out");
+    throw RunLockError(path_ + ": cannot lock the run lock of " + archive_path + ": " +
+                       std::strerror(err));
+  }
+  const std::string me = "pid " + std::to_string(::getpid()) + " on " + host + "\n";
+  // Best effort: the lock is what protects the archive, the text only names the holder.
+  if (::ftruncate(fd_, 0) == 0) {
+    const ssize_t put = ::pwrite(fd_, me.data(), me.size(), 0);
+    (void)put;
+  }
+}
+
+RunLock::~RunLock() {
+  if (fd_ >= 0) ::close(fd_);  // releases the flock
+}
+
+RunLock::RunLock(RunLock&& other) noexcept
+    : path_(std::move(other.path_)), fd_(std::exchange(other.fd_, -1)) {}
+
+RunLock& RunLock::operator=(RunLock&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) ::close(fd_);
+    path_ = std::move(other.path_);
+    fd_ = std::exchange(other.fd_, -1);
+  }
+  return *this;
+}
+
+}  // namespace softevo::io

@@ -1,0 +1,46 @@
+// The exclusive lock of one run archive: two runs on one --out must never both write it.
+//
+// The lock is flock(LOCK_EX) on "<archive>.lock" beside the archive (not on the archive itself:
+// every generation replaces the archive by a rename, so its inode changes). The lock file
+// holds "pid <pid> on <host>" of the holder, for the message of the run that is refused.
+// The kernel drops an flock when its holder dies in any way (SIGKILL included), so a lock
+// cannot go stale; the file itself stays (removing it would let a third run lock a new file
+// while a second still holds the unlinked old one). docs/archive.md states what this means on
+// NFS.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace softevo::io {
+
+// Another process holds the lock, or the lock file cannot be opened; the message names the
+// lock file and, when held, the holder's pid and host.
+class RunLockError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// "<archive_path>.lock"
+std::string lock_path_for(const std::string& archive_path);
+
+class RunLock {
+ public:
+  // Takes the lock of `archive_path` without waiting and records this process (getpid(),
+  // `host`) in the lock file. Throws RunLockError if another process holds it. Creates the
+  // lock file if needed; touches nothing else.
+  RunLock(const std::string& archive_path, const std::string& host);
+  ~RunLock();
+  RunLock(RunLock&& other) noexcept;
+  RunLock& operator=(RunLock&& other) noexcept;
+  RunLock(const RunLock&) = delete;
+  RunLock& operator=(const RunLock&) = delete;
+
+  const std::string& path() const { return path_; }  // the lock file
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+};
+
+}  // namespace softevo::io

@@ -1,0 +1,269 @@
+// The run loop's archive discipline (master/run.hpp) without MPI: a write that fails at any
+// step of a generation's update leaves an archive that --resume continues to the same result,
+// and a second run on the same archive is refused while the first holds its lock. The evaluator
+// is a stand-in (fitness from the genome bytes), so each run takes milliseconds.
+#include "master/run.hpp"
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include "tasks/task.hpp"
+#include "tests/io/tmp_dir.hpp"
+
+namespace softevo::master {
+namespace {
+
+using io::Archive;
+
+Config small_config() {
+  Config c;
+  c.body.lattice = {5, 5, 5};
+  c.task.eval_seconds = 0.1;
+  c.neat.pop_size = 6;
+  c.run.seed = 5;
+  c.run.generations = 4;
+  return c;
+}
+
+// A deterministic stand-in for a physics evaluation: fitness from the genome's bytes.
+EvalResult fake_evaluation(const EvalRequest& request) {
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  for (std::uint8_t b : request.genome) h = (h ^ b) * 0x100000001b3ULL;
+  EvalResult r;
+  r.genome_id = request.genome_id;
+  r.unit = request.unit;
+  r.fitness = static_cast<double>(h >> 11) / static_cast<double>(1ULL << 53);
+  r.voxels = 10;
+  UnitFitness u;
+  u.fitness = r.fitness;
+  u.values.assign(tasks::make_task(small_config())->component_names().size(), r.fitness);
+  r.components.push_back(u);
+  return r;
+}
+
+// One run (or resume) of `config` into `out`; throws StartupError / RunError.
+RunOutcome run_once(const Config& config, const std::string& out, bool resume,
+                    const io::WriteStepHook& fault = {}) {
+  RunOptions options;
+  options.out_path = out;
+  options.resume = resume;
+  options.archive_fault = fault;
+  PreparedRun run = prepare_run(config, options, 1);
+  LocalExecutor executor(fake_evaluation);
+  ProgressReporter progress = ProgressReporter::silent();
+  return execute_run(run, executor, progress);
+}
+
+std::string fitness_digest_of(const std::string& path) {
+  return hash_hex(io::fitness_digest(Archive(path)));
+}
+
+// A full disk for the archive writes of a fresh run: fails (ENOSPC) write step `fail_at` of
+// the update that archives generation `generation` (the run's (generation + 1)-th copy of the
+// archive; the first update creates it) and, if `stays_full`, every write after it.
+class FullDisk {
+ public:
+  FullDisk(std::int64_t generation, int fail_at, bool stays_full)
+      : state_(std::make_shared<State>()) {
+    state_->generation = generation;
+    state_->fail_at = fail_at;
+    state_->stays_full = stays_full;
+  }
+  void operator()(const std::string& step) const {
+    State& s = *state_;
+    if (step == "copy") {
+      ++s.copies;
+      s.index = 0;
+    }
+    const bool hit = s.copies == s.generation + 1 && s.index == s.fail_at;
+    ++s.index;
+    if (hit || (s.failed && s.stays_full)) {
+      s.failed = true;
+      throw std::system_error(ENOSPC, std::generic_category(), step);
+    }
+  }
+  bool failed() const { return state_->failed; }
+
+ private:
+  struct State {
+    std::int64_t generation = 0;
+    int fail_at = 0;
+    bool stays_full = false;
+    std::int64_t copies = 0;
+    int index = 0;
+    bool failed = false;
+  };
+  std::shared_ptr<State> state_;  // shared by the copies std::function makes
+};
+
+// The write steps of the update that archives generation 1.
+std::vector<std::string> steps_of_a_generation(const Config& config, const std::string& dir) {
+  std::vector<std::string> all;
+  run_once(config, dir + "/count.h5", false, [&](const std::string& name) { all.push_back(name); });
+  std::vector<std::string> steps;
+  int copies = 0;
+  for (const std::string& name : all) {
+    if (name == "copy") ++copies;
+    if (copies == 2) steps.push_back(name);
+  }
+  return steps;
+}
+
+TEST(RunArchive, WriteStepsOfAGenerationAreKnown) {
+  test::TmpDir dir;
+  const std::vector<std::string> expected = {"copy",       "/generations/000001",
+                                             "/stats",     "/checkpoint",
+                                             "attributes", "flush",
+                                             "close",      "fsync",
+                                             "rename",     "fsync directory"};
+  EXPECT_EQ(steps_of_a_generation(small_config(), dir.path), expected);
+}
+
+// A failure at every write step of generation 1 (the disk full once, or for good) loses at
+// most that generation: the archive still holds generation 0 consistently, the error names
+// the real cause, and --resume (space freed) gives the digest of an uninterrupted run.
+TEST(RunArchive, FailureAtEveryWriteOfAGenerationLeavesAResumableArchive) {
+  test::TmpDir dir;
+  const Config config = small_config();
+  const std::string ref = dir.file("ref.h5");
+  ASSERT_EQ(run_once(config, ref, false), RunOutcome::complete);
+  const std::string expected = fitness_digest_of(ref);
+  const std::vector<std::string> steps = steps_of_a_generation(config, dir.path);
+  ASSERT_EQ(steps.size(), 10u);
+
+  for (bool stays_full : {false, true}) {
+    for (std::size_t k = 0; k < steps.size(); ++k) {
+      SCOPED_TRACE("fail at step " + std::to_string(k) + " (" + steps[k] + ")" +
+                   (stays_full ? ", disk stays full" : ", once"));
+      const std::string out = dir.file("fault.h5");
+      std::filesystem::remove(out);
+      const FullDisk fault(1, static_cast<int>(k), stays_full);
+      try {
+        run_once(config, out, false, fault);
+        ADD_FAILURE() << "the run did not fail";
+      } catch (const RunError& e) {
+        EXPECT_NE(std::string(e.what()).find("No space left on device"), std::string::npos)
+            << e.what();
+        EXPECT_NE(std::string(e.what()).find("--resume"), std::string::npos) << e.what();
+      }
+      EXPECT_TRUE(fault.failed());
+      {
+        // Syncing the directory comes after the rename: the new archive is then in place.
+        const std::int64_t kept = steps[k] == "fsync directory" ? 2 : 1;
+        const Archive a(out);
+        const io::RunInfo info = a.info();
+        EXPECT_EQ(info.generations_done, kept);
+        EXPECT_EQ(static_cast<std::int64_t>(a.generations().size()), kept);
+        EXPECT_EQ(info.state, stays_full ? "running" : "interrupted");
+        ASSERT_TRUE(a.checkpoint().has_value());
+        EXPECT_EQ(a.checkpoint()->generation, kept);
+      }
+      ASSERT_EQ(run_once(config, out, true), RunOutcome::complete);
+      EXPECT_EQ(fitness_digest_of(out), expected);
+      EXPECT_EQ(Archive(out).info().state, "complete");
+      for (const auto& e : std::filesystem::directory_iterator(dir.path))
+        EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
+    }
+  }
+}
+
+std::string file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// A resume into a full disk fails at its first write and leaves the archive byte for byte as
+// it was; with space again it completes the run.
+TEST(RunArchive, ResumeIntoAFullDiskLeavesTheArchiveAsItWas) {
+  test::TmpDir dir;
+  const Config config = small_config();
+  const std::string ref = dir.file("ref.h5");
+  ASSERT_EQ(run_once(config, ref, false), RunOutcome::complete);
+  const std::string out = dir.file("run.h5");
+  EXPECT_THROW(run_once(config, out, false, FullDisk(2, 0, true)), RunError);
+  const std::string before = file_bytes(out);
+  const auto full = [](const std::string& step) {
+    throw std::system_error(ENOSPC, std::generic_category(), step);
+  };
+  EXPECT_THROW(run_once(config, out, true, full), RunError);
+  EXPECT_TRUE(file_bytes(out) == before);
+  EXPECT_EQ(Archive(out).generations(), (std::vector<std::int64_t>{0, 1}));
+  ASSERT_EQ(run_once(config, out, true), RunOutcome::complete);
+  EXPECT_EQ(fitness_digest_of(out), fitness_digest_of(ref));
+}
+
+// The run lock: a second run on the same archive is refused at start-up, naming the holder,
+// and touches nothing; the lock of a killed process does not block the next start.
+TEST(RunLock, SecondRunOnTheSameArchiveIsRefused) {
+  test::TmpDir dir;
+  const Config config = small_config();
+  const std::string out = dir.file("run.h5");
+  RunOptions options;
+  options.out_path = out;
+  PreparedRun first = prepare_run(config, options, 1);
+  for (bool resume : {false, true}) {
+    options.resume = resume;
+    try {
+      prepare_run(config, options, 1);
+      ADD_FAILURE() << "second start accepted (resume = " << resume << ")";
+    } catch (const StartupError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("another run"), std::string::npos) << m;
+      EXPECT_NE(m.find("pid " + std::to_string(::getpid()) + " on " + host_name()),
+                std::string::npos)
+          << m;
+    }
+  }
+  EXPECT_FALSE(std::filesystem::exists(out));
+  LocalExecutor executor(fake_evaluation);
+  ProgressReporter progress = ProgressReporter::silent();
+  EXPECT_EQ(execute_run(first, executor, progress), RunOutcome::complete);
+}
+
+TEST(RunLock, LockOfAKilledProcessDoesNotBlock) {
+  test::TmpDir dir;
+  const std::string out = dir.file("run.h5");
+  int ready[2];
+  ASSERT_EQ(::pipe(ready), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    const io::RunLock lock(out, "child");
+    const char byte = 1;
+    if (::write(ready[1], &byte, 1) != 1) ::_exit(1);
+    ::pause();  // holds the lock until killed
+    ::_exit(0);
+  }
+  char byte = 0;
+  ASSERT_EQ(::read(ready[0], &byte, 1), 1);
+  ::close(ready[0]);
+  ::close(ready[1]);
+  try {
+    const io::RunLock probe(out, "parent");
+    ADD_FAILURE() << "the child's lock was not seen";
+  } catch (const io::RunLockError& e) {
+    EXPECT_NE(std::string(e.what()).find("pid " + std::to_string(child) + " on child"),
+              std::string::npos)
+        << e.what();
+  }
+  ::kill(child, SIGKILL);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  EXPECT_NO_THROW(run_once(small_config(), out, true));
+  EXPECT_EQ(Archive(out).info().state, "complete");
+}
+
+}  // namespace
+}  // namespace softevo::master
