@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <utility>
 
+#include "common/config.hpp"  // hash_hex
 #include "io/h5.hpp"
 
 namespace softevo::io {
@@ -292,6 +293,7 @@ void append_generation(const std::string& path, const RunInfo& info, const Gener
     g.write_attribute<std::int64_t>("species_count", record.species_count);
     g.write_attribute<std::int64_t>("evaluations", record.evaluations);
     g.write_attribute<double>("eval_wall_seconds", record.eval_wall_seconds);
+    g.write_string_attribute("digest", hash_hex(generation_digest(record)), Charset::utf8);
 
     // /stats: one more row.
     step("/stats");
@@ -467,6 +469,65 @@ bool is_run_archive(const std::string& path) {
   }
 }
 
+namespace {
+
+// The deterministic part of one generation, in content_digest's order (which must not change:
+// equal digests across builds are how runs are compared).
+void hash_generation_results(Fnv& h, const GenerationRecord& r) {
+  h.i64(r.generation);
+  h.u64(r.size());
+  h.i64(r.units);
+  // Named columns are part of the content; an archive without names (the legacy six) keeps
+  // the digest it always had.
+  if (r.component_columns != legacy_component_columns())
+    for (const std::string& c : r.component_columns) h.str(c);
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    h.i64(r.id[i]);
+    h.i64(r.parent1[i]);
+    h.i64(r.parent2[i]);
+    h.i64(r.species[i]);
+    h.byte(r.status[i]);
+    h.f64(r.fitness[i]);
+    h.i64(r.voxels[i]);
+    h.i64(r.chambers[i]);
+    h.bytes(r.genome[i]);
+  }
+  for (double c : r.components) h.f64(c);
+  h.f64(r.best);
+  h.f64(r.mean);
+  h.f64(r.sd);
+  h.i64(r.species_count);
+  h.i64(r.evaluations);
+}
+
+}  // namespace
+
+std::uint64_t generation_digest(const GenerationRecord& r) {
+  Fnv h;
+  hash_generation_results(h, r);
+  for (std::size_t i = 0; i < r.size(); ++i) {
+    h.f64(r.wall_seconds[i]);
+    h.i64(r.worker_rank[i]);
+  }
+  h.f64(r.eval_wall_seconds);
+  return h.value();
+}
+
+std::optional<std::uint64_t> Archive::stored_generation_digest(std::int64_t gen) const {
+  return archive_errors([&]() -> std::optional<std::uint64_t> {
+    const std::string name = "generations/" + generation_group_name(gen);
+    const h5::Group g = file_->open_group(name);
+    if (!g.has_attribute("digest")) return std::nullopt;
+    const std::string text = g.read_string_attribute("digest");
+    char* end = nullptr;
+    const unsigned long long v = std::strtoull(text.c_str(), &end, 16);
+    if (text.size() != 16 || end != text.c_str() + text.size())
+      throw ArchiveError(path_ + ": /" + name + ": attribute digest \"" + text +
+                         "\" is not 16 hex digits");
+    return v;
+  });
+}
+
 std::uint64_t fitness_digest(const Archive& archive) {
   Fnv h;
   for (std::int64_t gen : archive.generations()) {
@@ -492,31 +553,7 @@ std::uint64_t content_digest(const Archive& archive) {
   h.i64(info.generations_done);
   h.str(archive.config_text());
   for (std::int64_t gen : archive.generations()) {
-    const GenerationRecord r = archive.generation(gen);
-    h.i64(gen);
-    h.u64(r.size());
-    h.i64(r.units);
-    // Named columns are part of the content; an archive without names (the legacy six) keeps
-    // the digest it always had.
-    if (r.component_columns != legacy_component_columns())
-      for (const std::string& c : r.component_columns) h.str(c);
-    for (std::size_t i = 0; i < r.size(); ++i) {
-      h.i64(r.id[i]);
-      h.i64(r.parent1[i]);
-      h.i64(r.parent2[i]);
-      h.i64(r.species[i]);
-      h.byte(r.status[i]);
-      h.f64(r.fitness[i]);
-      h.i64(r.voxels[i]);
-      h.i64(r.chambers[i]);
-      h.bytes(r.genome[i]);
-    }
-    for (double c : r.components) h.f64(c);
-    h.f64(r.best);
-    h.f64(r.mean);
-    h.f64(r.sd);
-    h.i64(r.species_count);
-    h.i64(r.evaluations);
+    hash_generation_results(h, archive.generation(gen));
   }
   for (const StatsRow& s : archive.stats()) {
     h.f64(s.generation);

@@ -153,6 +153,9 @@ class Archive {
   GenerationRecord generation(std::int64_t g) const;
   std::vector<StatsRow> stats() const;
   std::optional<Checkpoint> checkpoint() const;
+  // The `digest` attribute of /generations/<G> (generation_digest at write time); nullopt in
+  // archives written before the attribute existed. Throws ArchiveError when it is malformed.
+  std::optional<std::uint64_t> stored_generation_digest(std::int64_t g) const;
 
  private:
   std::string path_;
@@ -171,6 +174,12 @@ std::uint64_t fitness_digest(const Archive& archive);
 // species, status, fitness, voxels, chambers, components, genomes), the deterministic /stats
 // columns and the checkpoint. Excludes version, git commit, host, ranks, times and timings.
 std::uint64_t content_digest(const Archive& archive);
+
+// FNV-1a 64 over every column and group attribute of one generation (timings included): the
+// integrity digest stored at write time as the group's attribute `digest` (16 hex digits) and
+// recomputed by master/archive_check.hpp. Not an identity: fitness_digest and content_digest
+// are unchanged by it.
+std::uint64_t generation_digest(const GenerationRecord& record);
 
 // "000042"
 std::string generation_group_name(std::int64_t generation);

@@ -11,6 +11,7 @@
 
 #include "common/version.hpp"
 #include "evo/genome.hpp"
+#include "master/archive_check.hpp"
 #include "master/signals.hpp"
 #include "physics/revision.hpp"
 #include "tasks/task.hpp"
@@ -43,6 +44,16 @@ double seconds_since(Clock::time_point t) {
 
 int task_inputs(const Config& config) {
   return tasks::make_task(config)->controller_inputs();
+}
+
+// What to do about an archive that fails its checks.
+std::string repair_hint(const std::string& out, const ArchiveCheck& check) {
+  const std::string kept =
+      check.consistent_generations == 0
+          ? "no generation passes them"
+          : "generations 0-" + std::to_string(check.consistent_generations - 1) + " pass them";
+  return "(" + kept + "; `softevo repair " + out +
+         " -o FIXED.h5` copies those into a new file to resume from)";
 }
 
 // generations_done of the archive at `out`, -1 if it cannot be read.
@@ -146,6 +157,10 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
   if (exists && options.resume) {
     try {
       const Archive archive(out);
+      const ArchiveCheck check = check_archive(archive);
+      if (!check.ok())
+        throw StartupError(out + ": cannot resume: the archive fails its integrity checks:\n" +
+                           check.describe(out) + repair_hint(out, check));
       const RunInfo old = archive.info();
       if (old.config_hash != hash || archive.config_text() != run.config_text)
         throw StartupError(out + ": cannot resume: the archive was written with config hash " +
@@ -160,12 +175,6 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
             "start a new run");
       info.start_time = old.start_time;
       info.generations_done = old.generations_done;
-      const std::vector<std::int64_t> gens = archive.generations();
-      if (static_cast<std::int64_t>(gens.size()) != old.generations_done ||
-          (!gens.empty() && gens.back() != old.generations_done - 1))
-        throw StartupError(
-            out + ": cannot resume: generations_done = " + std::to_string(old.generations_done) +
-            " but " + std::to_string(gens.size()) + " generation groups");
       if (old.generations_done >= config.run.generations) {
         run.already_complete = true;
         run.info = old;

@@ -1,15 +1,18 @@
 // `softevo info RUN.h5 [--json]`: summary of a run archive (docs/archive.md): metadata, state,
 // per-generation best/mean, the resolved config, and two digests for one-line comparisons:
 // fitness_digest (every archived generation, id, status, fitness bits) and content_digest
-// (everything deterministic, see io/archive.hpp).
+// (everything deterministic, see io/archive.hpp). It also runs the integrity checks --resume
+// requires (master/archive_check.hpp) and exits 1 when one fails.
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "common/config.hpp"
 #include "common/printable.hpp"
 #include "io/archive.hpp"
+#include "master/archive_check.hpp"
 #include "tools/commands.hpp"
 
 namespace softevo::cli {
@@ -23,10 +26,31 @@ void register_info(CLI::App& app, int& exit_code) {
   cmd->callback([&exit_code, path, json] {
     const io::Archive archive(*path);
     const io::RunInfo info = archive.info();
-    const std::vector<io::StatsRow> stats = archive.stats();
-    const std::string fitness = hash_hex(io::fitness_digest(archive));
-    const std::string content = hash_hex(io::content_digest(archive));
-    const auto checkpoint = archive.checkpoint();
+    const master::ArchiveCheck check = master::check_archive(archive);
+    // A damaged archive is still summarised as far as it can be read; the checks say what
+    // is wrong.
+    const auto or_unreadable = [](auto&& read) -> std::string {
+      try {
+        return read();
+      } catch (const io::ArchiveError&) {
+        return "(unreadable)";
+      }
+    };
+    std::vector<io::StatsRow> stats;
+    try {
+      stats = archive.stats();
+    } catch (const io::ArchiveError&) {
+    }
+    const std::string fitness =
+        or_unreadable([&] { return hash_hex(io::fitness_digest(archive)); });
+    const std::string content =
+        or_unreadable([&] { return hash_hex(io::content_digest(archive)); });
+    std::optional<io::Checkpoint> checkpoint;
+    try {
+      checkpoint = archive.checkpoint();
+    } catch (const io::ArchiveError&) {
+    }
+    const std::string config_text = or_unreadable([&] { return archive.config_text(); });
     if (*json) {
       nlohmann::ordered_json j;
       j["path"] = *path;
@@ -55,7 +79,16 @@ void register_info(CLI::App& app, int& exit_code) {
                         {"sd", s.sd},
                         {"species_count", static_cast<std::int64_t>(s.species_count)},
                         {"evaluations_per_second", s.evaluations_per_second}});
-      j["config"] = archive.config_text();
+      j["config"] = config_text;
+      auto& integrity = j["integrity"];
+      integrity["ok"] = check.ok();
+      integrity["generations_checked"] = check.generations_checked;
+      integrity["generations_with_digest"] = check.generations_with_digest;
+      integrity["consistent_generations"] = check.consistent_generations;
+      auto& problems = integrity["problems"] = nlohmann::ordered_json::array();
+      for (const master::ArchiveProblem& p : check.problems)
+        problems.push_back(
+            {{"generation", p.generation}, {"check", p.check}, {"message", p.message}});
       std::printf("%s\n", j.dump(2).c_str());
     } else {
       // Archive strings are shown escaped: a file may carry terminal control sequences.
@@ -74,16 +107,26 @@ void register_info(CLI::App& app, int& exit_code) {
                   info.end_time.empty() ? "(running)" : shown(info.end_time).c_str());
       std::printf("fitness_digest   %s\n", fitness.c_str());
       std::printf("content_digest   %s\n", content.c_str());
+      if (check.ok())
+        std::printf("integrity        ok (%lld generations checked, %lld with a stored digest%s)\n",
+                    static_cast<long long>(check.generations_checked),
+                    static_cast<long long>(check.generations_with_digest),
+                    check.generations_with_digest < check.generations_checked
+                        ? "; the others predate digests and pass the other checks"
+                        : "");
+      else
+        std::printf("integrity        FAILED: %zu problem(s); generations 0..%lld consistent\n%s",
+                    check.problems.size(), static_cast<long long>(check.consistent_generations) - 1,
+                    printable(check.describe(*path), Newlines::keep).c_str());
       std::printf("\n%10s %12s %12s %12s %8s %10s\n", "generation", "best", "mean", "sd", "species",
                   "eval/s");
       for (const auto& s : stats)
         std::printf("%10lld %12.6g %12.6g %12.6g %8lld %10.3g\n",
                     static_cast<long long>(s.generation), s.best, s.mean, s.sd,
                     static_cast<long long>(s.species_count), s.evaluations_per_second);
-      std::printf("\n# resolved config\n%s",
-                  printable(archive.config_text(), Newlines::keep).c_str());
+      std::printf("\n# resolved config\n%s", printable(config_text, Newlines::keep).c_str());
     }
-    exit_code = kExitOk;
+    exit_code = check.ok() ? kExitOk : kExitMismatch;
   });
 }
 

@@ -33,5 +33,6 @@ void register_champions(CLI::App& app, int& exit_code);
 void register_bench_eval(CLI::App& app, int& exit_code);
 void register_info(CLI::App& app, int& exit_code);
 void register_export(CLI::App& app, int& exit_code);
+void register_repair(CLI::App& app, int& exit_code);
 
 }  // namespace softevo::cli

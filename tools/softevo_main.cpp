@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   softevo::cli::register_bench_eval(app, exit_code);
   softevo::cli::register_info(app, exit_code);
   softevo::cli::register_export(app, exit_code);
+  softevo::cli::register_repair(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

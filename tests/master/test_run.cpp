@@ -19,56 +19,13 @@
 #include <system_error>
 #include <vector>
 
-#include "tasks/task.hpp"
 #include "tests/io/tmp_dir.hpp"
+#include "tests/master/fake_run.hpp"
 
 namespace softevo::master {
 namespace {
 
 using io::Archive;
-
-Config small_config() {
-  Config c;
-  c.body.lattice = {5, 5, 5};
-  c.task.eval_seconds = 0.1;
-  c.neat.pop_size = 6;
-  c.run.seed = 5;
-  c.run.generations = 4;
-  return c;
-}
-
-// A deterministic stand-in for a physics evaluation: fitness from the genome's bytes.
-EvalResult fake_evaluation(const EvalRequest& request) {
-  std::uint64_t h = 0xcbf29ce484222325ULL;
-  for (std::uint8_t b : request.genome) h = (h ^ b) * 0x100000001b3ULL;
-  EvalResult r;
-  r.genome_id = request.genome_id;
-  r.unit = request.unit;
-  r.fitness = static_cast<double>(h >> 11) / static_cast<double>(1ULL << 53);
-  r.voxels = 10;
-  UnitFitness u;
-  u.fitness = r.fitness;
-  u.values.assign(tasks::make_task(small_config())->component_names().size(), r.fitness);
-  r.components.push_back(u);
-  return r;
-}
-
-// One run (or resume) of `config` into `out`; throws StartupError / RunError.
-RunOutcome run_once(const Config& config, const std::string& out, bool resume,
-                    const io::WriteStepHook& fault = {}) {
-  RunOptions options;
-  options.out_path = out;
-  options.resume = resume;
-  options.archive_fault = fault;
-  PreparedRun run = prepare_run(config, options, 1);
-  LocalExecutor executor(fake_evaluation);
-  ProgressReporter progress = ProgressReporter::silent();
-  return execute_run(run, executor, progress);
-}
-
-std::string fitness_digest_of(const std::string& path) {
-  return hash_hex(io::fitness_digest(Archive(path)));
-}
 
 // A full disk for the archive writes of a fresh run: fails (ENOSPC) write step `fail_at` of
 // the update that archives generation `generation` (the run's (generation + 1)-th copy of the
