@@ -6,8 +6,7 @@
 #   tools/bootstrap.sh clang        the physics bit tests built with clang (same golden hashes)
 #   tools/bootstrap.sh minimal      the optional dependencies really are optional: softevo-mpi
 #                                   without GoogleTest, libpng and the system's Eigen, CLI11 and
-#                                   nlohmann-json (downloaded instead), and the core libraries
-#                                   without MPI and HDF5
+#                                   nlohmann-json (downloaded instead)
 #   tools/bootstrap.sh aarch64      the same bits on AArch64: the core cross-compiled with Debian's
 #                                   g++-aarch64-linux-gnu, its bit tests run under qemu-user
 # Idempotent: packages already installed are not touched, builds are incremental.
@@ -131,10 +130,8 @@ case "${1:-}" in
       -DSOFTEVO_REQUIRE_MPI=ON -DSOFTEVO_REQUIRE_HDF5=ON
     build_timed "$ROOT/build-minimal-mpi" softevo-mpi
     "$ROOT/build-minimal-mpi/bin/softevo-mpi" --help >/dev/null
-    # The core (what a cross build for another architecture uses): no MPI, no HDF5.
-    configure_timed "$ROOT/build-minimal-core" -DCMAKE_DISABLE_FIND_PACKAGE_MPI=ON \
-      -DCMAKE_DISABLE_FIND_PACKAGE_HDF5=ON -DSOFTEVO_REQUIRE_TESTS=ON
-    build_timed "$ROOT/build-minimal-core" common physics evo worker
+    # The core without MPI and HDF5 is built (and its bit tests run) by the aarch64 mode, whose
+    # cross toolchain has neither.
     ;;
   aarch64)
     # The core (common, physics, evo, worker) cross-compiled for AArch64 (toolchain:
