@@ -1,5 +1,6 @@
 // Software rasteriser for `softevo render` (see render.hpp for the approach).
 #include "render/render.hpp"
+#include "common/safe_write.hpp"
 
 #ifdef SOFTEVO_HAVE_PNG
 #include <png.h>
@@ -335,11 +336,15 @@ void write_png(const Image& image, const std::string& path) {
   out.width = static_cast<png_uint_32>(image.width);
   out.height = static_cast<png_uint_32>(image.height);
   out.format = PNG_FORMAT_RGB;
-  if (png_image_write_to_file(&out, path.c_str(), 0, image.rgb.data(), 0, nullptr) == 0) {
+  // Atomic, and never through a symlink or over a special file (docs/output-files.md).
+  AtomicOutput file(path, Overwrite::replace);
+  if (png_image_write_to_file(&out, file.temp_path().c_str(), 0, image.rgb.data(), 0, nullptr) ==
+      0) {
     const std::string reason = out.message;
     png_image_free(&out);
     throw std::runtime_error("cannot write PNG " + path + ": " + reason);
   }
+  file.commit();
 }
 
 Image read_png(const std::string& path) {
