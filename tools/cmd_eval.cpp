@@ -26,6 +26,7 @@
 
 #include "common/config.hpp"
 #include "common/eval_types.hpp"
+#include "common/printable.hpp"
 #include "common/robot.hpp"
 #include "io/trace.hpp"
 #include "physics/model.hpp"
@@ -232,7 +233,8 @@ int run_eval(const EvalArgs& a) {
     j["message"] = result.message;
     std::printf("%s\n", j.dump().c_str());
   } else {
-    std::printf("robot        %s\n", robot.name.empty() ? a.robot.c_str() : robot.name.c_str());
+    // The name comes from the file: shown escaped (it may hold terminal control sequences).
+    std::printf("robot        %s\n", printable(robot.name.empty() ? a.robot : robot.name).c_str());
     std::printf("task         %s (%s loop%s), integrator %s, ablate %s\n",
                 to_string(config.task.kind), robot.controller.closed_loop ? "closed" : "open",
                 robot.controller.directed ? ", directed controller" : "",

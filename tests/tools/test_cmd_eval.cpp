@@ -25,9 +25,9 @@ using test::binary;
 using test::run_command;
 
 // A 6x3x3 closed-loop directed robot of one material with a two-cell chamber.
-fs::path write_robot(const fs::path& dir) {
+fs::path write_robot(const fs::path& dir, const std::string& name = "cmd-eval") {
   RobotFile r;
-  r.name = "cmd-eval";
+  r.name = name;
   r.body.lattice = {6, 3, 3};
   r.body.voxel_size = 0.01;
   for (int k = 1; k <= 10; ++k) r.body.materials.push_back({1.0e4 * k, 1000.0});
@@ -36,7 +36,7 @@ fs::path write_robot(const fs::path& dir) {
   r.body.cells[r.body.cell_index(3, 1, 1)] = 11;
   r.controller = test::make_controller(
       true, true, [](int i) { return std::sin(0.3 + 1.7 * i); }, 2.0);
-  const fs::path path = dir / "robot.json";
+  const fs::path path = dir / (name == "cmd-eval" ? "robot.json" : "named.json");
   write_robot_file(r, path.string());
   return path;
 }
@@ -125,6 +125,16 @@ TEST_F(CmdEval, SimdWidthChangesNothingButTheReportedWidth) {
   const auto bad = run_command(eval + " --simd avx");
   EXPECT_EQ(bad.code, 2) << bad.output;
   EXPECT_NE(bad.output.find("--simd"), std::string::npos) << bad.output;
+}
+
+TEST_F(CmdEval, RobotNameIsPrintedWithControlCharactersEscaped) {
+  // A name that would clear the screen and set the window title if printed raw.
+  const fs::path robot = write_robot(dir_, "evil\x1b[2J\x1b]0;owned\x07");
+  const auto r = run_command(binary("softevo") + " eval '" + robot.string() + "' --seconds 0.1");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(r.output.find('\x1b'), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("robot        evil\\x1b[2J\\x1b]0;owned\\x07"), std::string::npos)
+      << r.output;
 }
 
 TEST_F(CmdEval, MalformedRobotFileNamesFileAndKey) {
