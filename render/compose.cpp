@@ -12,6 +12,7 @@ namespace softevo::render {
 namespace {
 
 constexpr int kMaxSnapshots = 64;
+constexpr int kTitleBandFontRows = 11;  // the 7-row font with 2 rows of margin above and below
 constexpr double kPi = 3.14159265358979323846;
 
 std::string time_label(double t) {
@@ -30,6 +31,18 @@ std::string shell_quote(const std::string& s) {
     }
   }
   return out + "'";
+}
+
+// `image` below a band of the sky's top colour holding `title`, in the font size the panels'
+// labels have (render_poses: one font pixel per 200 image rows, rounded).
+Image with_title_band(const Image& image, const std::string& title) {
+  const int size = std::max(1, (image.height + 100) / 200);
+  const int band = kTitleBandFontRows * size;
+  Image out(image.width, image.height + band, {247, 247, 252});
+  std::copy(image.rgb.begin(), image.rgb.end(),
+            out.rgb.begin() + static_cast<std::ptrdiff_t>(band) * image.width * 3);
+  draw_text(out, 6 * size, 2 * size, title, {40, 40, 48}, size);
+  return out;
 }
 
 }  // namespace
@@ -92,10 +105,12 @@ Image render_timelapse(const Clip& clip, View view, const Timelapse& timelapse, 
     std::vector<Image> panels;
     for (std::size_t i = 0; i < snaps.size(); ++i) {
       SceneOptions o = scene;
-      o.label = (i == 0 ? clip.name + "  " : std::string()) + time_label(snaps[i].time);
+      o.label = time_label(snaps[i].time);
       panels.push_back(render_poses(clip.body, {snaps[i]}, cam, o));
     }
-    return hstack(panels, 4);
+    // The name goes in a band above all panels: inside the first panel a long name ran into the
+    // second one.
+    return with_title_band(hstack(panels, 4), clip.name);
   }
   Eigen::AlignedBox3d framed = box;
   if (scene.target_direction_deg) {

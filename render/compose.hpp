@@ -39,9 +39,11 @@ struct Timelapse {
   std::optional<double> start;  // [s] default: 0 (top view) or 5 s; clamped into the clip
   Layout layout = Layout::strip;
 };
-// Strip: one panel per snapshot (size per panel, 0 = 360 x 300 pixels), the first labelled with
-// the name. Overlay: one scene (0 = 960 x 720 pixels), earlier snapshots fainter, with the
-// target line kept in view. Throws std::invalid_argument unless 1 <= snapshots <= 64.
+// Strip: one panel per snapshot (size per panel, 0 = 360 x 300 pixels), each labelled with its
+// time, below a title band with the name (11 font rows high, the font's pixel being
+// max(1, (height + 100) / 200) image pixels). Overlay: one scene (0 = 960 x 720 pixels), earlier
+// snapshots fainter, with the target line kept in view. Throws std::invalid_argument unless 1 <=
+// snapshots <= 64.
 Image render_timelapse(const Clip& clip, View view, const Timelapse& timelapse, int width,
                        int height, SceneOptions scene);
 

@@ -66,7 +66,35 @@ TEST(Compose, StillAndStripHaveTheRequestedSizes) {
   strip.span = 1.0;
   const Image panels = render_timelapse(bar.clip(), View::side, strip, 50, 40, small_scene());
   EXPECT_EQ(panels.width, 3 * 50 + 2 * 4);  // 4-pixel gaps
-  EXPECT_EQ(panels.height, 40);
+  EXPECT_EQ(panels.height, 40 + 11);        // the title band: 11 font rows of 1 pixel
+}
+
+// The name stands in a band of its own above the panels, so a long name cannot run into the
+// second panel's time label.
+TEST(Compose, StripTitleIsAboveThePanels) {
+  const MovingBar bar;
+  Timelapse strip;
+  strip.snapshots = 2;
+  strip.start = 0.0;
+  strip.span = 1.0;
+  Clip named = bar.clip();
+  named.name = "A LONG NAME THAT IS WIDER THAN ONE PANEL";
+  const Image titled = render_timelapse(named, View::side, strip, 60, 300, small_scene());
+  Clip unnamed = bar.clip();
+  unnamed.name.clear();
+  const Image plain = render_timelapse(unnamed, View::side, strip, 60, 300, small_scene());
+  const int band = 11 * 2;  // font pixel 2 at 300 rows
+  ASSERT_EQ(titled.height, 300 + band);
+  long title_pixels = 0, panel_differences = 0;
+  for (int y = 0; y < titled.height; ++y)
+    for (int x = 0; x < titled.width; ++x) {
+      if (y < band)
+        title_pixels += titled.pixel(x, y) != plain.pixel(x, y);
+      else
+        panel_differences += titled.pixel(x, y) != plain.pixel(x, y);
+    }
+  EXPECT_GT(title_pixels, 100);     // the name is drawn, across both panels' width
+  EXPECT_EQ(panel_differences, 0);  // and nothing of it inside the panels
 }
 
 TEST(Compose, OverlayIsOneSceneOfEverySnapshot) {

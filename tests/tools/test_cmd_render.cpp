@@ -143,13 +143,13 @@ TEST_F(CmdRender, TraceTimelapseStripHasOnePanelPerSnapshot) {
             0);
   const render::Image img = render::read_png(out);
   EXPECT_EQ(img.width, 3 * 200 + 2 * 4);  // panels + 4-pixel gaps
-  EXPECT_EQ(img.height, 150);
+  EXPECT_EQ(img.height, 11 + 150);  // the title band (11 font rows of 1 pixel) above the panels
   // The robot moves right from panel to panel: the first blue column advances.
   int first_blue[3];
   for (int panel = 0; panel < 3; ++panel) {
     first_blue[panel] = -1;
     for (int x = 0; x < 200 && first_blue[panel] < 0; ++x)
-      for (int y = 0; y < 150; ++y) {
+      for (int y = 11; y < 11 + 150; ++y) {
         const auto p = img.pixel(panel * 204 + x, y);
         if (p[2] > p[0] + 40 && p[2] > p[1] + 40) {
           first_blue[panel] = x;
