@@ -53,12 +53,14 @@ softevo_optional(NAME HDF5 FOUND HDF5_FOUND
                  HOW "install libhdf5-dev (Debian), or load your cluster's HDF5 module")
 
 # softevo_header_library(PACKAGE P TARGET T DEBIAN deb [MINIMUM v] [FIND_ARGS ...]
-#                        [VERSION v URLS u ... SHA256 h INCLUDE_DIR dir])
+#                        [VERSION v URLS u ... SHA256 h INCLUDE_DIR dir [DEBIAN_PACKAGE_FILE]])
 #   find_package(P MINIMUM); when missing and a pinned download is known, fetch it and define the
 #   INTERFACE target T over its headers (no build of the project's own CMake: we need headers
-#   only). Records how it was satisfied in SOFTEVO_SOURCE_<P> for the summary.
+#   only). DEBIAN_PACKAGE_FILE: the download is a Debian binary package (.deb), whose data
+#   archive holds the headers. Records how it was satisfied in SOFTEVO_SOURCE_<P> for the
+#   summary.
 function(softevo_header_library)
-  cmake_parse_arguments(H "" "PACKAGE;TARGET;DEBIAN;MINIMUM;VERSION;SHA256;INCLUDE_DIR"
+  cmake_parse_arguments(H "DEBIAN_PACKAGE_FILE" "PACKAGE;TARGET;DEBIAN;MINIMUM;VERSION;SHA256;INCLUDE_DIR"
                         "FIND_ARGS;URLS" ${ARGN})
   find_package(${H_PACKAGE} ${H_MINIMUM} QUIET ${H_FIND_ARGS})
   if(${H_PACKAGE}_FOUND AND TARGET ${H_TARGET})
@@ -74,14 +76,38 @@ function(softevo_header_library)
                         "or configure with -DSOFTEVO_FETCH_MISSING=ON to download it")
   endif()
   string(TOLOWER "softevo_dep_${H_PACKAGE}" content)
-  FetchContent_Declare(${content} URL ${H_URLS} URL_HASH SHA256=${H_SHA256})
-  FetchContent_GetProperties(${content})
-  if(NOT ${content}_POPULATED)
-    message(STATUS "${H_PACKAGE} not found: downloading ${H_VERSION} (SOFTEVO_FETCH_MISSING)")
-    FetchContent_Populate(${content})
+  if(H_DEBIAN_PACKAGE_FILE)
+    # A Debian binary package (an ar archive): its headers are in data.tar.xz.
+    set(root ${CMAKE_BINARY_DIR}/_deps/${content})
+    if(NOT EXISTS ${root}/${H_INCLUDE_DIR})
+      message(STATUS "${H_PACKAGE} not found: downloading ${H_VERSION} (SOFTEVO_FETCH_MISSING)")
+      set(fetched OFF)
+      foreach(url ${H_URLS})
+        file(DOWNLOAD ${url} ${root}/package.deb EXPECTED_HASH SHA256=${H_SHA256} STATUS status)
+        list(GET status 0 code)
+        if(code EQUAL 0)
+          set(fetched ON)
+          break()
+        endif()
+      endforeach()
+      if(NOT fetched)
+        message(FATAL_ERROR "${H_PACKAGE}: no download matched its SHA256 (${status}): ${how}")
+      endif()
+      file(ARCHIVE_EXTRACT INPUT ${root}/package.deb DESTINATION ${root}/package)
+      file(ARCHIVE_EXTRACT INPUT ${root}/package/data.tar.xz DESTINATION ${root})
+    endif()
+    set(include_root ${root})
+  else()
+    FetchContent_Declare(${content} URL ${H_URLS} URL_HASH SHA256=${H_SHA256})
+    FetchContent_GetProperties(${content})
+    if(NOT ${content}_POPULATED)
+      message(STATUS "${H_PACKAGE} not found: downloading ${H_VERSION} (SOFTEVO_FETCH_MISSING)")
+      FetchContent_Populate(${content})
+    endif()
+    set(include_root ${${content}_SOURCE_DIR})
   endif()
   add_library(${H_TARGET} INTERFACE IMPORTED GLOBAL)
-  target_include_directories(${H_TARGET} INTERFACE ${${content}_SOURCE_DIR}/${H_INCLUDE_DIR})
+  target_include_directories(${H_TARGET} INTERFACE ${include_root}/${H_INCLUDE_DIR})
   set(SOFTEVO_SOURCE_${H_PACKAGE} "downloaded ${H_VERSION}" PARENT_SCOPE)
 endfunction()
 
@@ -101,10 +127,15 @@ softevo_header_library(PACKAGE nlohmann_json MINIMUM 3 VERSION 3.11.2 TARGET nlo
        https://github.com/nlohmann/json/archive/refs/tags/v3.11.2.tar.gz
   SHA256 d69f9deb6a75e2580465c6c4c5111b89c4dc2fa94e3a85fcd2ffcd9a143d9273
   INCLUDE_DIR include)
-# toml++: Debian's 3.3.0+ds source tarball could not be downloaded to check its sum, so no
-# download is offered (an unchecked hash would be worse than a clear message).
-softevo_header_library(PACKAGE tomlplusplus TARGET tomlplusplus::tomlplusplus
-  DEBIAN libtomlplusplus-dev)
+# toml++: the Debian mirror serves no source tarball of 3.3.0+ds, so the headers come from the
+# binary package libtomlplusplus-dev (its sum is the one in Debian 12's Packages index). Its
+# headers are architecture-independent; without Debian's shared library they compile in toml++'s
+# header-only mode, the same parser.
+softevo_header_library(PACKAGE tomlplusplus VERSION 3.3.0 TARGET tomlplusplus::tomlplusplus
+  DEBIAN libtomlplusplus-dev DEBIAN_PACKAGE_FILE
+  URLS ${SOFTEVO_DEBIAN_POOL}/t/tomlplusplus/libtomlplusplus-dev_3.3.0%2bds-1_amd64.deb
+  SHA256 2779cce0001466dcf60eb6262ff68a888d49f9e30aee80c499d1d4f6f9f6e12e
+  INCLUDE_DIR usr/include)
 
 # CLI11 only serves the executables (softevo, softevo-mpi), which need HDF5.
 if(SOFTEVO_ENABLE_HDF5)

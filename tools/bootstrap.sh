@@ -5,8 +5,8 @@
 #   tools/bootstrap.sh sanitize     the test suite built with -fsanitize=address,undefined
 #   tools/bootstrap.sh clang        the physics bit tests built with clang (same golden hashes)
 #   tools/bootstrap.sh minimal      the optional dependencies really are optional: softevo-mpi
-#                                   without GoogleTest, libpng and the system's Eigen, CLI11 and
-#                                   nlohmann-json (downloaded instead)
+#                                   without GoogleTest, libpng and the system's Eigen, CLI11,
+#                                   nlohmann-json and toml++ (downloaded instead)
 #   tools/bootstrap.sh aarch64      the same bits on AArch64: the core cross-compiled with Debian's
 #                                   g++-aarch64-linux-gnu, its bit tests run under qemu-user
 # Idempotent: packages already installed are not touched, builds are incremental.
@@ -110,23 +110,26 @@ case "${1:-}" in
     ;;
   clang)
     # The physics gives the same bits with clang as with GCC: the golden hashes (every SIMD
-    # width, both integrators) and the lane/scalar bits of the reproducible math.
+    # width, both integrators), the lane/scalar bits of the reproducible math and the
+    # controller's tanh.
     PACKAGES+=(clang)
     install_dependencies
     cmake -S "$ROOT" -B "$ROOT/build-clang" -G Ninja -DCMAKE_BUILD_TYPE=Release \
       -DSOFTEVO_WERROR=ON -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ >/dev/null
     cmake --build "$ROOT/build-clang" -j"$JOBS" --target test_physics_determinism \
-      test_reproducible_math physics_golden_hash
+      test_reproducible_math physics_golden_hash test_elman_tanh
     "$ROOT/build-clang/tests/test_physics_determinism"
     "$ROOT/build-clang/tests/test_reproducible_math"
+    "$ROOT/build-clang/tests/test_elman_tanh"  # the controller's tanh: the same bits with clang
     ;;
   minimal)
     install_dependencies
-    # A cluster with a compiler, CMake, MPI, HDF5 (C) and toml++: the header-only libraries
-    # come from their pinned, hash-checked downloads (SOFTEVO_FETCH_MISSING).
+    # A cluster with a compiler, CMake, MPI and HDF5 (C): the header-only libraries come from
+    # their pinned, hash-checked downloads (SOFTEVO_FETCH_MISSING).
     configure_timed "$ROOT/build-minimal-mpi" -DCMAKE_DISABLE_FIND_PACKAGE_GTest=ON \
       -DCMAKE_DISABLE_FIND_PACKAGE_PNG=ON -DCMAKE_DISABLE_FIND_PACKAGE_Eigen3=ON \
       -DCMAKE_DISABLE_FIND_PACKAGE_CLI11=ON -DCMAKE_DISABLE_FIND_PACKAGE_nlohmann_json=ON \
+      -DCMAKE_DISABLE_FIND_PACKAGE_tomlplusplus=ON \
       -DSOFTEVO_REQUIRE_MPI=ON -DSOFTEVO_REQUIRE_HDF5=ON
     build_timed "$ROOT/build-minimal-mpi" softevo-mpi
     "$ROOT/build-minimal-mpi/bin/softevo-mpi" --help >/dev/null
@@ -155,7 +158,7 @@ case "${1:-}" in
     configure_timed "$ROOT/build-aarch64" -DCMAKE_TOOLCHAIN_FILE="$toolchain" \
       -DGTest_DIR="$gtest/install/lib/cmake/GTest" -DSOFTEVO_REQUIRE_TESTS=ON
     build_timed "$ROOT/build-aarch64" physics_golden_hash test_physics_determinism \
-      test_reproducible_math test_floor test_libm_bits test_champion_bits
+      test_reproducible_math test_floor test_libm_bits test_elman_tanh test_champion_bits
     # No fused multiply-add anywhere in the physics (it would round differently from x86-64):
     # -ffp-contract=off must keep GCC from fusing the NEON lanes' products and sums.
     fused=$(aarch64-linux-gnu-objdump -d "$ROOT"/build-aarch64/physics/CMakeFiles/physics.dir/*.o |
@@ -180,19 +183,13 @@ case "${1:-}" in
       run_aarch64 "$logs/3" "$tests/test_floor") &
     first=$!
     (run_aarch64 "$logs/4" "$tests/test_champion_bits" &&
-      run_aarch64 "$logs/5" "$tests/test_libm_bits" --gtest_filter=-LibmBits.TanhOfFloats) &
+      run_aarch64 "$logs/5" "$tests/test_libm_bits" &&
+      run_aarch64 "$logs/6" "$tests/test_elman_tanh") &
     second=$!
-    # tanhf (worker/controller.cpp) is known to differ on AArch64 (test_libm_bits.cpp): shown,
-    # not fatal, until the controller uses a reproducible tanh.
-    tanh_rc=0
-    run_aarch64 "$logs/6" "$tests/test_libm_bits" --gtest_filter=LibmBits.TanhOfFloats || tanh_rc=$?
     rc=0
     wait $first || rc=1
     wait $second || rc=1
     for log in "$logs"/[1-6]; do grep -vE '^\[ RUN|^$' "$log" || true; done
-    if [ $tanh_rc -ne 0 ]; then
-      echo "== KNOWN DIFFERENCE on AArch64: tanhf of the controller (see test_libm_bits.cpp)"
-    fi
     [ $rc -eq 0 ]
     ;;
   *)

@@ -1,6 +1,8 @@
 // Elman network controller (docs/model.md §4). See controller.hpp.
 #include "worker/controller.hpp"
 
+#include "worker/elman_tanh.hpp"
+
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -68,19 +70,19 @@ void elman_forward(const ElmanWeights& w, ElmanState& s, std::span<const float> 
     from_input += w.b_h[i];
     float from_context = 0.0f;  // context -> hidden layer; its bias is never set (0, §4.3)
     for (int c = 0; c < h; ++c) from_context += w.w_ch[c * h + i] * s.context[c];
-    s.hidden[i] = std::tanh(from_input + from_context);  // h(t)
+    s.hidden[i] = tanh_binary32(from_input + from_context);  // h(t)
   }
   for (int k = 0; k < o; ++k) {
     float a = 0.0f;
     for (int c = 0; c < h; ++c) a += w.w_ho[c * o + k] * s.hidden[c];
     a += w.b_o[k];
-    outputs[k] = std::tanh(a);  // y(t)
+    outputs[k] = tanh_binary32(a);  // y(t)
   }
   // c(t) = tanh(w_ctx * h(t) + (w_self * c(t-1) + b_ctx)); the hidden -> context bias is 0.
   for (int i = 0; i < h; ++i) {
     const float from_hidden = w.w_ctx[i] * s.hidden[i];
     const float from_self = w.w_self[i] * s.context[i] + w.b_ctx[i];
-    s.context[i] = std::tanh(from_hidden + from_self);
+    s.context[i] = tanh_binary32(from_hidden + from_self);
   }
 }
 
