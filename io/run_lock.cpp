@@ -25,7 +25,34 @@ std::string read_holder(int fd) {
   return text;
 }
 
+constexpr int kLockAttempts = 10;
+constexpr useconds_t kLockRetryMicroseconds = 20000;
+
 }  // namespace
+
+std::optional<std::string> lock_holder(const std::string& archive_path) {
+  const std::string path = lock_path_for(archive_path);
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+  if (fd < 0) {
+    if (errno == ENOENT) return std::nullopt;  // never locked: written before locks existed
+    return "holder unknown: cannot open " + path + ": " + std::strerror(errno);
+  }
+  int rc = 0;
+  do {
+    rc = ::flock(fd, LOCK_SH | LOCK_NB);
+  } while (rc != 0 && errno == EINTR);
+  std::optional<std::string> holder;
+  if (rc == 0) {
+    ::flock(fd, LOCK_UN);
+  } else if (errno == EWOULDBLOCK) {
+    const std::string text = read_holder(fd);
+    holder = text.empty() ? "holder unknown" : text;
+  } else {
+    holder = "holder unknown: cannot test " + path + ": " + std::strerror(errno);
+  }
+  ::close(fd);
+  return holder;
+}
 
 std::string lock_path_for(const std::string& archive_path) {
   return archive_path + ".lock";
@@ -38,10 +65,14 @@ RunLock::RunLock(const std::string& archive_path, const std::string& host)
   if (fd_ < 0)
     throw RunLockError(path_ + ": cannot open the run lock of " + archive_path + ": " +
                        std::strerror(errno));
+  // A few tries over ~0.2 s: lock_holder() of a `softevo info` holds a shared lock for
+  // microseconds, which must not make a starting run fail as if another run held it.
   int rc = 0;
-  do {
+  for (int attempt = 0;; ++attempt) {
     rc = ::flock(fd_, LOCK_EX | LOCK_NB);
-  } while (rc != 0 && errno == EINTR);
+    if (rc == 0 || (errno != EINTR && errno != EWOULDBLOCK) || attempt >= kLockAttempts) break;
+    if (errno == EWOULDBLOCK) ::usleep(kLockRetryMicroseconds);
+  }
   if (rc != 0) {
     const int err = errno;
     const std::string holder = err == EWOULDBLOCK ? read_holder(fd_) : "";

@@ -9,6 +9,7 @@
 // NFS.
 #pragma once
 
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -23,6 +24,12 @@ class RunLockError : public std::runtime_error {
 
 // "<archive_path>.lock"
 std::string lock_path_for(const std::string& archive_path);
+
+// Who holds the run lock of `archive_path` now ("pid 4242 on node17"; "holder unknown..." when
+// that cannot be told), nothing if no process does. Takes a shared lock for an instant (the
+// way to ask without seeing only this host's locks); RunLock retries briefly, so this never
+// makes a starting run fail. Creates nothing.
+std::optional<std::string> lock_holder(const std::string& archive_path);
 
 class RunLock {
  public:

@@ -12,6 +12,7 @@
 #include "common/version.hpp"
 #include "evo/genome.hpp"
 #include "master/archive_check.hpp"
+#include "master/run_state.hpp"
 #include "master/signals.hpp"
 #include "physics/revision.hpp"
 #include "tasks/task.hpp"
@@ -113,6 +114,8 @@ bool LocalExecutor::evaluate(GenerationScheduler& scheduler,
   while (auto unit = scheduler.next()) {
     if (stop_requested() == StopRequest::now) return false;
     EvalResult result = evaluate_(make_request(*unit));
+    // A stop-now during the evaluation may have abandoned it: never archive that result.
+    if (stop_requested() == StopRequest::now) return false;
     result.worker_rank = 0;
     scheduler.complete(result);
     progress.unit_done(scheduler.units_done(), scheduler.units_total());
@@ -175,6 +178,7 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
             "start a new run");
       info.start_time = old.start_time;
       info.generations_done = old.generations_done;
+      run.previous_run = previous_run_note(old, std::nullopt);  // the lock is ours now
       if (old.generations_done >= config.run.generations) {
         run.already_complete = true;
         run.info = old;

@@ -87,6 +87,9 @@ struct PreparedRun {
   std::optional<evo::Population> population;
   bool already_complete = false;
   bool resumed = false;
+  // --resume of an archive whose last run did not complete: what happened to it, in the words
+  // of master/run_state.hpp, for the start's console header.
+  std::optional<std::string> previous_run;
   // Held from start-up to the end of the run (io/run_lock.hpp): no other run writes the archive.
   std::optional<io::RunLock> lock;
 };

@@ -15,7 +15,10 @@ enum class StopRequest : int { none = 0, after_generation = 1, now = 2 };
 
 void install_stop_handlers();  // SIGTERM, SIGINT, SIGUSR1
 StopRequest stop_requested();
+// The signal behind the strongest stop request so far ("SIGTERM", "SIGINT", "SIGUSR1"), for the
+// message that says why a run stopped; "" when none arrived (or the request came from code).
+const char* stop_signal_name();
 void request_stop(StopRequest r);  // for tests and the drivers (keeps the strongest request)
-void clear_stop_request();         // for tests
+void clear_stop_request();         // for tests (also forgets the signal)
 
 }  // namespace softevo::master

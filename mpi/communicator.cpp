@@ -72,6 +72,31 @@ void Communicator::send(int dest, Tag tag, std::span<const std::uint8_t> bytes) 
   check(MPI_Send(bytes.data(), count, MPI_BYTE, dest, static_cast<int>(tag), comm_), rank_, what);
 }
 
+bool Communicator::send_unless(int dest, Tag tag, std::span<const std::uint8_t> bytes,
+                               const std::function<bool()>& give_up) const {
+  const std::string what = "MPI_Isend of " + std::to_string(bytes.size()) + " bytes with tag " +
+                           tag_label(tag) + " to " + peer_label(dest);
+  const int count = byte_count(bytes.size(), rank_, what);
+  // MPI reads the buffer until the send completes, which for an abandoned send is never known:
+  // it is a copy that this communicator keeps for its whole life then.
+  std::vector<std::uint8_t> buffer(bytes.begin(), bytes.end());
+  MPI_Request request = MPI_REQUEST_NULL;
+  check(MPI_Isend(buffer.data(), count, MPI_BYTE, dest, static_cast<int>(tag), comm_, &request),
+        rank_, what);
+  PollBackoff backoff;
+  for (;;) {
+    int done = 0;
+    check(MPI_Test(&request, &done, MPI_STATUS_IGNORE), rank_, "MPI_Test of an " + what);
+    if (done != 0) return true;
+    if (give_up()) {
+      MPI_Request_free(&request);  // released, not completed
+      abandoned_.push_back(std::move(buffer));
+      return false;
+    }
+    backoff.sleep();
+  }
+}
+
 void Communicator::send(int dest, Tag tag, std::string_view text) const {
   send(dest, tag,
        std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(text.data()),
@@ -141,6 +166,29 @@ std::int32_t Communicator::broadcast(std::int32_t value, int root) const {
   check(MPI_Bcast(&value, 1, MPI_INT32_T, root, comm_), rank_,
         "MPI_Bcast of an integer from root rank " + std::to_string(root));
   return value;
+}
+
+std::vector<std::string> Communicator::gather(const std::string& text, int root) const {
+  const std::string from = " to root rank " + std::to_string(root);
+  const int count = byte_count(text.size(), rank_, "MPI_Gatherv of text" + from);
+  std::vector<int> counts(rank_ == root ? static_cast<std::size_t>(size_) : 0);
+  check(MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, root, comm_), rank_,
+        "MPI_Gather of text lengths" + from);
+  std::vector<int> offsets(counts.size());
+  std::size_t total = 0;
+  for (std::size_t r = 0; r < counts.size(); ++r) {
+    offsets[r] = byte_count(total, rank_, "MPI_Gatherv of text" + from);
+    total += static_cast<std::size_t>(counts[r]);
+  }
+  std::string all(total, '\0');
+  check(MPI_Gatherv(text.data(), count, MPI_CHAR, all.data(), counts.data(), offsets.data(),
+                    MPI_CHAR, root, comm_),
+        rank_, "MPI_Gatherv of " + std::to_string(text.size()) + " bytes of text" + from);
+  std::vector<std::string> texts;
+  for (std::size_t r = 0; r < counts.size(); ++r)
+    texts.push_back(
+        all.substr(static_cast<std::size_t>(offsets[r]), static_cast<std::size_t>(counts[r])));
+  return texts;
 }
 
 void Communicator::abort(int code) const {

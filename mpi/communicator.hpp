@@ -14,6 +14,7 @@
 #include <mpi.h>
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -74,6 +75,12 @@ class Communicator {
 
   void send(int dest, Tag tag, std::span<const std::uint8_t> bytes) const;
   void send(int dest, Tag tag, std::string_view text) const;
+  // As send, but returns false, the message abandoned, once `give_up` returns true while the
+  // message has not left (asked between sleeps of PollBackoff). A send to a process that died
+  // may never complete (Open MPI's shared-memory transport then waits for ever), so a master
+  // that must stop in time sends this way.
+  bool send_unless(int dest, Tag tag, std::span<const std::uint8_t> bytes,
+                   const std::function<bool()>& give_up) const;
 
   // The oldest pending message from `source` (or any source), without receiving it; nothing if
   // none has arrived. Throws Error for a message with a tag softevo never sends.
@@ -89,12 +96,15 @@ class Communicator {
   // Collective: every rank returns the root's value.
   std::string broadcast(const std::string& text, int root = 0) const;
   std::int32_t broadcast(std::int32_t value, int root = 0) const;
+  // Collective: the root returns every rank's `text` by rank; the other ranks return nothing.
+  std::vector<std::string> gather(const std::string& text, int root = 0) const;
 
   // Ends every rank of the job with `code` (MPI_Abort); for errors no rank can recover from.
   [[noreturn]] void abort(int code) const;
 
  private:
   MPI_Comm comm_ = MPI_COMM_NULL;
+  mutable std::vector<std::vector<std::uint8_t>> abandoned_;  // buffers of send_unless
   int rank_ = 0;
   int size_ = 1;
 };

@@ -12,7 +12,9 @@
 #include "common/config.hpp"
 #include "common/printable.hpp"
 #include "io/archive.hpp"
+#include "io/run_lock.hpp"
 #include "master/archive_check.hpp"
+#include "master/run_state.hpp"
 #include "tools/commands.hpp"
 
 namespace softevo::cli {
@@ -27,6 +29,9 @@ void register_info(CLI::App& app, int& exit_code) {
     const io::Archive archive(*path);
     const io::RunInfo info = archive.info();
     const master::ArchiveCheck check = master::check_archive(archive);
+    // "running" is what a live run and a dead one both leave; the run lock tells them apart.
+    const std::optional<std::string> holder = io::lock_holder(*path);
+    const std::optional<std::string> note = master::previous_run_note(info, holder);
     // A damaged archive is still summarised as far as it can be read; the checks say what
     // is wrong.
     const auto or_unreadable = [](auto&& read) -> std::string {
@@ -66,6 +71,8 @@ void register_info(CLI::App& app, int& exit_code) {
       j["config_hash"] = info.config_hash;
       j["experiment"] = info.experiment;
       j["state"] = info.state;
+      j["lock_holder"] = holder ? nlohmann::ordered_json(*holder) : nlohmann::ordered_json();
+      j["state_note"] = note ? nlohmann::ordered_json(*note) : nlohmann::ordered_json();
       j["generations_done"] = info.generations_done;
       j["checkpoint_generation"] =
           checkpoint ? nlohmann::ordered_json(checkpoint->generation) : nlohmann::ordered_json();
@@ -97,8 +104,10 @@ void register_info(CLI::App& app, int& exit_code) {
       std::printf("experiment       %s, seed %lld, config hash %s\n",
                   shown(info.experiment).c_str(), static_cast<long long>(info.seed),
                   shown(info.config_hash).c_str());
-      std::printf("state            %s, %lld generations done\n", shown(info.state).c_str(),
-                  static_cast<long long>(info.generations_done));
+      std::printf("state            %s, %lld generations done%s\n", shown(info.state).c_str(),
+                  static_cast<long long>(info.generations_done),
+                  holder ? (" (written now by " + shown(*holder) + ")").c_str() : "");
+      if (note) std::printf("                 %s\n", note->c_str());
       std::printf("written by       softevo %s (commit %s), %d ranks on %s\n",
                   shown(info.version).c_str(), shown(info.git_commit).c_str(), info.ranks,
                   shown(info.host).c_str());

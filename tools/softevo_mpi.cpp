@@ -1,13 +1,17 @@
 #include "tools/softevo_mpi.hpp"
 
 #include <CLI/CLI.hpp>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include "common/config.hpp"
+#include "common/launcher_watch.hpp"
 #include "master/mpi_driver.hpp"
 #include "master/run.hpp"
 #include "master/signals.hpp"
@@ -71,9 +75,28 @@ master::PreparedRun prepare(Options& o, int ranks) {
   return master::prepare_run(config, ro, ranks);
 }
 
+// The stop signal this rank has received, for the worker loop ("" while there is none). Only a
+// stop-now counts: on SIGUSR1 the workers finish their units (the master ends the generation).
+std::string stop_now_signal() {
+  if (master::stop_requested() != master::StopRequest::now) return "";
+  const std::string name = master::stop_signal_name();
+  return name.empty() ? "a stop request" : name;
+}
+
+// Evaluation options of rank 0 evaluating alone: an evaluation is abandoned on a stop-now or
+// when the launcher died (which also stops the run loop).
+worker::EvaluateOptions abandoning_on_stop(worker::EvaluateOptions options) {
+  options.abandon = [earlier = options.abandon] {
+    if (launcher_gone()) master::request_stop(master::StopRequest::now);
+    return (earlier && earlier()) || master::stop_requested() == master::StopRequest::now;
+  };
+  return options;
+}
+
 }  // namespace
 
 int softevo_mpi_main(int argc, char** argv, MPI_Comm parent, const MpiMainHooks& hooks) {
+  watch_launcher();
   const mpi::Communicator comm(parent);
 
   Options o;
@@ -95,6 +118,9 @@ int softevo_mpi_main(int argc, char** argv, MPI_Comm parent, const MpiMainHooks&
     return code == 0 ? 0 : 2;
   }
   master::install_stop_handlers();
+  // A rank whose launcher died writes its output into a pipe nobody reads: that must fail with
+  // EPIPE, not kill the rank before it has marked the archive and left (launcher_watch.hpp).
+  std::signal(SIGPIPE, SIG_IGN);
 
   // Rank 0 resolves the config and prepares the run; status 0 = ok, else text is the message.
   std::int32_t status = 0;
@@ -124,18 +150,24 @@ int softevo_mpi_main(int argc, char** argv, MPI_Comm parent, const MpiMainHooks&
   }
 
   try {
+    // Every rank's process, so the master can name a rank that died (master/mpi_driver.hpp).
+    const std::vector<std::string> processes =
+        comm.gather(master::format_rank_process(::getpid(), master::host_name()));
     if (comm.rank() != 0) {
       const Config config = parse_config(text, "config from rank 0");
-      return worker::run_worker_loop(comm, config, config_hash(config), hooks.unit_options)
-          .exit_code;
+      const worker::WorkerOutcome outcome = worker::run_worker_loop(
+          comm, config, config_hash(config), hooks.unit_options, stop_now_signal);
+      return outcome.left_on_its_own ? master::kExitRequeue : outcome.exit_code;
     }
     master::PreparedRun& r = *run;
     master::MasterOptions mo;
     mo.config_path = o.config_path;
     mo.quiet = hooks.quiet;
+    for (const std::string& p : processes) mo.processes.push_back(master::parse_rank_process(p));
     const std::unique_ptr<tasks::Task> task = tasks::make_task(r.config);
-    mo.evaluate_alone = [&r, &hooks, &task](const EvalRequest& request) {
-      return worker::evaluate(r.config, *task, r.config_hash, request, hooks.unit_options);
+    const worker::EvaluateOptions alone = abandoning_on_stop(hooks.unit_options);
+    mo.evaluate_alone = [&r, &alone, &task](const EvalRequest& request) {
+      return worker::evaluate(r.config, *task, r.config_hash, request, alone);
     };
     return master::run_master(comm, r, mo);
   } catch (const std::exception& e) {

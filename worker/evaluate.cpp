@@ -160,10 +160,15 @@ EvalResult simulate(const Config& config, const tasks::Task& task, const BodyPla
       result.message = "physics step failed (link strain > 100 or non-finite state)";
       break;
     }
-    // 6. Deadline.
+    // 6. Deadline and abandon request.
     if (opts.deadline && Clock::now() > *opts.deadline) {
       result.status = EvalStatus::timeout;
       result.message = "evaluation exceeded its wall-clock deadline (run.eval_timeout_seconds)";
+      break;
+    }
+    if (opts.abandon && opts.abandon()) {
+      result.status = EvalStatus::timeout;
+      result.message = "evaluation abandoned: the run is stopping";
       break;
     }
   }

@@ -12,7 +12,7 @@
 //   3. kill checks flipped()/exploded() (§2.15);
 //   4. the task observes the robot (tasks::UnitScore::observe, e.g. the §7.2 waypoints);
 //   5. steps_per_frame x (pneumatic update §3.6, physics step §2.12);
-//   6. the wall-clock deadline, if any.
+//   6. the wall-clock deadline and the abandon request, if any.
 // After the loop the task scores the final state (§7).
 //
 // Failures are results, never exceptions: a body or controller that cannot be simulated gives
@@ -84,6 +84,10 @@ struct EvaluateOptions {
   // once per control frame). Work units from a request get now + run.eval_timeout_seconds
   // unless a deadline is given here.
   std::optional<Clock::time_point> deadline;
+  // Asked once per control frame, with the deadline: true = the run is stopping (SIGTERM, the
+  // launcher died), so the evaluation stops at once with status timeout and a message saying
+  // it was abandoned. Such a result must never be archived; the caller discards it.
+  std::function<bool()> abandon;
   std::function<void(const TraceHeader&)> on_start;  // optional observer
   std::function<void(const TraceFrame&)> on_frame;   // optional observer, 60 Hz
   // Stand-in for the evaluation of a built robot (tests inject faults and stand-in simulators

@@ -4,6 +4,8 @@
 // is a stand-in (fitness from the genome bytes), so each run takes milliseconds.
 #include "master/run.hpp"
 
+#include "master/signals.hpp"
+
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -207,6 +209,8 @@ TEST(RunLock, LockOfAKilledProcessDoesNotBlock) {
   ASSERT_EQ(::read(ready[0], &byte, 1), 1);
   ::close(ready[0]);
   ::close(ready[1]);
+  EXPECT_EQ(io::lock_holder(out),
+            std::optional<std::string>("pid " + std::to_string(child) + " on child"));
   try {
     const io::RunLock probe(out, "parent");
     ADD_FAILURE() << "the child's lock was not seen";
@@ -218,8 +222,42 @@ TEST(RunLock, LockOfAKilledProcessDoesNotBlock) {
   ::kill(child, SIGKILL);
   int status = 0;
   ::waitpid(child, &status, 0);
+  EXPECT_EQ(io::lock_holder(out), std::nullopt) << "a dead holder still reported";
   EXPECT_NO_THROW(run_once(small_config(), out, true));
   EXPECT_EQ(Archive(out).info().state, "complete");
+}
+
+// SIGTERM while the master evaluates alone: the evaluation in progress is abandoned (what
+// softevo-mpi's abandon request does) and its result, even of the generation's last unit, is
+// never archived; the stop is recorded and the run resumes to the uninterrupted digest.
+TEST(RunArchive, AStopDuringTheLastEvaluationOfAGenerationArchivesNothingOfIt) {
+  test::TmpDir dir;
+  const Config config = small_config();
+  const std::string ref = dir.file("ref.h5"), out = dir.file("run.h5");
+  ASSERT_EQ(run_once(config, ref, false), RunOutcome::complete);
+  RunOptions options;
+  options.out_path = out;
+  PreparedRun run = prepare_run(config, options, 1);
+  std::size_t evaluated = 0;
+  const std::size_t first_generation = run.population->members().size();
+  LocalExecutor executor([&](const EvalRequest& request) {
+    if (++evaluated == first_generation + run.population->members().size()) {
+      request_stop(StopRequest::now);  // during the last unit of generation 1
+      EvalResult abandoned;
+      abandoned.status = EvalStatus::timeout;
+      return abandoned;
+    }
+    return fake_evaluation(request);
+  });
+  ProgressReporter progress = ProgressReporter::silent();
+  const RunOutcome outcome = execute_run(run, executor, progress);
+  clear_stop_request();
+  run.lock.reset();  // the stopped run's process would end here
+  EXPECT_EQ(outcome, RunOutcome::interrupted);
+  EXPECT_EQ(Archive(out).info().state, "interrupted");
+  EXPECT_EQ(Archive(out).info().generations_done, 1);
+  ASSERT_EQ(run_once(config, out, true), RunOutcome::complete);
+  EXPECT_EQ(fitness_digest_of(out), fitness_digest_of(ref));
 }
 
 }  // namespace

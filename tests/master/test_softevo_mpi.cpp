@@ -3,12 +3,10 @@
 // the real evaluator on a tiny problem (5x5x5 lattice, 0.1 s robots, population 6). A killed
 // run is a real child process (the softevo-mpi binary, started as an MPI singleton).
 // Expectations depend only on the outcome, never on rank count or timing.
-#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <mpi.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/mount.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -30,10 +28,9 @@
 #include "physics/revision.hpp"
 #include "tasks/task.hpp"
 #include "tests/build_tree.hpp"
+#include "tests/master/child_process.hpp"
 #include "tools/softevo_mpi.hpp"
 #include "worker/evaluate.hpp"
-
-extern char** environ;
 
 namespace softevo::master {
 namespace {
@@ -42,6 +39,8 @@ using io::Archive;
 using io::ArchiveError;
 using io::GenerationRecord;
 using io::RunInfo;
+using test::file_bytes;
+using test::wait_exit;
 
 namespace fs = std::filesystem;
 
@@ -170,46 +169,16 @@ Digests digests(const std::string& path) {
   return d;
 }
 
-std::string file_bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 // ---- the binary as a child process (rank 0 only) ----------------------------------------------
 std::string mpi_binary() {
   return test::build_dir() + "/bin/softevo-mpi";
 }
 
-// Starts softevo-mpi as an MPI singleton: the launcher's OMPI_/PMIX_ variables are removed so
-// the child does not try to join this test's MPI job.
+// Starts softevo-mpi as an MPI singleton (test::spawn_child drops the test's own MPI job).
 pid_t spawn_child(const std::vector<std::string>& args, const std::string& log) {
-  std::vector<std::string> env;
-  for (char** e = environ; *e != nullptr; ++e) {
-    const std::string v = *e;
-    if (v.rfind("OMPI_", 0) == 0 || v.rfind("PMIX_", 0) == 0 || v.rfind("OPAL_", 0) == 0 ||
-        v.rfind("ORTE_", 0) == 0)
-      continue;
-    env.push_back(v);
-  }
-  env.push_back("OMPI_ALLOW_RUN_AS_ROOT=1");
-  env.push_back("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1");
-  std::vector<std::string> argv_s = {mpi_binary()};
-  argv_s.insert(argv_s.end(), args.begin(), args.end());
-  std::vector<char*> argv, envp;
-  for (auto& s : argv_s) argv.push_back(s.data());
-  argv.push_back(nullptr);
-  for (auto& s : env) envp.push_back(s.data());
-  envp.push_back(nullptr);
-  posix_spawn_file_actions_t fa;
-  posix_spawn_file_actions_init(&fa);
-  posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&fa, 1, 2);
-  pid_t pid = -1;
-  const int rc = posix_spawn(&pid, argv[0], &fa, nullptr, argv.data(), envp.data());
-  posix_spawn_file_actions_destroy(&fa);
-  return rc == 0 ? pid : -1;
+  std::vector<std::string> argv = {mpi_binary()};
+  argv.insert(argv.end(), args.begin(), args.end());
+  return test::spawn_child(argv, log);
 }
 
 // Waits (max 120 s) until the archive has at least `g` generations; false on timeout or if the
@@ -231,13 +200,6 @@ bool wait_for_generations(const std::string& path, std::int64_t g, pid_t child) 
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   return false;
-}
-
-int wait_exit(pid_t child, bool* signalled = nullptr) {
-  int st = 0;
-  waitpid(child, &st, 0);
-  if (signalled != nullptr) *signalled = WIFSIGNALED(st);
-  return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
 }
 
 // ---- tests ---------------------------------------------------------------------------------
@@ -425,6 +387,50 @@ TEST(SoftevoMpi, EveryRankReturnsTheRequeueCodeOfAStoppedRun) {
     EXPECT_EQ(info.state, "interrupted");
     EXPECT_LT(info.generations_done, 3);  // stopped before the end
   }
+}
+
+// A worker told to stop while it evaluates (its own SIGTERM, which request_stop stands in for
+// here) abandons the unit within a control frame, tells the master (Tag::leaving), and every
+// rank returns the requeue code at once; the archive keeps the generations before, marked
+// interrupted, and a --resume completes it to the digests of an uninterrupted run.
+TEST(SoftevoMpi, AWorkerStoppedMidEvaluationEndsEveryRankWithTheRequeueCode) {
+  if (world_size() < 2) GTEST_SKIP() << "needs a worker rank";
+  TempDir dir;
+  const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
+  const std::string ref = dir.file("ref.h5");
+  ASSERT_EQ(run_on(world_size(), {"--config", cfg, "--out", ref}), 0);
+  worker::EvaluateOptions endless;
+  endless.evaluate_robot = [](const Config& c, const tasks::Task& task,
+                              const worker::BuiltRobot& robot, const EvalRequest& request,
+                              const worker::EvaluateOptions& options) {
+    if (request.generation != 1 || world_rank() != 1)
+      return worker::evaluate(c, task, robot.body, robot.controller, request.unit, options);
+    request_stop(StopRequest::now);
+    // Endless: only the abandon request ends it (the 60 s bound keeps a failure finite).
+    const auto t0 = std::chrono::steady_clock::now();
+    while (!(options.abandon && options.abandon()) &&
+           std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    EvalResult never_archived;
+    never_archived.status = EvalStatus::timeout;
+    return never_archived;
+  };
+  const std::string out = dir.file("run.h5");
+  const auto t0 = std::chrono::steady_clock::now();
+  const int rc = run_on_each(world_size(), {"--config", cfg, "--out", out}, true, endless);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  clear_stop_request();
+  EXPECT_EQ(rc, kExitRequeue) << "rank " << world_rank();
+  EXPECT_LT(seconds, 30.0) << "the stopped rank's evaluation was not abandoned";
+  const Digests stopped = digests(out);
+  EXPECT_EQ(stopped.state, "interrupted");
+  EXPECT_EQ(stopped.generations_done, 1);
+  ASSERT_EQ(run_on(world_size(), {"--config", cfg, "--out", out, "--resume"}), 0);
+  const Digests resumed = digests(out), expected = digests(ref);
+  EXPECT_EQ(resumed.state, "complete");
+  EXPECT_EQ(resumed.fitness, expected.fitness);
+  EXPECT_EQ(resumed.content, expected.content);
 }
 
 TEST(SoftevoMpi, StartupErrorsFailFastAndTouchNothing) {

@@ -1,6 +1,7 @@
 // The MPI room (mpi/communicator.hpp), at np = 2 and 3: softevo's communicator is a duplicate of
 // the caller's, bytes of any length go through, poll does not receive, broadcast reaches every
-// rank, and a message or call that breaks the protocol is an Error that says where.
+// rank, gather collects every rank's text in order, and a message or call that breaks the protocol
+// is an Error that says where.
 #include "mpi/communicator.hpp"
 
 #include <gtest/gtest.h>
@@ -124,6 +125,25 @@ TEST(Communicator, BroadcastGivesEveryRankTheRootsValue) {
       EXPECT_TRUE(got == text) << "root " << root << ", " << text.size() << " bytes";
     }
     EXPECT_EQ(comm.broadcast(comm.rank() == root ? 1234 + root : -1, root), 1234 + root);
+  }
+}
+
+TEST(Communicator, GatherGivesTheRootEveryRanksTextInRankOrder) {
+  const Communicator comm(MPI_COMM_WORLD);
+  for (int root : {0, comm.size() - 1}) {
+    // Lengths differ per rank (rank 0's is empty), so a wrong offset shifts every later text.
+    const std::string mine = std::string(static_cast<std::size_t>(comm.rank()) * 3, 'x') + "|" +
+                             std::to_string(comm.rank() + 10 * root);
+    const std::vector<std::string> got = comm.gather(mine, root);
+    if (comm.rank() != root) {
+      EXPECT_TRUE(got.empty());
+      continue;
+    }
+    ASSERT_EQ(got.size(), static_cast<std::size_t>(comm.size()));
+    for (int r = 0; r < comm.size(); ++r)
+      EXPECT_EQ(
+          got[static_cast<std::size_t>(r)],
+          std::string(static_cast<std::size_t>(r) * 3, 'x') + "|" + std::to_string(r + 10 * root));
   }
 }
 
