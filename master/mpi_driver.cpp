@@ -69,7 +69,7 @@ class MpiExecutor : public UnitExecutor {
   int ranks() const override { return comm_.size(); }
   // Why the run stopped now ("" if it did not): a signal, a worker that left, lost ranks.
   const std::string& stop_reason() const { return stop_reason_; }
-  // Ranks that are gone or did not answer the stop (no stop message is sent to them).
+  // Ranks whose process on this host is gone (no stop message is sent to them).
   const std::set<int>& lost() const { return lost_; }
 
   bool evaluate(GenerationScheduler& scheduler,

@@ -10,7 +10,8 @@
 // "softevo-mpi: rank R: error: ..." and aborts the job: no rank hangs.
 //
 // Exit codes (the same on every rank): 0 complete (or nothing to resume), 2 usage / config /
-// start-up error, 75 (kExitRequeue) stopped by SIGTERM/SIGINT/SIGUSR1 after a checkpoint.
+// start-up error, 75 (kExitRequeue) stopped after a checkpoint by SIGTERM/SIGINT/SIGUSR1, a
+// worker that left or a dead launcher (master/mpi_driver.hpp).
 #pragma once
 
 #include "mpi/communicator.hpp"
