@@ -191,7 +191,9 @@ void print_header(const PreparedRun& r, const std::string& config_path, int rank
   std::printf("# config %s (hash %s)\n%s", config_path.c_str(), hash_hex(r.config_hash).c_str(),
               r.config_text.c_str());
   std::printf("# archive %s (%s)\n", r.options.out_path.c_str(),
-              r.already_complete ? "complete: nothing to do"
+              r.already_complete ? (r.info.state == "complete" ? "complete: nothing to do"
+                                                               : "every generation archived: "
+                                                                 "marking it complete")
               : r.resumed
                   ? ("resuming at generation " + std::to_string(r.info.generations_done)).c_str()
                   : "new run");

@@ -178,7 +178,8 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
             "start a new run");
       info.start_time = old.start_time;
       info.generations_done = old.generations_done;
-      run.previous_run = previous_run_note(old, std::nullopt);  // the lock is ours now
+      // The lock is ours now: a "running" archive was left by a run that died.
+      run.previous_run = previous_run_note(old, std::nullopt, config.run.generations);
       if (old.generations_done >= config.run.generations) {
         run.already_complete = true;
         run.info = old;
@@ -216,7 +217,20 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
 }
 
 RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporter& progress) {
-  if (run.already_complete) return RunOutcome::already_complete;
+  if (run.already_complete) {
+    // Killed after archiving its last generation but before closing: closing is all that is
+    // left (a complete archive is not touched).
+    if (run.info.state != "complete") {
+      run.info.state = "complete";
+      run.info.end_time = iso8601_now();
+      try {
+        update_run_info(run.options.out_path, run.info, run.options.archive_fault);
+      } catch (const ArchiveError& e) {
+        throw RunError(e.what());
+      }
+    }
+    return RunOutcome::already_complete;
+  }
   const Config& config = run.config;
   const std::string& out = run.options.out_path;
   RunInfo& info = run.info;

@@ -11,10 +11,14 @@ std::string resume_note(std::int64_t generations_done) {
 }
 
 std::optional<std::string> previous_run_note(const io::RunInfo& info,
-                                             const std::optional<std::string>& lock_holder) {
-  const std::string at = "at generation " + std::to_string(info.generations_done) +
-                         "; --resume continues from generation " +
-                         std::to_string(info.generations_done);
+                                             const std::optional<std::string>& lock_holder,
+                                             std::optional<std::int64_t> generations) {
+  const std::string done = std::to_string(info.generations_done);
+  const std::string at =
+      generations && info.generations_done >= *generations
+          ? "after archiving its last generation (" + std::to_string(info.generations_done - 1) +
+                "); --resume marks it complete"
+          : "at generation " + done + "; --resume continues from generation " + done;
   if (info.state == "interrupted")
     return "the previous run on this archive was interrupted (it stopped after a signal or an "
            "error, see its log) " +

@@ -23,8 +23,11 @@ std::string resume_note(std::int64_t generations_done);
 
 // One line on an archive whose last run did not complete, for `info` and the next start;
 // nothing for a complete archive or a live run. `lock_holder`: the run lock's holder
-// ("pid 4242 on node17"), nothing if the lock is free (io::lock_holder).
+// ("pid 4242 on node17"), nothing if the lock is free (io::lock_holder). `generations`: the
+// run's run.generations if known; a run that died after archiving all of them only needs
+// --resume to mark it complete.
 std::optional<std::string> previous_run_note(const io::RunInfo& info,
-                                             const std::optional<std::string>& lock_holder);
+                                             const std::optional<std::string>& lock_holder,
+                                             std::optional<std::int64_t> generations = {});
 
 }  // namespace softevo::master

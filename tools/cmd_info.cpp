@@ -31,7 +31,12 @@ void register_info(CLI::App& app, int& exit_code) {
     const master::ArchiveCheck check = master::check_archive(archive);
     // "running" is what a live run and a dead one both leave; the run lock tells them apart.
     const std::optional<std::string> holder = io::lock_holder(*path);
-    const std::optional<std::string> note = master::previous_run_note(info, holder);
+    std::optional<std::int64_t> generations;  // the run's target, if its config parses
+    try {
+      generations = parse_config(archive.config_text(), *path + ":/config").run.generations;
+    } catch (const std::exception&) {
+    }
+    const std::optional<std::string> note = master::previous_run_note(info, holder, generations);
     // A damaged archive is still summarised as far as it can be read; the checks say what
     // is wrong.
     const auto or_unreadable = [](auto&& read) -> std::string {

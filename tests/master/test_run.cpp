@@ -260,5 +260,31 @@ TEST(RunArchive, AStopDuringTheLastEvaluationOfAGenerationArchivesNothingOfIt) {
   EXPECT_EQ(fitness_digest_of(out), fitness_digest_of(ref));
 }
 
+// A run killed after archiving its last generation but before closing leaves "running" with
+// every generation: --resume only marks it complete, and the digests are an uninterrupted run's.
+TEST(RunArchive, ResumeClosesARunThatDiedAfterItsLastGeneration) {
+  test::TmpDir dir;
+  const Config config = small_config();
+  const std::string ref = dir.file("ref.h5"), out = dir.file("run.h5");
+  ASSERT_EQ(run_once(config, ref, false), RunOutcome::complete);
+  ASSERT_EQ(run_once(config, out, false), RunOutcome::complete);
+  io::RunInfo info = Archive(out).info();
+  info.state = "running";  // what the SIGKILL before the closing state change leaves
+  info.end_time.clear();
+  io::update_run_info(out, info);
+  {
+    RunOptions options;
+    options.out_path = out;
+    options.resume = true;
+    const PreparedRun run = prepare_run(config, options, 1);
+    ASSERT_TRUE(run.previous_run.has_value());
+    EXPECT_NE(run.previous_run->find("after archiving its last generation"), std::string::npos)
+        << *run.previous_run;
+  }
+  EXPECT_EQ(run_once(config, out, true), RunOutcome::already_complete);
+  EXPECT_EQ(Archive(out).info().state, "complete");
+  EXPECT_EQ(io::content_digest(Archive(out)), io::content_digest(Archive(ref)));
+}
+
 }  // namespace
 }  // namespace softevo::master
