@@ -86,8 +86,27 @@ inline VL<L> rotvec_lanes(const QL<L>& q) {
   return {select<L>(unit, zero, v.x), select<L>(unit, zero, v.y), select<L>(unit, zero, v.z)};
 }
 
-// frame_to_pos_x (§2.11, quat.hpp) on lanes, every branch in SIMD (the closed-form one only when
-// a lane needs it); len = |d| = sqrt(d.x^2 + d.y^2 + d.z^2), which the caller also needs.
+// §2.11 "angle to +X" on lanes: q1, the rotation taking direction d onto +X (identity for d = 0),
+// and its rotation vector a1 = rotvec(q1), together (the large-angle link frame, §2.3). Every
+// branch in SIMD, the closed-form one only when a lane needs it; len = |d| = sqrt(d.x^2 + d.y^2 +
+// d.z^2), which the caller also needs. The branches, first match wins, per lane:
+//   d = 0:                                  q1 = identity, a1 = 0
+//   |d_y / d_x|, |d_z / d_x| < kNearPosXBelow:  the reference's Taylor q1 = (1 - (y^2 + z^2) / 2,
+//                                           0, y, z), y = d_z / (2 d_x), z = -d_y / (2 d_x);
+//                                           a1 = rotvec(q1)
+//   n_x < kReversedBelow (n = d / |d|):     q1 = (0, 0, 1, 0), a1 = rotvec(q1)
+//   otherwise:                              the closed form below
+//
+// Physics revision 2 (physics/revision.hpp) evaluates the general branch in closed form. With
+// theta = acos(n_x) and s = sqrt(n_y^2 + n_z^2) = sin(theta):
+//   q1 = (cos(theta/2), 0, n_z k sin(theta/2), -n_y k sin(theta/2)),  k = 1 / s      (reference)
+//      = (c, 0, n_z h, -n_y h),  c = cos(theta/2) = sqrt((1 + n_x) / 2),  h = 1 / (2c)
+//        (half-angle identities: k sin(theta/2) = sin(theta/2) / sin(theta) = 1 / (2 cos(theta/2)))
+//   a1 = 2 acos(c) / sqrt(1 - c^2) (q1.x, q1.y, q1.z)                          (reference rotvec)
+//      = (0, theta n_z / s, -theta n_y / s)        (acos(c) = theta/2, sqrt(1 - c^2) = s / (2c))
+// The same numbers up to rounding, without sin, cos, a second acos and three divisions. Bends
+// small enough for rotvec's Taylor branch (1 - c^2 < 2.4e-3: that branch is only good to ~1e-5
+// relative, and the gaits should see the reference's a1 there) keep a1 = rotvec(q1).
 template <class L>
 inline void frame_to_pos_x_lanes(const VL<L>& d, const DV<L>& len, QL<L>& q1, VL<L>& a1) {
   using D = DV<L>;

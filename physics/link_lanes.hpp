@@ -1,6 +1,8 @@
-// The link pass (§2.3-2.6) W links at a time: links in small-angle and in large-angle mode in
-// separate groups, one link per lane; every lane performs link_scalar's IEEE operations in the
-// same order (physics/link_scalar.hpp). Internal to physics/ (see physics/lanes.hpp).
+// The link pass (§2.2-2.6), written once over the lane traits (physics/lanes.hpp): W links at
+// a time, one link per lane, links in small-angle and in large-angle mode in separate groups. A
+// link that switches between the modes (rare) runs the same formulas one lane wide
+// (LanesScalar), which performs the reference's scalar IEEE operations in their order; so every
+// width gives the same bits. Internal to physics/.
 //
 // Memory layout the groups rely on: link ids run axis by axis (Model), so the full groups of a
 // link pass are consecutive ids; the per-link state that the groups read and write (mode and
@@ -14,9 +16,10 @@
 
 #include "physics/lane_math.hpp"
 #include "physics/lanes.hpp"
+#include "physics/lanes_scalar.hpp"
 #include "physics/link_mode.hpp"
-#include "physics/link_scalar.hpp"
 #include "physics/model.hpp"
+#include "physics/quat.hpp"
 #include "physics/state.hpp"
 #include "physics/step.hpp"
 
@@ -44,7 +47,31 @@ template <class L, bool kContig>
   return {d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8], d[9], d[10]};
 }
 
-// §2.2 permutations on lanes (to_x_c / from_x_c, as the scalar to_x / from_x)
+// ---- §2.2 axis permutation ("as if the link pointed along +X") --------------------------------
+// The axis is a template parameter: the link pass runs one axis at a time (Model::axis_link_begin),
+// so the permutations are free register moves instead of a data-dependent switch per link end.
+// Written once per component, generic over T (a lane vector, or a double); a quaternion permutes
+// its vector part the same way.
+template <Axis A, class T>
+[[gnu::always_inline]] inline void to_x_c(T x, T y, T z, T& ox, T& oy, T& oz) {
+  if constexpr (A == Axis::x) {
+    ox = x, oy = y, oz = z;
+  } else if constexpr (A == Axis::y) {
+    ox = y, oy = -x, oz = z;
+  } else {
+    ox = z, oy = y, oz = -x;
+  }
+}
+template <Axis A, class T>
+[[gnu::always_inline]] inline void from_x_c(T x, T y, T z, T& ox, T& oy, T& oz) {
+  if constexpr (A == Axis::x) {
+    ox = x, oy = y, oz = z;
+  } else if constexpr (A == Axis::y) {
+    ox = -y, oy = x, oz = z;
+  } else {
+    ox = -z, oy = y, oz = x;
+  }
+}
 template <Axis A, class L>
 [[gnu::always_inline]] inline VL<L> to_x_lanes(DV<L> x, DV<L> y, DV<L> z) {
   VL<L> r;
@@ -65,60 +92,109 @@ template <Axis A, class L>
   return r;
 }
 
-// Links ids[0..W) of axis A, all in the same mode at their last update: small-angle mode
-// (kLarge false) or large-angle mode (kLarge true), the caller's choice. With kContig the ids are
-// consecutive (ids[k] = ids[0] + k), so the per-link flags and strains are read and written as
-// runs. Each lane whose link stays in that mode (§2.3 hysteresis) is updated like link_scalar
-// (or link_scalar_state_only without forces), its strain > 100 ORed into `diverged`; returns those
-// lanes (bit k = lane k). Lanes that switch mode are left unchanged for the caller's link_scalar.
-// A link may fill several lanes (padding of a partial group): all loads precede all stores, so
-// its lanes compute and store the same values.
-// Invariant used for small-angle links: a link whose last update was in small-angle mode has
-// angle1v = (+0, +0, +0) stored (every small-angle update stores rotvec(identity) = 0, and so
-// does initial_state), so the old angle1v is the constant zero and the new one need not be
-// stored again. The mode flag of a lane that stays in its mode need not be stored either.
-template <class L, Axis A, LinkPass K, bool kLarge, bool kContig>
-[[gnu::always_inline]] inline int link_group(const Model& m, State& st, Scratch& sc, const int* ids,
-                                             bool& diverged) {
+constexpr float kStrainDiverged = 100.0f;  // §2.12 step 1
+
+// What a link pass computes and stores (the link kernels' template argument).
+enum class LinkPass {
+  // end loads and the new link state (pos2, angles, strain, mode, local-velocity validity): the
+  // reference's link pass, as the symplectic integrator runs it
+  forces_and_state,
+  // end loads, mode and validity only: the pneuvox step's first pass, whose pos2, angles and
+  // strain its mid-step pass (§2.12 step 6) overwrites before anything reads them
+  forces,
+  // the link state without loads: the pneuvox mid-step pass (§2.9 item 6)
+  state,
+  // pos2, angles and strain only, after a pneuvox step refused by its `forces` pass (§2.12 step
+  // 1): the state that pass left out. Mode and validity are as that pass left them; every link
+  // stays in the mode that pass gave it (it decided on the same positions), so each link's values
+  // are those of the reference's pass.
+  restore_state,
+};
+constexpr bool computes_forces(LinkPass k) {
+  return k == LinkPass::forces_and_state || k == LinkPass::forces;
+}
+constexpr bool stores_link_state(LinkPass k) {
+  return k != LinkPass::forces;
+}
+constexpr bool marks_velocity_valid(LinkPass k) {
+  return k != LinkPass::restore_state;
+}
+
+// The link frame of §2.3 "orient link" for W links, before the mode is known.
+template <class L>
+struct LinkFrameL {
+  VL<L> d;   // P's position relative to N, in N's frame with the link axis turned to +X [m]
+  QL<L> q2;  // P's orientation in that frame (the large-angle mode turns it further by q1)
+};
+
+// §2.3 orient link, up to the mode test: the frame of links ids[0..W) of axis A.
+template <class L, Axis A>
+[[gnu::always_inline]] inline LinkFrameL<L> orient_links(const Model& m, const State& st,
+                                                         const int* ids) {
   constexpr int W = L::W;
-  using D = DV<L>;
-  using M = MV<L>;
   int n[W], p[W];
   for (int k = 0; k < W; ++k) {
     n[k] = m.link_neg[ids[k]];
     p[k] = m.link_pos[ids[k]];
   }
-  // §2.3 orient link (see orient_link)
   const VL<L> pn = gather<L>(st.pos, n);
   const VL<L> pp = gather<L>(st.pos, p);
   const VL<L> d0 = to_x_lanes<A, L>(pp.x - pn.x, pp.y - pn.y, pp.z - pn.z);
   const QL<L> qn = to_x_lanes<A, L>(gather<L>(st.orient, n));
-  const QL<L> r{qn.w, -qn.x, -qn.y, -qn.z};  // conj
-  VL<L> d;
-  rotate_c(r.w, r.x, r.y, r.z, d0.x, d0.y, d0.z, d.x, d.y, d.z);
+  const QL<L> r{qn.w, -qn.x, -qn.y, -qn.z};  // conj: the total rotation of N so far
+  LinkFrameL<L> f;
+  rotate_c(r.w, r.x, r.y, r.z, d0.x, d0.y, d0.z, f.d.x, f.d.y, f.d.z);
   const QL<L> qp = to_x_lanes<A, L>(gather<L>(st.orient, p));
-  QL<L> q2;
-  mul_c(r.w, r.x, r.y, r.z, qp.w, qp.x, qp.y, qp.z, q2.w, q2.x, q2.y, q2.z);
-  const D l = splat<L>(m.rest_length);
-  // §2.3 mode test (see orient_link), from products where they decide it (link_mode.hpp)
+  mul_c(r.w, r.x, r.y, r.z, qp.w, qp.x, qp.y, qp.z, f.q2.w, f.q2.x, f.q2.y, f.q2.z);
+  return f;
+}
+
+// §2.3 step 3, the small-angle test with hysteresis, for links whose last update was in
+// large-angle (kLarge) or small-angle mode with link direction d: the lanes whose link keeps its
+// mode (bit k = lane k). Taken from products where they decide it (link_mode.hpp), else from the
+// reference's float quotients:
+//   turn = float((|d_z| + |d_y|) / d_x),   ext = float(|1 - d_x / L|).
+template <class L, bool kLarge>
+[[gnu::always_inline]] inline int lanes_keeping_mode(const Model& m, const VL<L>& d) {
+  using D = DV<L>;
+  using M = MV<L>;
   const auto mode =
       link_mode::test_without_division<kLarge, LaneMathOps<L>>(d.x, d.y, d.z, m.inv_rest_length);
-  int done;  // lanes that stay in their mode
   if (L::bits(reinterpret_cast<M>(mode.decided)) == kAllLanes<L>) [[likely]] {
-    done = ~L::bits(reinterpret_cast<M>(mode.switches)) & kAllLanes<L>;
-  } else {
-    const D turn = L::round_to_float((abs_lanes<L>(d.z) + abs_lanes<L>(d.y)) / d.x);
-    const D ext = L::round_to_float(abs_lanes<L>(1.0 - d.x / l));
-    if constexpr (kLarge) {
-      done = ~L::bits((turn < splat<L>(kSmallBend)) & (ext < splat<L>(kSmallExt))) & kAllLanes<L>;
-    } else {
-      done = ~L::bits((turn > splat<L>(kHysteresis * kSmallBend)) |
-                      (ext > splat<L>(kHysteresis * kSmallExt))) &
-             kAllLanes<L>;
-    }
+    return ~L::bits(reinterpret_cast<M>(mode.switches)) & kAllLanes<L>;
   }
-  if (!done) return 0;
+  const D l = splat<L>(m.rest_length);
+  const D turn = L::round_to_float((abs_lanes<L>(d.z) + abs_lanes<L>(d.y)) / d.x);
+  const D ext = L::round_to_float(abs_lanes<L>(1.0 - d.x / l));
+  if constexpr (kLarge) {
+    return ~L::bits((turn < splat<L>(kSmallBend)) & (ext < splat<L>(kSmallExt))) & kAllLanes<L>;
+  } else {
+    return ~L::bits((turn > splat<L>(kHysteresis * kSmallBend)) |
+                    (ext > splat<L>(kHysteresis * kSmallExt))) &
+           kAllLanes<L>;
+  }
+}
 
+// §2.3-2.6 for the lanes `done` (bit k = lane k) of links ids[0..W) of axis A with frame f, in
+// large-angle (kLarge) or small-angle mode: the new link state and, with forces
+// (computes_forces(K)), the end loads, a strain > 100 ORed into `diverged`. With kContig the ids
+// are consecutive (ids[k] = ids[0] + k), so the per-link flags and strains are read and written as
+// runs. kSwitched: the links have just entered that mode (orient link's hysteresis), so their
+// local velocity is not valid (§2.5: no damping) and their whole state is stored, mode flag and
+// validity included, whatever K (the reference's update of a switching link). Otherwise they were
+// in that mode at their last update; see link_group.
+template <class L, Axis A, LinkPass K, bool kLarge, bool kSwitched, bool kContig>
+[[gnu::always_inline]] inline void update_links(const Model& m, State& st, Scratch& sc,
+                                                const int* ids, const LinkFrameL<L>& f, int done,
+                                                bool& diverged) {
+  constexpr int W = L::W;
+  using D = DV<L>;
+  using M = MV<L>;
+  constexpr bool kStoresState = stores_link_state(K) || kSwitched;
+  constexpr bool kMarksValid = marks_velocity_valid(K) || kSwitched;
+  const VL<L>& d = f.d;
+  QL<L> q2 = f.q2;
+  const D l = splat<L>(m.rest_length);
   const D zero = splat<L>(0.0);
   VL<L> pos2, a1;
   QL<L> q1;  // large-angle mode: rotation of the link frame onto +X
@@ -134,13 +210,15 @@ template <class L, Axis A, LinkPass K, bool kLarge, bool kContig>
     a1 = {zero, zero, zero};  // rotvec(identity)
   }
   const VL<L> a2 = rotvec_lanes<L>(q2);
+  // §2.4: strain = pos2.x / L (float)
   const D strain = L::round_to_float(pos2.x / l);
 
   int valid = 0;  // lanes whose local velocity was valid (the forces pass reads it)
   if constexpr (computes_forces(K)) {
     if (L::bits(strain > splat<L>(kStrainDiverged)) & done) diverged = true;
     const LinkConstL<L> c = gather_link_const<L, kContig>(m, ids);
-    // §2.4 (see link_scalar)
+    // §2.4: sigma = E_L strain (linear material, float);
+    //   F_N = (sigma A, b1 y - b2 (t1z + t2z), b1 z + b2 (t1y + t2y)), F_P = -F_N
     const D stress = L::round_to_float(c.e_area * strain);
     const D b1 = c.b1;
     const D b2 = c.b2;
@@ -154,15 +232,18 @@ template <class L, Axis A, LinkPass K, bool kLarge, bool kContig>
     VL<L> mp{a2c * (a1.x - a2.x), -b2 * pos2.z - b3 * (a1.y + 2.0 * a2.y),
              b2 * pos2.y - b3 * (a1.z + 2.0 * a2.z)};
 
-    // §2.5 damping in the lanes with a valid local velocity (none switched mode)
-    if constexpr (kContig) {
-      valid = nonzero_flags<L>(&st.link_vel_valid[ids[0]]);
-    } else {
-      for (int k = 0; k < W; ++k) valid |= st.link_vel_valid[ids[k]] != 0 ? 1 << k : 0;
+    // §2.5 internal damping from the change since the previous link update, in the lanes with a
+    // valid local velocity (skipped after a mode switch and at the first update)
+    if constexpr (!kSwitched) {
+      if constexpr (kContig) {
+        valid = nonzero_flags<L>(&st.link_vel_valid[ids[0]]);
+      } else {
+        for (int k = 0; k < W; ++k) valid |= st.link_vel_valid[ids[k]] != 0 ? 1 << k : 0;
+      }
     }
     if (valid) {
       const VL<L> old_pos2 = gather<L, kContig>(st.link_pos2, ids);
-      VL<L> old_a1{zero, zero, zero};  // small-angle links: see the invariant above
+      VL<L> old_a1{zero, zero, zero};  // small-angle links: see link_group
       if constexpr (kLarge) old_a1 = gather<L, kContig>(st.link_angle1v, ids);
       const VL<L> old_a2 = gather<L, kContig>(st.link_angle2v, ids);
       const D dpx = 0.5 * (pos2.x - old_pos2.x), dpy = 0.5 * (pos2.y - old_pos2.y),
@@ -252,11 +333,10 @@ template <class L, Axis A, LinkPass K, bool kLarge, bool kContig>
   // float(strain) per lane (exact: strain is a float value); the local velocity becomes valid
   // (already is, after a step)
   if (kContig && done == kAllLanes<L>) {
-    if constexpr (stores_link_state(K)) to_floats<L>(strain, &st.link_strain[ids[0]]);
-    if (marks_velocity_valid(K) && valid != kAllLanes<L>)
-      std::memset(&st.link_vel_valid[ids[0]], 1, W);
+    if constexpr (kStoresState) to_floats<L>(strain, &st.link_strain[ids[0]]);
+    if (kMarksValid && valid != kAllLanes<L>) std::memset(&st.link_vel_valid[ids[0]], 1, W);
   } else {
-    if constexpr (stores_link_state(K)) {
+    if constexpr (kStoresState) {
       float strain_f[W];
       to_floats<L>(strain, strain_f);
       for (int k = 0; k < W; ++k) {
@@ -264,31 +344,52 @@ template <class L, Axis A, LinkPass K, bool kLarge, bool kContig>
         st.link_strain[ids[k]] = strain_f[k];
       }
     }
-    if (marks_velocity_valid(K) && (valid & done) != done) {
+    if (kMarksValid && (valid & done) != done) {
       for (int k = 0; k < W; ++k)
         if (done >> k & 1) st.link_vel_valid[ids[k]] = 1;
     }
   }
-  if constexpr (stores_link_state(K)) {
+  if constexpr (kSwitched) {
+    for (int k = 0; k < W; ++k)
+      if (done >> k & 1) st.link_small_angle[ids[k]] = kLarge ? 0 : 1;
+  }
+  if constexpr (kStoresState) {
     scatter<L, kContig>(pos2, st.link_pos2, ids, done);
-    if constexpr (kLarge) scatter<L, kContig>(a1, st.link_angle1v, ids, done);  // else stays 0
+    // a link staying in small-angle mode keeps its stored angle1v = 0 (see link_group)
+    if constexpr (kLarge || kSwitched) scatter<L, kContig>(a1, st.link_angle1v, ids, done);
     scatter<L, kContig>(a2, st.link_angle2v, ids, done);
   }
+}
+
+// Links ids[0..W) of axis A, all in the same mode at their last update: small-angle mode
+// (kLarge false) or large-angle mode (kLarge true), the caller's choice. Each lane whose link
+// stays in that mode (§2.3 hysteresis) is updated (update_links); returns those lanes (bit k =
+// lane k). Lanes that switch mode are left unchanged for the caller's links_switching_mode.
+// A link may fill several lanes (padding of a partial group): all loads precede all stores, so
+// its lanes compute and store the same values.
+// Invariant used for small-angle links: a link whose last update was in small-angle mode has
+// angle1v = (+0, +0, +0) stored (every small-angle update stores rotvec(identity) = 0, and so
+// does initial_state), so the old angle1v is the constant zero and the new one need not be
+// stored again. The mode flag of a lane that stays in its mode need not be stored either.
+template <class L, Axis A, LinkPass K, bool kLarge, bool kContig>
+[[gnu::always_inline]] inline int link_group(const Model& m, State& st, Scratch& sc, const int* ids,
+                                             bool& diverged) {
+  const LinkFrameL<L> f = orient_links<L, A>(m, st, ids);
+  const int done = lanes_keeping_mode<L, kLarge>(m, f.d);
+  if (!done) return 0;
+  update_links<L, A, K, kLarge, false, kContig>(m, st, sc, ids, f, done, diverged);
   return done;
 }
 
-// The lanes of a group that link_group left undone (they switched mode) through link_scalar (or
-// link_scalar_state_only without forces). Out of line: rare.
-template <Axis A, LinkPass K>
+// The lanes of a group that link_group left undone: their links leave large-angle (kLarge) or
+// small-angle mode. Each runs the same formulas one lane wide in its new mode. Out of line: rare.
+template <Axis A, LinkPass K, bool kLarge>
 [[gnu::noinline]] void links_switching_mode(const Model& m, State& st, Scratch& sc,
                                             const int* group, int count, int done, bool& diverged) {
   for (int k = 0; k < count; ++k) {
     if (done >> k & 1) continue;
-    if constexpr (computes_forces(K)) {
-      if (link_scalar<A>(m, st, sc, group[k])) diverged = true;
-    } else {
-      link_scalar_state_only<A>(m, st, group[k]);
-    }
+    const LinkFrameL<LanesScalar> f = orient_links<LanesScalar, A>(m, st, &group[k]);
+    update_links<LanesScalar, A, K, !kLarge, true, false>(m, st, sc, &group[k], f, 1, diverged);
   }
 }
 
@@ -301,14 +402,15 @@ template <class L, Axis A, LinkPass K, bool kLarge>
   int j = 0;
   for (; j + W <= count; j += W) {
     const int done = link_group<L, A, K, kLarge, false>(m, st, sc, list + j, diverged);
-    if (done != kAllLanes<L>) links_switching_mode<A, K>(m, st, sc, list + j, W, done, diverged);
+    if (done != kAllLanes<L>)
+      links_switching_mode<A, K, kLarge>(m, st, sc, list + j, W, done, diverged);
   }
   if (j < count) {
     int group[W];
     for (int k = 0; k < W; ++k) group[k] = list[std::min(j + k, count - 1)];
     const int done = link_group<L, A, K, kLarge, false>(m, st, sc, group, diverged);
     if (done != kAllLanes<L>)
-      links_switching_mode<A, K>(m, st, sc, group, count - j, done, diverged);
+      links_switching_mode<A, K, kLarge>(m, st, sc, group, count - j, done, diverged);
   }
 }
 
@@ -325,19 +427,20 @@ template <class L, Axis A, LinkPass K, bool kLarge>
     int group[W];
     for (int k = 0; k < W; ++k) group[k] = j + k;
     const int done = link_group<L, A, K, kLarge, true>(m, st, sc, group, diverged);
-    if (done != kAllLanes<L>) links_switching_mode<A, K>(m, st, sc, group, W, done, diverged);
+    if (done != kAllLanes<L>)
+      links_switching_mode<A, K, kLarge>(m, st, sc, group, W, done, diverged);
   }
   return j;
 }
 
 // Link pass (§2.3-2.6) over the links of axis A: links go through link_group W at a time, those
 // in small-angle mode at their last update and those in large-angle mode in separate groups (a
-// lane that switches mode falls back to link_scalar). W consecutive links of the axis (ids are
-// contiguous per axis, see Model) that share a mode, the usual case, form a group as they are;
-// the others are collected per mode into lists (Scratch) and run after the axis's stretches.
-// Links are independent within a pass, so this order gives the same results as list order.
-// With forces (computes_forces(K)) the end loads are computed and the return value is true if any
-// strain > 100; without, only the link state (LinkPass::state and restore_state).
+// lane that switches mode runs one lane wide, links_switching_mode). W consecutive links of the
+// axis (ids are contiguous per axis, see Model) that share a mode, the usual case, form a group as
+// they are; the others are collected per mode into lists (Scratch) and run after the axis's
+// stretches. Links are independent within a pass, so this order gives the same results as list
+// order. With forces (computes_forces(K)) the end loads are computed and the return value is true
+// if any strain > 100; without, only the link state (LinkPass::state and restore_state).
 template <class L, Axis A, LinkPass K>
 bool link_pass_axis(const Model& m, State& st, Scratch& sc) {
   constexpr int W = L::W;

@@ -83,7 +83,7 @@ inline Vec3 rotate_inv(const Quat& q, const Vec3& f) {
 }
 
 // Branch thresholds of §2.11, shared by the scalar functions below and their lane versions in
-// step_kernels.hpp, which must branch exactly alike:
+// physics/lane_math.hpp, which must branch exactly alike:
 constexpr double kRotvecToQuatTaylorBelow =
     5.328e-15;                                       // quat_from_rotvec: Taylor if |r/2|^4 < this
 constexpr double kQuatToRotvecTaylorBelow = 2.4e-3;  // rotvec: Taylor if 1 - w^2 < this
@@ -125,49 +125,9 @@ constexpr double kNearPosXBelow =
   return {q.x * f, q.y * f, q.z * f};
 }
 
-// §2.11 "angle to +X": q1, the rotation taking direction d onto +X (identity for d = 0), and its
-// rotation vector a1 = rotvec(q1), together (the large-angle link frame, §2.3).
-//
-// Physics revision 2 (physics/revision.hpp) evaluates the general branch in closed form. With
-// n = d / |d|, theta = acos(n_x) and s = sqrt(n_y^2 + n_z^2) = sin(theta):
-//   q1 = (cos(theta/2), 0, n_z k sin(theta/2), -n_y k sin(theta/2)),  k = 1 / s      (reference)
-//      = (c, 0, n_z h, -n_y h),  c = cos(theta/2) = sqrt((1 + n_x) / 2),  h = 1 / (2c)
-//        (half-angle identities: k sin(theta/2) = sin(theta/2) / sin(theta) = 1 / (2 cos(theta/2)))
-//   a1 = 2 acos(c) / sqrt(1 - c^2) (q1.x, q1.y, q1.z)                          (reference rotvec)
-//      = (0, theta n_z / s, -theta n_y / s)        (acos(c) = theta/2, sqrt(1 - c^2) = s / (2c))
-// The same numbers up to rounding, without sin, cos, a second acos and three divisions. The
-// near-+X Taylor branch, d = 0 and the reversed direction keep the reference's q1 and rotvec, and
-// so do bends small enough for rotvec's Taylor branch (1 - c^2 < 2.4e-3: that branch is only good
-// to ~1e-5 relative, and the gaits should see the reference's a1 there).
-constexpr double kReversedBelow = -0x1.fffffffffffd3p-1;  // cos(3.14159265358979 - 1e-7)
-[[gnu::always_inline]] inline void frame_to_pos_x(const Vec3& d, Quat& q1, Vec3& a1) {
-  if (d.x() == 0.0 && d.y() == 0.0 && d.z() == 0.0) {
-    q1 = {};
-    a1 = Vec3::Zero();  // rotvec(identity)
-    return;
-  }
-  const double a = d.y() / d.x(), b = d.z() / d.x();
-  if (std::fabs(a) < kNearPosXBelow && std::fabs(b) < kNearPosXBelow) {
-    const double y = b / 2, z = -a / 2;
-    q1 = {1.0 - 0.5 * (y * y + z * z), 0.0, y, z};
-    a1 = rotvec(q1);
-    return;
-  }
-  const double len = std::sqrt(d.x() * d.x() + d.y() * d.y() + d.z() * d.z());
-  const double nx = d.x() / len, ny = d.y() / len, nz = d.z() / len;
-  if (nx < kReversedBelow) {  // theta > 3.14159265358979 - 1e-7
-    q1 = {0.0, 0.0, 1.0, 0.0};
-    a1 = rotvec(q1);
-    return;
-  }
-  const double c = std::sqrt((1.0 + nx) * 0.5), h = 0.5 / c;
-  q1 = {c, 0.0, nz * h, -ny * h};
-  if (1.0 - c * c < kQuatToRotvecTaylorBelow) {  // rotvec's Taylor branch, as the reference
-    a1 = rotvec(q1);
-    return;
-  }
-  const double f = rmath::acos(nx) / std::sqrt(ny * ny + nz * nz);
-  a1 = {0.0, nz * f, -ny * f};
-}
+// §2.11 "angle to +X" (the large-angle link frame, §2.3) is computed on lanes only
+// (physics/lane_math.hpp frame_to_pos_x_lanes): every link runs it there, one lane wide when it
+// switches mode. Its reversed-direction threshold: cos(3.14159265358979 - 1e-7).
+constexpr double kReversedBelow = -0x1.fffffffffffd3p-1;
 
 }  // namespace softevo::physics

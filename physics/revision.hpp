@@ -8,7 +8,7 @@
 //   1  the reference's formulas with glibc acos / sin / cos (archives without the attribute).
 //   2  acos / sin / cos of physics/reproducible_math.hpp (within 1 ulp of glibc, computed on SIMD
 //      lanes), and the large-angle link frame (q1 and rotvec(q1), §2.11) in closed form by
-//      half-angle identities (physics/quat.hpp frame_to_pos_x). The same formulas up to
+//      half-angle identities (physics/lane_math.hpp frame_to_pos_x_lanes). The same formulas up to
 //      rounding: fitness values differ in their last bits and, through the chaotic gaits, by a
 //      few percent (issue 4 note).
 //   3  the same functions evaluated with fewer dependent operations (issue 4 speed): polynomials by

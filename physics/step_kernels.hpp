@@ -13,19 +13,20 @@
 // -ffp-contract=off, so the written operation order is the executed one.
 //
 // Lanes: links (small-angle and large-angle mode in separate groups) and free voxels go through
-// the passes W at a time, one link or voxel per lane of a W x double vector. Every lane performs
-// exactly the scalar path's IEEE operations in the same order (the quaternion formulas are the
-// shared templates of quat.hpp; float roundings are a float conversion of the same double;
+// the passes W at a time, one link or voxel per lane of a W x double vector. Each formula is
+// written once, over the lanes, and the exceptions to a group (a link switching mode, the last
+// voxels of a pass) run it one lane wide (LanesScalar), which is the reference's scalar IEEE
+// arithmetic. Every lane performs those operations in the same order (the quaternion formulas are
+// the shared templates of quat.hpp; float roundings are a float conversion of the same double;
 // float x float products and float / float quotients are formed in double and rounded to float,
-// which gives the float result exactly since 53 >= 2 x 24 + 2), so every width gives results
-// bit-identical to the scalar reference path (link_scalar; the voxel formulas one lane wide), and
-// thus to each other. The acos / sin / cos branches of rotvec, frame_to_pos_x and quat_from_rotvec
-// run on the lanes too (physics/lane_math.hpp: the scalar functions' bits); rare branches (a link
-// switching mode, floor contact) run per lane in the scalar code.
+// which gives the float result exactly since 53 >= 2 x 24 + 2), so every width gives the same
+// bits. The acos / sin / cos branches of rotvec, frame_to_pos_x and quat_from_rotvec run on the
+// lanes too (physics/lane_math.hpp: the scalar functions' bits); rare branches (floor contact)
+// run per lane in the scalar code.
 //
 // The rooms: lane utilities (lanes.hpp) and lane math (lane_math.hpp); the link pass
-// (link_scalar.hpp, link_lanes.hpp); the voxel passes (voxel_pass.hpp) with the floor contact
-// (floor_contact.hpp, floor.hpp); the chamber meshes (mesh_lanes.hpp).
+// (link_lanes.hpp); the voxel passes (voxel_pass.hpp) with the floor contact (floor_contact.hpp,
+// floor.hpp); the chamber meshes (mesh_lanes.hpp).
 #pragma once
 
 #include "physics/link_lanes.hpp"

@@ -15,7 +15,8 @@
 namespace softevo::physics::link_mode {
 namespace {
 
-// The reference's test, as orient_link writes it: true if the link leaves its mode.
+// The reference's test (physics/link_lanes.hpp lanes_keeping_mode, when the products do not
+// decide): true if the link leaves its mode.
 bool exact_switches(bool large, double dx, double dy, double dz, double l) {
   const float turn = static_cast<float>((std::fabs(dz) + std::fabs(dy)) / dx);
   const float ext = static_cast<float>(std::fabs(1 - dx / l));

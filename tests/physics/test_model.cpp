@@ -7,6 +7,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "physics/lane_math.hpp"
+#include "physics/lanes_scalar.hpp"
 #include "physics/model.hpp"
 #include "physics/observables.hpp"
 #include "physics/quat.hpp"
@@ -154,6 +156,19 @@ TEST(Quat, RotationVectorRoundTripAndBranches) {
   const Quat qx = quat_from_rotvec(Vec3(M_PI / 2, 0, 0));
   const Vec3 v(0.3, 0.7, -0.2);
   EXPECT_LT((rotate(mul(qx, qz), v) - rotate(qx, rotate(qz, v))).norm(), 1e-15);
+}
+
+// The link pass's angle to +X (physics/lane_math.hpp) one lane wide, as a link switching mode
+// runs it, on a Vec3.
+void frame_to_pos_x(const Vec3& d, Quat& q1, Vec3& a1) {
+  using L = LanesScalar;
+  const VL<L> lanes{DV<L>{d.x()}, DV<L>{d.y()}, DV<L>{d.z()}};
+  const DV<L> len = L::sqrt(lanes.x * lanes.x + lanes.y * lanes.y + lanes.z * lanes.z);
+  QL<L> q;
+  VL<L> a;
+  frame_to_pos_x_lanes<L>(lanes, len, q, a);
+  q1 = {q.w[0], q.x[0], q.y[0], q.z[0]};
+  a1 = Vec3(a.x[0], a.y[0], a.z[0]);
 }
 
 // §2.11 angle to +X (frame_to_pos_x): q1 rotates d onto +X, and a1 is its rotation vector. The
