@@ -1,6 +1,8 @@
 // Determinism (docs/model.md §9): the same robot file gives bit-identical fitness in different
 // processes, including closed-loop multi-chamber robots (whose first sensor reading was
 // uninitialised memory in the thesis simulator, §3.7).
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -53,7 +55,9 @@ std::string write_closed_loop_robot() {
   r.controller = softevo::test::make_controller(
       true, true, [](int i) { return std::cos(0.5 + 2.1 * i); }, 2.5);
   const std::string test = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-  const fs::path path = fs::temp_directory_path() / ("softevo_determinism_" + test + ".robot.json");
+  // The pid keeps concurrent runs of the suite (several build trees on one machine) apart.
+  const fs::path path = fs::temp_directory_path() / ("softevo_determinism_" + test + "_" +
+                                                     std::to_string(::getpid()) + ".robot.json");
   softevo::write_robot_file(r, path.string());
   return path.string();
 }
