@@ -179,6 +179,51 @@ TEST(RunArchive, FailureAtEveryWriteOfAGenerationLeavesAResumableArchive) {
   }
 }
 
+// A full disk while packing the finished run (it needs room for a second copy): every
+// generation stays archived, the error says so, and --resume (with room again) only packs.
+TEST(RunArchive, FailureWhilePackingKeepsEveryGeneration) {
+  const test::TmpDir dir(true);
+  const Config config = small_config();
+  const std::string ref = dir.file("ref.h5");
+  ASSERT_EQ(run_once(config, ref, false), RunOutcome::complete);
+  std::vector<std::string> pack_steps;
+  for (const std::string& step : steps_of_a_run(config, dir.file("count.h5"), false))
+    if (step.rfind("pack: ", 0) == 0) pack_steps.push_back(step);
+  ASSERT_GE(pack_steps.size(), 10u);
+  for (const std::string& failing : pack_steps) {
+    if (failing == "pack: remove segments") continue;  // after the rename: nothing to lose
+    SCOPED_TRACE("disk full from " + failing + " on");
+    const std::string out = dir.file("full.h5");
+    io::remove_archive(out);
+    bool full = false;
+    try {
+      run_once(config, out, false, [&](const std::string& step) {
+        full = full || step == failing;
+        if (full) throw std::system_error(ENOSPC, std::generic_category(), step);
+      });
+      ADD_FAILURE() << "the run did not fail";
+    } catch (const RunError& e) {
+      EXPECT_NE(std::string(e.what()).find("No space left on device"), std::string::npos)
+          << e.what();
+    }
+    {
+      const Archive a(out);
+      EXPECT_EQ(a.info().generations_done, config.run.generations);
+      // Syncing the directory comes after the rename: the packed archive is then in place.
+      // Otherwise even the small root with the final state could not be written.
+      const bool packed = failing == "pack: fsync directory";
+      EXPECT_EQ(a.info().state, packed ? "complete" : "running");
+      EXPECT_EQ(a.self_contained(), packed);
+      EXPECT_EQ(fitness_digest_of(out), fitness_digest_of(ref));
+    }
+    ASSERT_EQ(run_once(config, out, true), RunOutcome::already_complete);
+    EXPECT_EQ(hash_hex(io::content_digest(Archive(out))),
+              hash_hex(io::content_digest(Archive(ref))));
+    EXPECT_TRUE(Archive(out).self_contained());
+    expect_no_debris(dir.path);
+  }
+}
+
 // Runs (or resumes) `config` into `out` in a child process that SIGKILLs itself just before
 // write step `kill_at` (counted over the whole run); true when the child was killed there.
 bool killed_at_step(const Config& config, const std::string& out, bool resume,
