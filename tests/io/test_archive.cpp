@@ -188,6 +188,11 @@ TEST(Archive, RejectsForeignAndMissingFiles) {
   EXPECT_THROW(check_output_path(d.path), ArchiveError);
   EXPECT_NO_THROW(check_output_path(d.path + "/fine.h5"));
   EXPECT_FALSE(fs::exists(d.path + "/fine.h5"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(d.path), fs::directory_iterator()), 1);
+  // The archive is never written through a symlink nor over a special file.
+  fs::create_symlink(d.path + "/text.h5", d.path + "/link.h5");
+  EXPECT_THROW(check_output_path(d.path + "/link.h5"), ArchiveError);
+  EXPECT_THROW(check_output_path("/dev/null"), ArchiveError);
 }
 
 // Archives written before the physics_revision attribute existed were simulated with revision 1

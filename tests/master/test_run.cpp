@@ -278,16 +278,18 @@ TEST(RunArchive, KillAtEveryWriteStepLeavesAResumableArchive) {
       EXPECT_EQ(steps[0], "packed: link");
     }
     // Every step but those of the second and later generations of the run, the same steps
-    // again (which keeps the test within seconds).
+    // again, and (resuming) those of the pack, the new run's again: this keeps the test short.
     std::vector<bool> tested(steps.size(), true);
     int generation_updates = 0;
     bool in_generation = false;
+    bool packing = false;
     for (std::size_t k = 0; k < steps.size(); ++k) {
       if (starts_a_generation(steps[k])) {
         in_generation = true;
         ++generation_updates;
       }
-      tested[k] = !in_generation || generation_updates == 1;
+      packing = packing || steps[k] == "pack: create";
+      tested[k] = (!in_generation || generation_updates == 1) && !(from_packed && packing);
       if (steps[k] == "root: fsync directory") in_generation = false;
     }
     for (std::size_t k = 0; k < steps.size(); ++k) {
