@@ -159,7 +159,10 @@ def find_runs(folder: str | pathlib.Path) -> tuple[list[Run], list[str]]:
     runs: list[Run] = []
     skipped: list[str] = []
     root = pathlib.Path(folder)
-    paths = sorted(p for p in root.rglob("*") if p.suffix.lower() in (".h5", ".hdf5") and p.is_file())
+    # RUN.h5.d/ holds the per-generation segments of a run still writing (docs/archive.md): they
+    # are read through RUN.h5's links, not as archives of their own.
+    paths = sorted(p for p in root.rglob("*") if p.suffix.lower() in (".h5", ".hdf5") and p.is_file()
+                   and not p.parent.name.endswith((".h5.d", ".hdf5.d")))
     for p in paths:
         try:
             runs.append(Run(p))

@@ -4,6 +4,7 @@
 #include "io/archive.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
 
@@ -16,6 +17,7 @@
 #include <utility>
 
 #include "common/config.hpp"  // hash_hex
+#include "common/safe_write.hpp"
 #include "io/h5.hpp"
 
 namespace softevo::io {
@@ -82,43 +84,6 @@ std::string with_space_diagnosis(const std::string& message, const std::string& 
   if (free_bytes >= kLowSpaceBytes && vfs.f_favail != 0) return message;
   return message + " (" + std::strerror(ENOSPC) + ": " + directory + " has " +
          std::to_string(free_bytes) + " bytes free)";
-}
-
-// Runs `edit` on a copy of `path` (or on a new file if `fresh`), then swaps the copy in
-// (io/atomic_file.hpp). Messages name `path`, not the copy.
-template <typename Edit>
-void atomic_edit(const std::string& path, bool fresh, const WriteStepHook& hook, Edit&& edit) {
-  const WriteSteps step(hook);
-  try {
-    archive_errors([&] {
-      if (!fresh && !fs::exists(path)) throw ArchiveError(path + ": archive does not exist");
-      replace_atomically(
-          path,
-          [&](const std::string& temp) {
-            h5::File file = [&] {
-              if (fresh) {
-                // Persistent free-space tracking: space freed by replacing /checkpoint is reused
-                // on the next generation instead of growing the file forever.
-                h5::PropertyList creation = h5::PropertyList::file_creation();
-                creation.persist_free_space();
-                step("create");
-                return h5::File::create(temp, &creation, path);
-              }
-              step("copy");
-              copy_file_contents(path, temp);
-              return h5::File::open(temp, h5::File::Access::read_write, path);
-            }();
-            edit(file, step);
-            step("flush");
-            file.flush();
-            step("close");
-            file.close();
-          },
-          step);
-    });
-  } catch (const ArchiveError& e) {
-    throw ArchiveError(with_space_diagnosis(e.what(), directory_of(path)));
-  }
 }
 
 // ---- FNV-1a 64 ---------------------------------------------------------------------------------
@@ -233,30 +198,340 @@ void check_output_path(const std::string& path) {
   const std::string dir = directory_of(path);
   if (!fs::is_directory(dir, ec))
     throw ArchiveError(path + ": output directory " + dir + " does not exist");
-  const std::string probe = temp_path_for(path) + ".probe";
-  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
-  if (fd < 0)
-    throw ArchiveError(path + ": cannot create files in " + dir + ": " + std::strerror(errno));
-  ::close(fd);
-  ::unlink(probe.c_str());
+  try {
+    // The archive is replaced like any output (common/safe_write.hpp): a symlink or special
+    // file is refused now, before a run starts, rather than at its first write.
+    const AtomicOutput probe(path, Overwrite::replace);
+  } catch (const OutputFileError& e) {
+    throw ArchiveError(e.what());
+  }
 }
+
+namespace {
+
+// ---- the writer's layout (docs/archive.md "On disk while running, once finished") -----------
+
+constexpr const char* kSegmentFormat = "softevo.segment/1";
+
+std::string segment_directory(const std::string& path) {
+  return path + ".d";
+}
+// The segment directory as external links name it: relative to the root file's directory,
+// so the pair can be moved together.
+std::string segment_directory_link_name(const std::string& path) {
+  return fs::path(path).filename().string() + ".d";
+}
+std::string segment_file_name(std::int64_t generation) {
+  return "gen-" + generation_group_name(generation) + ".h5";
+}
+// The former self-contained root, kept as it was, that holds generations 0..n-1 of an archive
+// being continued (a finished archive, or one from an older build).
+std::string packed_file_name(std::int64_t generations) {
+  return "packed-" + generation_group_name(generations) + ".h5";
+}
+bool is_segment_file_name(const std::string& name) {
+  const auto numbered = [&](const std::string& prefix) {
+    return name.size() == prefix.size() + 9 && name.rfind(prefix, 0) == 0 &&
+           name.compare(name.size() - 3, 3, ".h5") == 0 &&
+           std::all_of(name.begin() + static_cast<std::ptrdiff_t>(prefix.size()), name.end() - 3,
+                       [](char c) { return c >= '0' && c <= '9'; });
+  };
+  return numbered("gen-") || numbered("packed-");
+}
+
+// What the root file holds besides the generations' data.
+struct RootContent {
+  RunInfo info;
+  std::string config_text;
+  std::vector<StatsRow> stats;
+  std::vector<GenerationStorage> generations;  // ascending
+  std::optional<Checkpoint> checkpoint;
+  bool holds_generation_data() const {
+    return std::any_of(generations.begin(), generations.end(),
+                       [](const GenerationStorage& s) { return s.file.empty(); });
+  }
+};
+
+RootContent read_root(const std::string& path, bool with_checkpoint) {
+  if (!fs::exists(path)) throw ArchiveError(path + ": archive does not exist");
+  const Archive archive(path);
+  RootContent c;
+  c.info = archive.info();
+  c.config_text = archive.config_text();
+  c.stats = archive.stats();
+  c.generations = archive.generation_storage();
+  if (with_checkpoint) c.checkpoint = archive.checkpoint();
+  return c;
+}
+
+// Steps of one file's write, named "<part>: <step>" for the fault-injection hook.
+class PartSteps {
+ public:
+  PartSteps(const WriteSteps& steps, std::string part) : steps_(steps), part_(std::move(part)) {}
+  void operator()(const std::string& step) const { steps_(part_ + ": " + step); }
+  CommitStepHook commit_hook() const {
+    return [this](const std::string& step) { (*this)(step); };
+  }
+
+ private:
+  const WriteSteps& steps_;
+  std::string part_;
+};
+
+void write_stats(const h5::File& file, const std::vector<StatsRow>& rows) {
+  // Chunked with unlimited rows, as it always was: an older build continuing this archive
+  // extends it in place.
+  h5::PropertyList creation = h5::PropertyList::dataset_creation();
+  creation.chunk({64, kStatsColumns});
+  const hsize_t n = rows.size();
+  const h5::Dataset stats = file.create_dataset<double>(
+      "stats", h5::Dataspace::simple({n, kStatsColumns}, {H5S_UNLIMITED, kStatsColumns}),
+      &creation);
+  stats.write_string_attribute("columns", kStatsColumnNames, Charset::utf8);
+  if (n == 0) return;
+  std::vector<double> values;
+  values.reserve(rows.size() * kStatsColumns);
+  for (const StatsRow& s : rows)
+    values.insert(values.end(),
+                  {s.generation, s.best, s.mean, s.sd, s.species_count, s.evaluations_per_second});
+  stats.write_block<double>({0, 0}, {n, kStatsColumns}, values);
+}
+
+void write_checkpoint(const h5::File& file, const Checkpoint& checkpoint) {
+  const h5::Group cg = file.create_group("checkpoint");
+  cg.write_dataset<std::uint8_t>("population", {static_cast<hsize_t>(checkpoint.population.size())},
+                                 checkpoint.population);
+  cg.write_attribute<std::int64_t>("generation", checkpoint.generation);
+}
+
+void write_generation_group(const h5::Group& parent, const std::string& name,
+                            const GenerationRecord& record) {
+  const h5::Group g = parent.create_group(name);
+  const hsize_t n = record.size();
+  g.write_dataset<std::int64_t>("id", {n}, record.id);
+  g.write_dataset<std::int64_t>("parent1", {n}, record.parent1);
+  g.write_dataset<std::int64_t>("parent2", {n}, record.parent2);
+  g.write_dataset<std::int64_t>("species", {n}, record.species);
+  g.write_dataset<std::uint8_t>("status", {n}, record.status);
+  g.write_dataset<double>("fitness", {n}, record.fitness);
+  g.write_dataset<std::int32_t>("voxels", {n}, record.voxels);
+  g.write_dataset<std::int32_t>("chambers", {n}, record.chambers);
+  g.write_dataset<double>("wall_seconds", {n}, record.wall_seconds);
+  g.write_dataset<std::int32_t>("worker_rank", {n}, record.worker_rank);
+  g.write_byte_rows("genome", record.genome);
+  g.write_dataset<double>("components",
+                          {n, static_cast<hsize_t>(record.units),
+                           static_cast<hsize_t>(record.component_columns.size())},
+                          record.components)
+      .write_string_attribute(kColumnsAttribute, join_columns(record.component_columns),
+                              h5::Charset::ascii);
+  g.write_attribute<double>("best", record.best);
+  g.write_attribute<double>("mean", record.mean);
+  g.write_attribute<double>("sd", record.sd);
+  g.write_attribute<std::int64_t>("species_count", record.species_count);
+  g.write_attribute<std::int64_t>("evaluations", record.evaluations);
+  g.write_attribute<double>("eval_wall_seconds", record.eval_wall_seconds);
+  g.write_string_attribute("digest", hash_hex(generation_digest(record)), Charset::utf8);
+}
+
+// The segment directory of `path`, created if needed; a symlink or non-directory there is
+// refused (the archive never writes through a link).
+std::string make_segment_directory(const std::string& path) {
+  const std::string dir = segment_directory(path);
+  if (::mkdir(dir.c_str(), 0777) != 0 && errno != EEXIST)
+    throw ArchiveError(dir + ": cannot create the segment directory: " + std::strerror(errno));
+  struct stat st {};
+  if (::lstat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
+    throw ArchiveError(dir + ": exists and is not a directory (the archive's segments go there)");
+  return dir;
+}
+
+// The new, small root: run attributes, /config, /stats, a link per generation, /checkpoint.
+// Written whole to a temporary and renamed over `path` (its size does not depend on the data
+// of the generations, only on their count: one link and one /stats row each).
+void write_root(const std::string& path, const RootContent& c, const WriteSteps& steps) {
+  const PartSteps step(steps, "root");
+  AtomicOutput out(path, Overwrite::replace);
+  {
+    step("create");
+    h5::File file = h5::File::create(out.temp_path(), nullptr, path);
+    step("attributes");
+    write_run_info(file, c.info);
+    step("/config");
+    file.write_string_dataset("config", c.config_text, Charset::utf8);
+    step("/stats");
+    write_stats(file, c.stats);
+    step("/generations");
+    const h5::Group generations = file.create_group("generations");
+    for (const GenerationStorage& s : c.generations) {
+      if (s.file.empty())
+        throw ArchiveError(path + ": internal error: generation " + std::to_string(s.generation) +
+                           " has no segment");
+      generations.create_external_link(generation_group_name(s.generation), {s.file, s.object});
+    }
+    if (c.checkpoint) {
+      step("/checkpoint");
+      write_checkpoint(file, *c.checkpoint);
+    }
+    step("flush");
+    file.flush();
+    step("close");
+    file.close();
+  }
+  out.commit(step.commit_hook());
+}
+
+// Writes the segment of one generation (written once, never edited) and returns its link.
+GenerationStorage write_segment(const std::string& path, const GenerationRecord& record,
+                                const WriteSteps& steps) {
+  const PartSteps step(steps, "segment");
+  const std::string name = segment_file_name(record.generation);
+  const std::string segment = make_segment_directory(path) + "/" + name;
+  AtomicOutput out(segment, Overwrite::replace);
+  {
+    step("create");
+    h5::File file = h5::File::create(out.temp_path(), nullptr, segment);
+    file.write_string_attribute("format", kSegmentFormat, Charset::utf8);
+    const std::string group = "generations/" + generation_group_name(record.generation);
+    step("/" + group);
+    write_generation_group(file.create_group("generations"),
+                           generation_group_name(record.generation), record);
+    step("flush");
+    file.flush();
+    step("close");
+    file.close();
+  }
+  out.commit(step.commit_hook());
+  return GenerationStorage{record.generation, segment_directory_link_name(path) + "/" + name,
+                           "/generations/" + generation_group_name(record.generation)};
+}
+
+// Copies the bytes of `from` into the existing, empty file `to`; a full disk says "No space
+// left on device" (std::filesystem::copy_file reports a short sendfile as EIO).
+void copy_file_contents(const std::string& from, const std::string& to) {
+  const auto fail = [&](const std::string& what) {
+    throw ArchiveError(to + ": cannot copy " + from + ": " + what + ": " + std::strerror(errno));
+  };
+  struct Fd {
+    int fd = -1;
+    ~Fd() {
+      if (fd >= 0) ::close(fd);
+    }
+  };
+  const Fd in{::open(from.c_str(), O_RDONLY | O_CLOEXEC)};
+  if (in.fd < 0) fail("open for reading");
+  Fd out{::open(to.c_str(), O_WRONLY | O_TRUNC | O_NOFOLLOW | O_CLOEXEC)};
+  if (out.fd < 0) fail("open the copy");
+  std::vector<char> buffer(std::size_t{1} << 20);
+  for (;;) {
+    const ssize_t got = ::read(in.fd, buffer.data(), buffer.size());
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) fail("read");
+    if (got == 0) break;
+    for (ssize_t done = 0; done < got;) {
+      const ssize_t put =
+          ::write(out.fd, buffer.data() + done, static_cast<std::size_t>(got - done));
+      if (put < 0 && errno == EINTR) continue;
+      if (put < 0) fail("write");
+      done += put;
+    }
+  }
+  if (::close(std::exchange(out.fd, -1)) != 0) fail("close");
+}
+
+// A root that still holds generation data (a finished archive being continued, or one written
+// by an older build) becomes a small root first: the file as it is moves, unchanged, into the
+// segment directory as packed-<n>.h5 (a hard link: no byte is copied; a copy where the file
+// system has no hard links), and its generations become links into it.
+void keep_generation_data_apart(const std::string& path, RootContent& c, const WriteSteps& steps) {
+  if (!c.holds_generation_data()) return;
+  const PartSteps step(steps, "packed");
+  std::int64_t held = 0;
+  for (const GenerationStorage& s : c.generations)
+    if (s.file.empty()) held = std::max(held, s.generation + 1);
+  const std::string name = packed_file_name(held);
+  const std::string packed = make_segment_directory(path) + "/" + name;
+  AtomicOutput out(packed, Overwrite::replace);
+  step("link");
+  ::unlink(out.temp_path().c_str());
+  if (::link(path.c_str(), out.temp_path().c_str()) != 0) {
+    const int fd = ::open(out.temp_path().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd < 0) throw ArchiveError(out.temp_path() + ": cannot create: " + std::strerror(errno));
+    ::close(fd);
+    step("copy");
+    copy_file_contents(path, out.temp_path());
+  }
+  out.commit(step.commit_hook());
+  for (GenerationStorage& s : c.generations)
+    if (s.file.empty()) s.file = segment_directory_link_name(path) + "/" + name;
+}
+
+// Runs `body` with every failure as an ArchiveError naming `path`, and the full-disk diagnosis.
+template <typename Body>
+void archive_update(const std::string& path, Body&& body) {
+  try {
+    archive_errors([&] {
+      try {
+        body();
+      } catch (const OutputFileError& e) {
+        throw ArchiveError(e.what());
+      }
+    });
+  } catch (const ArchiveError& e) {
+    throw ArchiveError(with_space_diagnosis(e.what(), directory_of(path)));
+  }
+}
+
+void require_generations_done(const std::string& path, const RootContent& c, const RunInfo& info) {
+  // A state change must not claim a generation the archive does not hold (a failed append
+  // followed by "interrupted" once left an archive no --resume would accept).
+  if (c.info.generations_done != info.generations_done)
+    throw ArchiveError(
+        path + ": refusing to set generations_done = " + std::to_string(info.generations_done) +
+        " in a state change (archive has " + std::to_string(c.info.generations_done) + ")");
+}
+
+// Removes the segment directory's files that the root at `path` does not reference (all of
+// them when `path` references none, e.g. a finished archive), stale temporaries included, and
+// the directory once empty. Nothing is removed when the root exists but cannot be read.
+int remove_unreferenced_segments(const std::string& path) {
+  const std::string dir = segment_directory(path);
+  struct stat st {};
+  if (::lstat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) return 0;
+  std::vector<std::string> referenced;
+  if (fs::exists(path)) {
+    try {
+      for (const GenerationStorage& s : Archive(path).generation_storage())
+        referenced.push_back(s.file);
+    } catch (const std::exception&) {
+      return 0;  // a damaged root: its segments may be all that is left of the run
+    }
+  }
+  int removed = remove_stale_temporaries_in(dir);
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    const std::string as_linked = segment_directory_link_name(path) + "/" + name;
+    if (!is_segment_file_name(name) ||
+        std::find(referenced.begin(), referenced.end(), as_linked) != referenced.end())
+      continue;
+    std::error_code rm;
+    if (fs::remove(entry.path(), rm)) ++removed;
+  }
+  if (fs::is_empty(dir, ec)) fs::remove(dir, ec);
+  return removed;
+}
+
+}  // namespace
 
 void create_archive(const std::string& path, const RunInfo& info, const std::string& config_text,
                     const WriteStepHook& hook) {
-  atomic_edit(path, true, hook, [&](const h5::File& file, const WriteSteps& step) {
-    step("attributes");
-    write_run_info(file, info);
-    step("/config");
-    file.write_string_dataset("config", config_text, Charset::utf8);
-    step("/stats");
-    // /stats: chunked, unlimited rows, extended by one row per generation.
-    h5::PropertyList creation = h5::PropertyList::dataset_creation();
-    creation.chunk({64, kStatsColumns});
-    const h5::Dataset stats = file.create_dataset<double>(
-        "stats", h5::Dataspace::simple({0, kStatsColumns}, {H5S_UNLIMITED, kStatsColumns}),
-        &creation);
-    stats.write_string_attribute("columns", kStatsColumnNames, Charset::utf8);
-    file.create_group("generations");
+  const WriteSteps steps(hook);
+  archive_update(path, [&] {
+    RootContent c;
+    c.info = info;
+    c.config_text = config_text;
+    write_root(path, c, steps);
   });
 }
 
@@ -264,71 +539,91 @@ void append_generation(const std::string& path, const RunInfo& info, const Gener
                        const StatsRow& stats, const Checkpoint& checkpoint,
                        const WriteStepHook& hook) {
   record.check();
-  atomic_edit(path, false, hook, [&](const h5::File& file, const WriteSteps& step) {
-    const std::string name = "generations/" + generation_group_name(record.generation);
-    if (file.has_link(name)) throw ArchiveError(path + ": /" + name + " already exists");
-    step("/" + name);
-    const h5::Group g = file.create_group(name);
-    const hsize_t n = record.size();
-    g.write_dataset<std::int64_t>("id", {n}, record.id);
-    g.write_dataset<std::int64_t>("parent1", {n}, record.parent1);
-    g.write_dataset<std::int64_t>("parent2", {n}, record.parent2);
-    g.write_dataset<std::int64_t>("species", {n}, record.species);
-    g.write_dataset<std::uint8_t>("status", {n}, record.status);
-    g.write_dataset<double>("fitness", {n}, record.fitness);
-    g.write_dataset<std::int32_t>("voxels", {n}, record.voxels);
-    g.write_dataset<std::int32_t>("chambers", {n}, record.chambers);
-    g.write_dataset<double>("wall_seconds", {n}, record.wall_seconds);
-    g.write_dataset<std::int32_t>("worker_rank", {n}, record.worker_rank);
-    g.write_byte_rows("genome", record.genome);
-    g.write_dataset<double>("components",
-                            {n, static_cast<hsize_t>(record.units),
-                             static_cast<hsize_t>(record.component_columns.size())},
-                            record.components)
-        .write_string_attribute(kColumnsAttribute, join_columns(record.component_columns),
-                                h5::Charset::ascii);
-    g.write_attribute<double>("best", record.best);
-    g.write_attribute<double>("mean", record.mean);
-    g.write_attribute<double>("sd", record.sd);
-    g.write_attribute<std::int64_t>("species_count", record.species_count);
-    g.write_attribute<std::int64_t>("evaluations", record.evaluations);
-    g.write_attribute<double>("eval_wall_seconds", record.eval_wall_seconds);
-    g.write_string_attribute("digest", hash_hex(generation_digest(record)), Charset::utf8);
-
-    // /stats: one more row.
-    step("/stats");
-    const h5::Dataset table = file.open_dataset("stats");
-    const hsize_t rows = table.dims().at(0);
-    table.set_extent({rows + 1, kStatsColumns});
-    table.write_block<double>({rows, 0}, {1, kStatsColumns},
-                              {stats.generation, stats.best, stats.mean, stats.sd,
-                               stats.species_count, stats.evaluations_per_second});
-
-    // /checkpoint: replaced as a whole.
-    step("/checkpoint");
-    if (file.has_link("checkpoint")) file.delete_link("checkpoint");
-    const h5::Group cg = file.create_group("checkpoint");
-    cg.write_dataset<std::uint8_t>(
-        "population", {static_cast<hsize_t>(checkpoint.population.size())}, checkpoint.population);
-    cg.write_attribute<std::int64_t>("generation", checkpoint.generation);
-
-    step("attributes");
-    write_run_info(file, info);
+  const WriteSteps steps(hook);
+  archive_update(path, [&] {
+    RootContent c = read_root(path, false);
+    const std::string name = "/generations/" + generation_group_name(record.generation);
+    for (const GenerationStorage& s : c.generations)
+      if (s.generation == record.generation)
+        throw ArchiveError(path + ": " + name + " already exists");
+    keep_generation_data_apart(path, c, steps);
+    // The segment first: until the root names it, it is an unreferenced file that a kill leaves
+    // behind and the next start removes.
+    c.generations.push_back(write_segment(path, record, steps));
+    c.stats.push_back(stats);
+    c.checkpoint = checkpoint;
+    c.info = info;
+    write_root(path, c, steps);
   });
 }
 
 void update_run_info(const std::string& path, const RunInfo& info, const WriteStepHook& hook) {
-  atomic_edit(path, false, hook, [&](const h5::File& file, const WriteSteps& step) {
-    // A state change must not claim a generation the archive does not hold (a failed append
-    // followed by "interrupted" once left an archive no --resume would accept).
-    const std::int64_t stored = file.read_attribute<std::int64_t>("generations_done");
-    if (stored != info.generations_done)
-      throw ArchiveError(
-          path + ": refusing to set generations_done = " + std::to_string(info.generations_done) +
-          " in a state change (archive has " + std::to_string(stored) + ")");
-    step("attributes");
-    write_run_info(file, info);
+  const WriteSteps steps(hook);
+  archive_update(path, [&] {
+    RootContent c = read_root(path, true);
+    require_generations_done(path, c, info);
+    keep_generation_data_apart(path, c, steps);
+    c.info = info;
+    write_root(path, c, steps);
   });
+}
+
+void finish_archive(const std::string& path, const RunInfo& info, const WriteStepHook& hook) {
+  const WriteSteps steps(hook);
+  archive_update(path, [&] {
+    const PartSteps step(steps, "pack");
+    {
+      const Archive source(path);
+      RootContent c;
+      c.info = source.info();
+      require_generations_done(path, c, info);
+      AtomicOutput out(path, Overwrite::replace);
+      {
+        step("create");
+        // Persistent free-space tracking: an older build that continues this archive edits it
+        // in place, and reuses the space of each replaced /checkpoint.
+        h5::PropertyList creation = h5::PropertyList::file_creation();
+        creation.persist_free_space();
+        h5::File file = h5::File::create(out.temp_path(), &creation, path);
+        step("attributes");
+        write_run_info(file, info);
+        step("/config");
+        file.write_string_dataset("config", source.config_text(), Charset::utf8);
+        step("/stats");
+        write_stats(file, source.stats());
+        step("/generations");
+        const h5::Group to = file.create_group("generations");
+        const h5::Group from = source.file_->open_group("generations");
+        // Object copies (links followed): every byte and attribute of a group as written,
+        // the digest included, so the integrity checks still see what the run wrote.
+        for (const std::int64_t g : source.generations())
+          from.copy_object(generation_group_name(g), to, generation_group_name(g));
+        if (const std::optional<Checkpoint> cp = source.checkpoint()) {
+          step("/checkpoint");
+          write_checkpoint(file, *cp);
+        }
+        step("flush");
+        file.flush();
+        step("close");
+        file.close();
+      }
+      out.commit(step.commit_hook());
+    }
+    // The root is self-contained now: the segments are unreferenced (a kill here leaves them
+    // for the next start to remove).
+    step("remove segments");
+    remove_unreferenced_segments(path);
+  });
+}
+
+int remove_archive_debris(const std::string& path) {
+  return remove_stale_temporaries(path) + remove_unreferenced_segments(path);
+}
+
+void remove_archive(const std::string& path) {
+  std::error_code ec;
+  fs::remove(path, ec);
+  remove_unreferenced_segments(path);
 }
 
 // ---- Archive (reader) --------------------------------------------------------------------------
@@ -393,6 +688,7 @@ GenerationRecord Archive::generation(std::int64_t gen) const {
     const std::string name = "generations/" + generation_group_name(gen);
     if (!file_->has_link(name))
       throw ArchiveError(path_ + ": no generation " + std::to_string(gen) + " (/" + name + ")");
+    require_segment(name);
     const h5::Group g = file_->open_group(name);
     GenerationRecord r;
     r.generation = gen;
@@ -459,6 +755,44 @@ std::optional<Checkpoint> Archive::checkpoint() const {
   });
 }
 
+std::vector<GenerationStorage> Archive::generation_storage() const {
+  return archive_errors([&] {
+    std::vector<GenerationStorage> out;
+    const h5::Group generations = file_->open_group("generations");
+    for (const std::int64_t g : this->generations()) {
+      const std::string name = generation_group_name(g);
+      GenerationStorage s{g, "", "/generations/" + name};
+      if (const auto target = generations.external_link(name)) {
+        s.file = target->file;
+        s.object = target->object;
+      }
+      out.push_back(std::move(s));
+    }
+    return out;
+  });
+}
+
+bool Archive::self_contained() const {
+  const std::vector<GenerationStorage> storage = generation_storage();
+  return std::all_of(storage.begin(), storage.end(),
+                     [](const GenerationStorage& s) { return s.file.empty(); });
+}
+
+void Archive::require_segment(const std::string& name) const {
+  const std::size_t slash = name.rfind('/');
+  const h5::Group parent = file_->open_group(name.substr(0, slash));
+  const auto target = parent.external_link(name.substr(slash + 1));
+  if (!target) return;
+  const fs::path file = fs::path(target->file).is_absolute()
+                            ? fs::path(target->file)
+                            : fs::path(directory_of(path_)) / target->file;
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec))
+    throw ArchiveError(path_ + ": /" + name + " is stored in " + file.string() +
+                       ", which is missing (a run's segment directory must stay beside its "
+                       "archive until the run is finished)");
+}
+
 bool is_run_archive(const std::string& path) {
   try {
     if (!h5::File::is_hdf5(path)) return false;
@@ -516,6 +850,7 @@ std::uint64_t generation_digest(const GenerationRecord& r) {
 std::optional<std::uint64_t> Archive::stored_generation_digest(std::int64_t gen) const {
   return archive_errors([&]() -> std::optional<std::uint64_t> {
     const std::string name = "generations/" + generation_group_name(gen);
+    require_segment(name);
     const h5::Group g = file_->open_group(name);
     if (!g.has_attribute("digest")) return std::nullopt;
     const std::string text = g.read_string_attribute("digest");

@@ -1,11 +1,15 @@
 // Run archive `softevo.run/1` (HDF5): what a distributed run records, written by rank 0 only.
 // The schema is documented in docs/archive.md; this header is its single implementation.
 //
-// Crash safety: an archive on disk is always a complete, valid file. Every change (new run,
-// one more generation + checkpoint, state change) is made on a copy next to the target and
-// swapped in by io/atomic_file.hpp (copy-append-rename). A crash leaves either the old or the
-// new file, never a half written one; the cost is one file copy per generation (page-cache
-// speed, small next to the evaluation of a generation).
+// Crash safety with a cost per generation that does not grow with the run (docs/archive.md
+// "On disk"): while a run writes, RUN.h5 is a small root (run attributes, /config, /stats,
+// /checkpoint) whose /generations/<G> are HDF5 external links to one segment file per
+// generation in RUN.h5.d/, each written once. Every file is written whole to a temporary and
+// renamed into place (common/safe_write.hpp): a new generation is its segment, then a new root
+// that names it, so a kill at any instant leaves the previous root or the new one, both
+// complete. finish_archive() packs everything into one self-contained RUN.h5 (one copy of the
+// data per run) and removes RUN.h5.d/. The reader reads both forms, and archives of older
+// builds (always self-contained).
 #pragma once
 
 #include <cstdint>
@@ -15,8 +19,6 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include "io/atomic_file.hpp"  // remove_stale_temp_files
 
 namespace softevo::io {
 
@@ -114,29 +116,55 @@ FitnessStats fitness_stats(const std::vector<double>& fitness);
 
 // ---- writing (rank 0 only; every call is atomic, see the file comment) -------------------------
 
-// Fault injection, for tests only: called with a step name ("copy", "/generations/000003/id",
-// "flush", "rename", ...) before every write step of an archive update. A hook that throws
-// (e.g. std::system_error(ENOSPC)) makes that step fail as a full disk would; the update then
-// fails like a real one (ArchiveError, temporary removed, archive unchanged). Empty = no hook.
+// Fault injection, for tests only: called with a step name ("segment: create",
+// "segment: /generations/000003", "root: /stats", "root: rename", "pack: /generations", ...)
+// before every write step of an archive update. A hook that throws (e.g.
+// std::system_error(ENOSPC)) makes that step fail as a full disk would; the update then fails
+// like a real one (ArchiveError, temporary removed, archive unchanged). A hook that kills the
+// process shows what a kill at that instant leaves. Empty = no hook.
 using WriteStepHook = std::function<void(const std::string& step)>;
 
-// Throws ArchiveError unless a file can be created next to `path` (directory exists and is
-// writable, `path` is not a directory). Touches nothing that exists.
+// Throws ArchiveError unless the archive can be written at `path`: its directory exists and is
+// writable, and `path` is absent or a regular file (not a directory, symlink, FIFO or device;
+// common/safe_write.hpp). Touches nothing that exists.
 void check_output_path(const std::string& path);
-// New archive with root attributes, /config, an empty /stats and no generation.
+// New archive (a root) with root attributes, /config, an empty /stats and no generation.
 void create_archive(const std::string& path, const RunInfo& info, const std::string& config_text,
                     const WriteStepHook& hook = {});
-// Adds /generations/<G>, appends a /stats row, replaces /checkpoint and the root attributes.
-// `info.generations_done` should be record.generation + 1 (master/run.cpp counts a
-// generation only once this call has succeeded).
+// Writes generation <G> as a segment, then a root that links it as /generations/<G>, with one
+// more /stats row, the new /checkpoint and root attributes. `info.generations_done` should be
+// record.generation + 1 (master/run.cpp counts a generation only once this call has
+// succeeded). A self-contained archive becomes a root first (its file moves unchanged into
+// RUN.h5.d/ as packed-<G>.h5, by a hard link where possible).
 void append_generation(const std::string& path, const RunInfo& info, const GenerationRecord& record,
                        const StatsRow& stats, const Checkpoint& checkpoint,
                        const WriteStepHook& hook = {});
 // Replaces the root attributes (state changes, end time). `info.generations_done` must equal
 // the archive's: a state change never claims generations (ArchiveError otherwise).
 void update_run_info(const std::string& path, const RunInfo& info, const WriteStepHook& hook = {});
+// Sets the root attributes (as update_run_info) and packs the archive into one self-contained
+// file (every generation group copied as written), replacing the root atomically, then removes
+// the segments. A failure leaves the archive as it was (consistent, in either form).
+void finish_archive(const std::string& path, const RunInfo& info, const WriteStepHook& hook = {});
+// Removes what a writer killed in the middle of an update left behind: temporaries of dead
+// processes beside `path` and in RUN.h5.d/, and segments the root does not reference (written
+// before a root update that never happened, or left by a finish that was killed). Keeps
+// everything when the root exists but cannot be read. Call it only under the run lock (io/
+// run_lock.hpp). Returns how many files it removed.
+int remove_archive_debris(const std::string& path);
+// Removes the archive at `path` and its segments (a temporary archive that is not wanted).
+void remove_archive(const std::string& path);
 
 // ---- reading ---------------------------------------------------------------------------------
+
+// Where the data of one generation is: `file` = "" when it is in the archive file itself (a
+// finished archive), else the file its external link names (relative to the archive's
+// directory, e.g. "run.h5.d/gen-000003.h5"), with `object` the group inside it.
+struct GenerationStorage {
+  std::int64_t generation = 0;
+  std::string file;
+  std::string object;
+};
 
 class Archive {
  public:
@@ -156,8 +184,16 @@ class Archive {
   // The `digest` attribute of /generations/<G> (generation_digest at write time); nullopt in
   // archives written before the attribute existed. Throws ArchiveError when it is malformed.
   std::optional<std::uint64_t> stored_generation_digest(std::int64_t g) const;
+  // Where each generation is stored, ascending.
+  std::vector<GenerationStorage> generation_storage() const;
+  // Every generation is in the file itself (a finished archive, or one of an older build).
+  bool self_contained() const;
 
  private:
+  friend void finish_archive(const std::string&, const RunInfo&, const WriteStepHook&);
+  // Throws a clear ArchiveError when generation `name`'s segment file is missing (HDF5 would
+  // otherwise look for it relative to the working directory too).
+  void require_segment(const std::string& name) const;
   std::string path_;
   std::unique_ptr<h5::File> file_;
 };

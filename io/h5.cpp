@@ -349,6 +349,43 @@ std::vector<std::string> Group::link_names() const {
   return names;
 }
 
+std::optional<Group::ExternalTarget> Group::external_link(const std::string& name) const {
+  const Where w = where_.child(name);
+  H5L_info_t info{};
+  w.check_status(H5Lget_info(id(), name.c_str(), &info, H5P_DEFAULT), "look up the link");
+  if (info.type != H5L_TYPE_EXTERNAL) return std::nullopt;
+  // Two path names: a link of more than this comes from a damaged or hostile file.
+  constexpr std::size_t kMaxExternalLinkBytes = 1 << 16;
+  if (info.u.val_size > kMaxExternalLinkBytes)
+    w.fail("read the external link", "its value has " + std::to_string(info.u.val_size) +
+                                         " bytes (at most " +
+                                         std::to_string(kMaxExternalLinkBytes) + " expected)");
+  std::vector<char> value(info.u.val_size);
+  w.check_status(H5Lget_val(id(), name.c_str(), value.data(), value.size(), H5P_DEFAULT),
+                 "read the external link");
+  unsigned flags = 0;
+  const char* file = nullptr;
+  const char* object = nullptr;
+  w.check_status(H5Lunpack_elink_val(value.data(), value.size(), &flags, &file, &object),
+                 "decode the external link");
+  return ExternalTarget{file, object};
+}
+
+void Group::create_external_link(const std::string& name, const ExternalTarget& target) const {
+  where_.child(name).check_status(
+      H5Lcreate_external(target.file.c_str(), target.object.c_str(), id(), name.c_str(),
+                         H5P_DEFAULT, H5P_DEFAULT),
+      "create an external link to " + target.file + ":" + target.object);
+}
+
+void Group::copy_object(const std::string& name, const Group& destination,
+                        const std::string& destination_name) const {
+  where_.child(name).check_status(H5Ocopy(id(), name.c_str(), destination.id(),
+                                          destination_name.c_str(), H5P_DEFAULT, H5P_DEFAULT),
+                                  "copy to " + destination.where().file + ":" +
+                                      destination.where().child(destination_name).object);
+}
+
 Group Group::create_group(const std::string& name) const {
   const Where w = where_.child(name);
   return Group(Id(w.check(H5Gcreate2(id(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),

@@ -13,6 +13,7 @@
 #include <hdf5.h>
 
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -243,6 +244,20 @@ class Group : public Object {
   void delete_link(const std::string& name) const;
   // Names of the direct children, in ascending name order.
   std::vector<std::string> link_names() const;
+
+  // Where the external link `name` points: the object `object` in the file `file` (HDF5 resolves
+  // a relative `file` against the directory of the file holding the link first). nullopt when
+  // `name` is a hard or soft link.
+  struct ExternalTarget {
+    std::string file;
+    std::string object;
+  };
+  std::optional<ExternalTarget> external_link(const std::string& name) const;
+  void create_external_link(const std::string& name, const ExternalTarget& target) const;
+  // Copies the object `name` (links followed) with its attributes and everything below it to
+  // `destination_name` in `destination`, which may be in another file.
+  void copy_object(const std::string& name, const Group& destination,
+                   const std::string& destination_name) const;
 
   Group create_group(const std::string& name) const;
   Group open_group(const std::string& name) const;

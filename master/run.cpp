@@ -26,10 +26,11 @@ using io::ArchiveError;
 using io::check_output_path;
 using io::Checkpoint;
 using io::create_archive;
+using io::finish_archive;
 using io::fitness_stats;
 using io::FitnessStats;
 using io::GenerationRecord;
-using io::remove_stale_temp_files;
+using io::remove_archive_debris;
 using io::RunInfo;
 using io::StatsRow;
 using io::update_run_info;
@@ -218,16 +219,21 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
 
 RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporter& progress) {
   if (run.already_complete) {
-    // Killed after archiving its last generation but before closing: closing is all that is
-    // left (a complete archive is not touched).
-    if (run.info.state != "complete") {
-      run.info.state = "complete";
-      run.info.end_time = iso8601_now();
-      try {
-        update_run_info(run.options.out_path, run.info, run.options.archive_fault);
-      } catch (const ArchiveError& e) {
-        throw RunError(e.what());
+    // Every generation is archived, but a run killed before its end (or a full disk then) left
+    // the state unset or the archive unpacked: the end of the run is done now.
+    const std::string& out = run.options.out_path;
+    try {
+      remove_archive_debris(out);
+      if (run.info.state != "complete" || !Archive(out).self_contained()) {
+        run.info.state = "complete";
+        if (run.info.end_time.empty()) run.info.end_time = iso8601_now();
+        finish_archive(out, run.info, run.options.archive_fault);
       }
+      remove_archive_debris(out);
+    } catch (const std::exception& e) {
+      throw RunError(std::string("the end of the complete run could not be recorded (the archive "
+                                 "holds every generation and is readable as it is): ") +
+                     e.what());
     }
     return RunOutcome::already_complete;
   }
@@ -236,8 +242,11 @@ RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporte
   RunInfo& info = run.info;
   info.ranks = executor.ranks();
   bool archive_written = false;
+  bool state_recorded = false;
   try {
-    remove_stale_temp_files(out);  // debris of a run killed while writing (SIGKILL, crash)
+    // Debris of a run killed while writing (SIGKILL, crash): its temporaries and the segment it
+    // wrote before the root that would have named it. We hold the run lock: no one else writes.
+    remove_archive_debris(out);
     if (run.resumed) {
       info.state = "running";
       info.end_time.clear();
@@ -246,6 +255,7 @@ RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporte
       create_archive(out, info, run.config_text, run.options.archive_fault);
     }
     archive_written = true;
+    remove_archive_debris(out);  // the segments of the archive an --overwrite replaced
 
     evo::Population& population = *run.population;
     const std::unique_ptr<tasks::Task> task = tasks::make_task(config);
@@ -357,17 +367,32 @@ RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporte
     }
     info.state = outcome == RunOutcome::complete ? "complete" : "interrupted";
     info.end_time = iso8601_now();
-    update_run_info(out, info, run.options.archive_fault);
+    try {
+      finish_archive(out, info, run.options.archive_fault);
+    } catch (const std::exception& e) {
+      // Every generation is on disk; only packing them into one file failed (a full disk: the
+      // pack needs room for a second copy). The state is still worth recording.
+      update_run_info(out, info, run.options.archive_fault);
+      state_recorded = true;
+      throw RunError(out + ": the run's results are archived (state " + info.state +
+                     "), but packing them into one file failed; the archive is readable as it "
+                     "is, and --resume packs it: " +
+                     e.what());
+    }
     return outcome;
   } catch (const std::exception& e) {
-    // Leave the archive marked as not running (best effort: it already holds the last
-    // consistent checkpoint whatever happens here).
-    if (archive_written) {
+    // Leave the archive marked as not running, in one file if possible (best effort: it already
+    // holds the last consistent checkpoint whatever happens here).
+    if (archive_written && !state_recorded) {
+      info.state = "interrupted";
+      info.end_time = iso8601_now();
       try {
-        info.state = "interrupted";
-        info.end_time = iso8601_now();
-        update_run_info(out, info, run.options.archive_fault);
+        finish_archive(out, info, run.options.archive_fault);
       } catch (...) {
+        try {
+          update_run_info(out, info, run.options.archive_fault);
+        } catch (...) {
+        }
       }
     }
     if (dynamic_cast<const RunError*>(&e) != nullptr) throw;

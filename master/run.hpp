@@ -1,8 +1,9 @@
 // The generation loop of a distributed run, MPI-free (docs/model.md §8.1, docs/model.md §8.10):
 //   members = population.members()           (generation g, immigrants included)
 //   evaluate every work unit                 (UnitExecutor: in-process or over MPI)
-//   archive generation g, population.advance(results), checkpoint the NEXT population,
-//   all in one atomic archive update         (io/archive.hpp)
+//   archive generation g, population.advance(results), checkpoint the NEXT population
+//                                            (io/archive.hpp: its segment, then a new root)
+//   at the end (or a stop): pack the archive into one file
 // The MPI master driver (master/mpi_driver.cpp) only supplies an executor that farms the units
 // out to worker ranks; everything else is here and is tested without MPI.
 #pragma once

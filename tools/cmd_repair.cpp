@@ -49,6 +49,15 @@ std::int64_t write_repaired(const io::Archive& in, std::int64_t keep, const std:
       evo::Population::create(config, tasks::make_task(config)->controller_inputs(),
                               static_cast<std::uint64_t>(config.run.seed));
   AtomicOutput output(out_path, Overwrite::refuse);
+  // Written as a run writes (segments beside the temporary), then packed into the one file
+  // that is renamed into place.
+  struct DiscardUnlessPacked {
+    const std::string& temp;
+    bool packed = false;
+    ~DiscardUnlessPacked() {
+      if (!packed) io::remove_archive(temp);
+    }
+  } discard{output.temp_path()};
   io::create_archive(output.temp_path(), info, config_text);
   std::int64_t kept = 0;
   for (std::int64_t g = 0; g < keep; ++g) {
@@ -73,6 +82,8 @@ std::int64_t write_repaired(const io::Archive& in, std::int64_t keep, const std:
                           io::Checkpoint{population.generation(), population.serialize()});
     kept = g + 1;
   }
+  io::finish_archive(output.temp_path(), info);
+  discard.packed = true;
   output.commit();
   return kept;
 }

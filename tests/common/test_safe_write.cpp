@@ -9,7 +9,9 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 using softevo::AtomicOutput;
@@ -116,6 +118,51 @@ TEST(SafeWrite, UncommittedOutputLeavesNothingBehind) {
     // no commit(): an exception in the writer lands here
   }
   EXPECT_EQ(read(out), "old");
+  EXPECT_EQ(entries(d.path), 1u);
+}
+
+// A temporary carries its writer's pid, so that a later process can remove a dead writer's
+// temporaries and leave a live one's alone.
+TEST(SafeWrite, TemporariesOfDeadWritersAreRemoved) {
+  TempDir d;
+  const fs::path out = d.path / "run.h5";
+  const AtomicOutput live(out.string(), Overwrite::replace);
+  const std::string own = fs::path(live.temp_path()).filename().string();
+  EXPECT_EQ(own.rfind(".run.h5.tmp." + std::to_string(::getpid()) + ".", 0), 0u) << own;
+  const fs::path dead = d.path / ".run.h5.tmp.999999999.AbC123";  // beyond pid_max
+  const fs::path old_build = d.path / ".run.h5.tmp.999999999";
+  const fs::path other_target = d.path / ".other.h5.tmp.999999999.AbC123";
+  const fs::path not_ours = d.path / ".run.h5.tmp.999999999.notmkstemp";
+  for (const fs::path& f : {dead, old_build, other_target, not_ours}) std::ofstream(f) << "x";
+  EXPECT_EQ(softevo::remove_stale_temporaries(out.string()), 2);
+  EXPECT_FALSE(fs::exists(dead));
+  EXPECT_FALSE(fs::exists(old_build));
+  EXPECT_TRUE(fs::exists(live.temp_path()));
+  EXPECT_TRUE(fs::exists(other_target));
+  EXPECT_TRUE(fs::exists(not_ours));
+  EXPECT_EQ(softevo::remove_stale_temporaries_in(d.path.string()), 1);  // other.h5's
+  EXPECT_TRUE(fs::exists(live.temp_path()));
+}
+
+// The fault-injection hook sees the commit's steps in order; a throw there fails the commit.
+TEST(SafeWrite, CommitStepsCanBeFailed) {
+  TempDir d;
+  const fs::path out = d.path / "a.txt";
+  std::vector<std::string> steps;
+  {
+    AtomicOutput o(out.string(), Overwrite::refuse);
+    o.commit([&](const std::string& s) { steps.push_back(s); });
+  }
+  EXPECT_EQ(steps, (std::vector<std::string>{"fsync", "rename", "fsync directory"}));
+  {
+    AtomicOutput o(out.string(), Overwrite::replace);
+    std::ofstream(o.temp_path()) << "new";
+    EXPECT_THROW(o.commit([](const std::string& s) {
+      if (s == "rename") throw std::runtime_error("injected");
+    }),
+                 std::runtime_error);
+  }
+  EXPECT_EQ(read(out), "");
   EXPECT_EQ(entries(d.path), 1u);
 }
 

@@ -1,5 +1,6 @@
 // Run archive: round trip of every field, atomic updates (a failed update leaves the previous
-// file byte for byte), digests that see every deterministic field and ignore timing fields.
+// file byte for byte), digests that see every deterministic field and ignore timing fields,
+// the two forms on disk (a root with segments while running, one file once finished).
 #include "io/archive.hpp"
 
 #include <gtest/gtest.h>
@@ -131,8 +132,11 @@ TEST(Archive, FailedUpdateLeavesThePreviousFileIntact) {
   bad.fitness.pop_back();
   EXPECT_THROW(append_generation(p, info, bad, StatsRow{}, Checkpoint{2, {8}}), ArchiveError);
   EXPECT_TRUE(bytes_of(p) == before);
-  for (const auto& e : fs::directory_iterator(d.path))
-    EXPECT_EQ(e.path().filename(), "run.h5") << "left behind: " << e.path();
+  for (const auto& e : fs::recursive_directory_iterator(d.path)) {
+    const std::string name = e.path().filename().string();
+    EXPECT_TRUE(name == "run.h5" || name == "run.h5.d" || name == "gen-000000.h5")
+        << "left behind: " << e.path();
+  }
 }
 
 TEST(Archive, DigestsSeeResultsButNotTiming) {
@@ -184,6 +188,11 @@ TEST(Archive, RejectsForeignAndMissingFiles) {
   EXPECT_THROW(check_output_path(d.path), ArchiveError);
   EXPECT_NO_THROW(check_output_path(d.path + "/fine.h5"));
   EXPECT_FALSE(fs::exists(d.path + "/fine.h5"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(d.path), fs::directory_iterator()), 1);
+  // The archive is never written through a symlink nor over a special file.
+  fs::create_symlink(d.path + "/text.h5", d.path + "/link.h5");
+  EXPECT_THROW(check_output_path(d.path + "/link.h5"), ArchiveError);
+  EXPECT_THROW(check_output_path("/dev/null"), ArchiveError);
 }
 
 // Archives written before the physics_revision attribute existed were simulated with revision 1
@@ -240,17 +249,119 @@ TEST(Archive, ComponentsWithoutNamesReadAsTheLegacySix) {
   }
 }
 
-TEST(Archive, StaleTemporaryCopiesOfDeadProcessesAreRemoved) {
+// Three generations appended to `p` (a new archive), as a run writes them.
+void write_three_generations(const std::string& p, RunInfo& info) {
+  create_archive(p, info, "[run]\nseed = 3\n");
+  for (std::int64_t g = 0; g < 3; ++g) {
+    const GenerationRecord r = sample_record(g, 4, 1);
+    info.generations_done = g + 1;
+    append_generation(p, info, r, StatsRow{static_cast<double>(g), r.best, r.mean, r.sd, 2, 1.0},
+                      Checkpoint{g + 1, {static_cast<std::uint8_t>(g), 7}});
+  }
+}
+
+// While a run writes, the archive is a small root whose generations are links to one segment
+// file each; finish_archive packs it into one file with the same content and removes them.
+TEST(Archive, RootWithSegmentsReadsAsAndPacksIntoOneFile) {
   TmpDir d;
   const std::string p = d.path + "/run.h5";
-  const std::string dead = d.path + "/.run.h5.tmp.999999999";  // beyond pid_max: never alive
-  const std::string live = d.path + "/.run.h5.tmp." + std::to_string(::getpid());
-  const std::string other = d.path + "/.other.h5.tmp.999999999";
-  for (const auto& f : {dead, live, other}) std::ofstream(f) << "x";
-  EXPECT_EQ(remove_stale_temp_files(p), 1);
-  EXPECT_FALSE(fs::exists(dead));
-  EXPECT_TRUE(fs::exists(live));
-  EXPECT_TRUE(fs::exists(other));
+  RunInfo info = sample_info();
+  write_three_generations(p, info);
+  std::uint64_t running_content = 0;
+  {
+    const Archive a(p);
+    EXPECT_FALSE(a.self_contained());
+    const std::vector<GenerationStorage> storage = a.generation_storage();
+    ASSERT_EQ(storage.size(), 3u);
+    EXPECT_EQ(storage[2].file, "run.h5.d/gen-000002.h5");
+    EXPECT_EQ(storage[2].object, "/generations/000002");
+    EXPECT_EQ(a.generation(2).id, sample_record(2, 4, 1).id);
+    EXPECT_EQ(a.stored_generation_digest(1), generation_digest(sample_record(1, 4, 1)));
+    EXPECT_EQ(a.stats().size(), 3u);
+    EXPECT_EQ(a.checkpoint()->population, (std::vector<std::uint8_t>{2, 7}));
+    running_content = content_digest(a);
+  }
+  // The root holds no generation data: its size does not depend on the generations' data.
+  EXPECT_LT(fs::file_size(p), fs::file_size(d.path + "/run.h5.d/gen-000002.h5") * 3);
+
+  // Packed with the same root attributes, the content is the same, digest for digest.
+  finish_archive(p, info);
+  EXPECT_FALSE(fs::exists(d.path + "/run.h5.d"));
+  const Archive a(p);
+  EXPECT_TRUE(a.self_contained());
+  EXPECT_EQ(a.info().state, "running");
+  EXPECT_EQ(a.generation(1).genome, sample_record(1, 4, 1).genome);
+  EXPECT_EQ(a.stored_generation_digest(2), generation_digest(sample_record(2, 4, 1)));
+  EXPECT_EQ(content_digest(a), running_content);
+}
+
+// Appending to a self-contained archive (a finished run continued, or an older build's file)
+// moves that file unchanged into the segment directory and links its generations.
+TEST(Archive, AppendingToAPackedArchiveKeepsItsFileAsASegment) {
+  TmpDir d;
+  const std::string p = d.path + "/run.h5";
+  RunInfo info = sample_info();
+  write_three_generations(p, info);
+  info.state = "interrupted";
+  finish_archive(p, info);
+  const std::string packed_bytes = bytes_of(p);
+  const GenerationRecord r = sample_record(3, 4, 1);
+  info.generations_done = 4;
+  append_generation(p, info, r, StatsRow{3, r.best, r.mean, r.sd, 2, 1.0}, Checkpoint{4, {9}});
+  EXPECT_TRUE(bytes_of(d.path + "/run.h5.d/packed-000003.h5") == packed_bytes);
+  const Archive a(p);
+  const std::vector<GenerationStorage> storage = a.generation_storage();
+  ASSERT_EQ(storage.size(), 4u);
+  EXPECT_EQ(storage[0].file, "run.h5.d/packed-000003.h5");
+  EXPECT_EQ(storage[3].file, "run.h5.d/gen-000003.h5");
+  for (std::int64_t g = 0; g < 4; ++g) EXPECT_EQ(a.generation(g).id, sample_record(g, 4, 1).id);
+  EXPECT_EQ(a.stats().size(), 4u);
+}
+
+TEST(Archive, MissingSegmentIsNamed) {
+  TmpDir d;
+  const std::string p = d.path + "/run.h5";
+  RunInfo info = sample_info();
+  write_three_generations(p, info);
+  fs::remove(d.path + "/run.h5.d/gen-000001.h5");
+  const Archive a(p);
+  EXPECT_EQ(a.generation(0).id, sample_record(0, 4, 1).id);
+  try {
+    a.generation(1);
+    ADD_FAILURE() << "a missing segment was read";
+  } catch (const ArchiveError& e) {
+    EXPECT_NE(std::string(e.what()).find("run.h5.d/gen-000001.h5, which is missing"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// What a killed writer leaves - its temporaries, a segment no root names yet - is removed;
+// what the root references and what live processes write is kept.
+TEST(Archive, DebrisOfADeadWriterIsRemoved) {
+  TmpDir d;
+  const std::string p = d.path + "/run.h5";
+  RunInfo info = sample_info();
+  write_three_generations(p, info);
+  const std::string seg = d.path + "/run.h5.d/";
+  const std::vector<std::string> debris = {
+      d.path + "/.run.h5.tmp.999999999.AbC123",  // beyond pid_max: never alive
+      d.path + "/.run.h5.tmp.999999999",         // an older build's temporary
+      seg + ".gen-000003.h5.tmp.999999999.xYz789", seg + "gen-000003.h5"};
+  const std::vector<std::string> kept = {
+      d.path + "/.run.h5.tmp." + std::to_string(::getpid()) + ".AbC123",
+      d.path + "/.other.h5.tmp.999999999", seg + "notes.txt"};
+  for (const auto& f : debris) std::ofstream(f) << "x";
+  for (const auto& f : kept) std::ofstream(f) << "x";
+  EXPECT_EQ(remove_archive_debris(p), 4);
+  for (const auto& f : debris) EXPECT_FALSE(fs::exists(f)) << f;
+  for (const auto& f : kept) EXPECT_TRUE(fs::exists(f)) << f;
+  for (std::int64_t g = 0; g < 3; ++g) EXPECT_EQ(Archive(p).generation(g).id.size(), 4u);
+  // A finished archive references no segment: they all go, the directory with them once empty.
+  fs::remove(seg + "notes.txt");
+  info.state = "complete";
+  finish_archive(p, info);
+  EXPECT_FALSE(fs::exists(seg));
 }
 
 TEST(Archive, FitnessStatsUsePopulationSd) {

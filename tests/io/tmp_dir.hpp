@@ -1,4 +1,6 @@
 // A fresh directory under /tmp for one test, removed with everything in it afterwards.
+// `in_memory`: under /dev/shm when there is one (a tmpfs: fsync costs nothing there, which
+// keeps the tests that write an archive hundreds of times fast; what is written is the same).
 #pragma once
 
 #include <unistd.h>
@@ -10,9 +12,10 @@ namespace softevo::test {
 
 struct TmpDir {
   std::string path;
-  TmpDir() {
-    char pattern[] = "/tmp/softevo-io-test-XXXXXX";
-    path = ::mkdtemp(pattern);
+  explicit TmpDir(bool in_memory = false) {
+    std::string pattern = "/tmp/softevo-io-test-XXXXXX";
+    if (in_memory && ::access("/dev/shm", W_OK) == 0) pattern = "/dev/shm/softevo-io-test-XXXXXX";
+    path = ::mkdtemp(pattern.data());
   }
   ~TmpDir() {
     std::error_code ec;

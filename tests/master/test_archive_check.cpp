@@ -87,14 +87,15 @@ std::vector<Variant> variants() {
   };
 }
 
-// An interrupted run of 3 of small_config()'s 4 generations: resumable when undamaged.
+// An interrupted run of 3 of small_config()'s 4 generations (packed into one file by the
+// stop): resumable when undamaged.
 std::string interrupted_run(const test::TmpDir& dir, const std::string& name) {
   const std::string out = dir.file(name);
   const Config config = small_config();
-  int copies = 0;
+  int generation_updates = 0;
   try {
     run_once(config, out, false, [&](const std::string& step) {
-      if (step == "copy" && ++copies == 4)  // the update of generation 3
+      if (step == "segment: create" && ++generation_updates == 4)  // generation 3
         throw std::runtime_error("stop here");
     });
   } catch (const RunError&) {

@@ -29,9 +29,29 @@ namespace {
 
 using io::Archive;
 
+// Every file below `dir` (the segment directory included).
+std::vector<std::string> files_below(const std::string& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
+    names.push_back(std::filesystem::relative(e.path(), dir).string());
+  return names;
+}
+
+// No temporary and no segment directory is left below `dir`: every archive there is one file.
+void expect_no_debris(const std::string& dir) {
+  for (const std::string& name : files_below(dir)) {
+    EXPECT_EQ(name.find(".tmp."), std::string::npos) << name;
+    EXPECT_EQ(name.find(".h5.d"), std::string::npos) << name;
+  }
+}
+
+// The step that starts the update archiving a generation.
+bool starts_a_generation(const std::string& step) {
+  return step == "segment: create";
+}
+
 // A full disk for the archive writes of a fresh run: fails (ENOSPC) write step `fail_at` of
-// the update that archives generation `generation` (the run's (generation + 1)-th copy of the
-// archive; the first update creates it) and, if `stays_full`, every write after it.
+// the update that archives generation `generation` and, if `stays_full`, every write after it.
 class FullDisk {
  public:
   FullDisk(std::int64_t generation, int fail_at, bool stays_full)
@@ -42,11 +62,11 @@ class FullDisk {
   }
   void operator()(const std::string& step) const {
     State& s = *state_;
-    if (step == "copy") {
-      ++s.copies;
+    if (starts_a_generation(step)) {
+      ++s.updates;
       s.index = 0;
     }
-    const bool hit = s.copies == s.generation + 1 && s.index == s.fail_at;
+    const bool hit = s.updates == s.generation + 1 && s.index == s.fail_at;
     ++s.index;
     if (hit || (s.failed && s.stays_full)) {
       s.failed = true;
@@ -60,33 +80,53 @@ class FullDisk {
     std::int64_t generation = 0;
     int fail_at = 0;
     bool stays_full = false;
-    std::int64_t copies = 0;
+    std::int64_t updates = 0;
     int index = 0;
     bool failed = false;
   };
   std::shared_ptr<State> state_;  // shared by the copies std::function makes
 };
 
+// Every write step of one run (or resume) of `config` into `out`, in order.
+std::vector<std::string> steps_of_a_run(const Config& config, const std::string& out, bool resume) {
+  std::vector<std::string> all;
+  run_once(config, out, resume, [&](const std::string& name) { all.push_back(name); });
+  return all;
+}
+
 // The write steps of the update that archives generation 1.
 std::vector<std::string> steps_of_a_generation(const Config& config, const std::string& dir) {
-  std::vector<std::string> all;
-  run_once(config, dir + "/count.h5", false, [&](const std::string& name) { all.push_back(name); });
   std::vector<std::string> steps;
-  int copies = 0;
-  for (const std::string& name : all) {
-    if (name == "copy") ++copies;
-    if (copies == 2) steps.push_back(name);
+  int updates = 0;
+  for (const std::string& name : steps_of_a_run(config, dir + "/count.h5", false)) {
+    if (starts_a_generation(name) || name == "pack: create") ++updates;
+    if (updates == 2) steps.push_back(name);
   }
   return steps;
 }
 
 TEST(RunArchive, WriteStepsOfAGenerationAreKnown) {
   test::TmpDir dir;
-  const std::vector<std::string> expected = {"copy",       "/generations/000001",
-                                             "/stats",     "/checkpoint",
-                                             "attributes", "flush",
-                                             "close",      "fsync",
-                                             "rename",     "fsync directory"};
+  // The segment (written once), then the small root that links it: nothing of the earlier
+  // generations is copied.
+  const std::vector<std::string> expected = {"segment: create",
+                                             "segment: /generations/000001",
+                                             "segment: flush",
+                                             "segment: close",
+                                             "segment: fsync",
+                                             "segment: rename",
+                                             "segment: fsync directory",
+                                             "root: create",
+                                             "root: attributes",
+                                             "root: /config",
+                                             "root: /stats",
+                                             "root: /generations",
+                                             "root: /checkpoint",
+                                             "root: flush",
+                                             "root: close",
+                                             "root: fsync",
+                                             "root: rename",
+                                             "root: fsync directory"};
   EXPECT_EQ(steps_of_a_generation(small_config(), dir.path), expected);
 }
 
@@ -94,13 +134,13 @@ TEST(RunArchive, WriteStepsOfAGenerationAreKnown) {
 // most that generation: the archive still holds generation 0 consistently, the error names
 // the real cause, and --resume (space freed) gives the digest of an uninterrupted run.
 TEST(RunArchive, FailureAtEveryWriteOfAGenerationLeavesAResumableArchive) {
-  test::TmpDir dir;
+  const test::TmpDir dir(true);
   const Config config = small_config();
   const std::string ref = dir.file("ref.h5");
   ASSERT_EQ(run_once(config, ref, false), RunOutcome::complete);
   const std::string expected = fitness_digest_of(ref);
   const std::vector<std::string> steps = steps_of_a_generation(config, dir.path);
-  ASSERT_EQ(steps.size(), 10u);
+  ASSERT_EQ(steps.size(), 18u);
 
   for (bool stays_full : {false, true}) {
     for (std::size_t k = 0; k < steps.size(); ++k) {
@@ -119,21 +159,160 @@ TEST(RunArchive, FailureAtEveryWriteOfAGenerationLeavesAResumableArchive) {
       }
       EXPECT_TRUE(fault.failed());
       {
-        // Syncing the directory comes after the rename: the new archive is then in place.
-        const std::int64_t kept = steps[k] == "fsync directory" ? 2 : 1;
+        // Syncing the directory comes after the rename: the new root is then in place.
+        const std::int64_t kept = steps[k] == "root: fsync directory" ? 2 : 1;
         const Archive a(out);
         const io::RunInfo info = a.info();
         EXPECT_EQ(info.generations_done, kept);
         EXPECT_EQ(static_cast<std::int64_t>(a.generations().size()), kept);
+        // With space again at once, the stop packs the archive into one file; on a disk that
+        // stays full it stays a root with its segments, state "running".
         EXPECT_EQ(info.state, stays_full ? "running" : "interrupted");
+        EXPECT_EQ(a.self_contained(), !stays_full);
         ASSERT_TRUE(a.checkpoint().has_value());
         EXPECT_EQ(a.checkpoint()->generation, kept);
       }
       ASSERT_EQ(run_once(config, out, true), RunOutcome::complete);
       EXPECT_EQ(fitness_digest_of(out), expected);
       EXPECT_EQ(Archive(out).info().state, "complete");
-      for (const auto& e : std::filesystem::directory_iterator(dir.path))
-        EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
+      EXPECT_TRUE(Archive(out).self_contained());
+      expect_no_debris(dir.path);
+    }
+  }
+}
+
+// A full disk while packing the finished run (it needs room for a second copy): every
+// generation stays archived, the error says so, and --resume (with room again) only packs.
+TEST(RunArchive, FailureWhilePackingKeepsEveryGeneration) {
+  const test::TmpDir dir(true);
+  const Config config = small_config();
+  const std::string ref = dir.file("ref.h5");
+  ASSERT_EQ(run_once(config, ref, false), RunOutcome::complete);
+  std::vector<std::string> pack_steps;
+  for (const std::string& step : steps_of_a_run(config, dir.file("count.h5"), false))
+    if (step.rfind("pack: ", 0) == 0) pack_steps.push_back(step);
+  ASSERT_GE(pack_steps.size(), 10u);
+  for (const std::string& failing : pack_steps) {
+    if (failing == "pack: remove segments") continue;  // after the rename: nothing to lose
+    SCOPED_TRACE("disk full from " + failing + " on");
+    const std::string out = dir.file("full.h5");
+    io::remove_archive(out);
+    bool full = false;
+    try {
+      run_once(config, out, false, [&](const std::string& step) {
+        full = full || step == failing;
+        if (full) throw std::system_error(ENOSPC, std::generic_category(), step);
+      });
+      ADD_FAILURE() << "the run did not fail";
+    } catch (const RunError& e) {
+      EXPECT_NE(std::string(e.what()).find("No space left on device"), std::string::npos)
+          << e.what();
+    }
+    {
+      const Archive a(out);
+      EXPECT_EQ(a.info().generations_done, config.run.generations);
+      // Syncing the directory comes after the rename: the packed archive is then in place.
+      // Otherwise even the small root with the final state could not be written.
+      const bool packed = failing == "pack: fsync directory";
+      EXPECT_EQ(a.info().state, packed ? "complete" : "running");
+      EXPECT_EQ(a.self_contained(), packed);
+      EXPECT_EQ(fitness_digest_of(out), fitness_digest_of(ref));
+    }
+    ASSERT_EQ(run_once(config, out, true), RunOutcome::already_complete);
+    EXPECT_EQ(hash_hex(io::content_digest(Archive(out))),
+              hash_hex(io::content_digest(Archive(ref))));
+    EXPECT_TRUE(Archive(out).self_contained());
+    expect_no_debris(dir.path);
+  }
+}
+
+// Runs (or resumes) `config` into `out` in a child process that SIGKILLs itself just before
+// write step `kill_at` (counted over the whole run); true when the child was killed there.
+bool killed_at_step(const Config& config, const std::string& out, bool resume,
+                    std::size_t kill_at) {
+  const pid_t child = ::fork();
+  if (child == 0) {
+    std::size_t index = 0;
+    try {
+      run_once(config, out, resume, [&](const std::string&) {
+        if (index++ == kill_at) ::raise(SIGKILL);
+      });
+    } catch (...) {
+      ::_exit(3);
+    }
+    ::_exit(0);
+  }
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  return WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL;
+}
+
+// A kill at every write step of a run - its creation, a generation (segment, root), the final
+// pack - leaves an archive that --resume continues to the digests of an uninterrupted
+// run, ending as one file with no temporary or segment left. Both forms of archive: a new run
+// (a root with segments), and the resume of a self-contained archive (which first moves its
+// file into the segment directory).
+TEST(RunArchive, KillAtEveryWriteStepLeavesAResumableArchive) {
+  const test::TmpDir dir(true);
+  const Config config = small_config();
+  const std::string ref = dir.file("ref.h5");
+  ASSERT_EQ(run_once(config, ref, false), RunOutcome::complete);
+  const std::string expected_fitness = fitness_digest_of(ref);
+  const std::string expected_content = hash_hex(io::content_digest(Archive(ref)));
+
+  // A self-contained archive of generations 0-1 (a failed write of generation 2, then the
+  // stop's pack).
+  const std::string packed = dir.file("packed.h5");
+  EXPECT_THROW(run_once(config, packed, false, FullDisk(2, 0, false)), RunError);
+  ASSERT_TRUE(Archive(packed).self_contained());
+  ASSERT_EQ(Archive(packed).info().generations_done, 2);
+
+  for (bool from_packed : {false, true}) {
+    const std::string out = dir.file("kill.h5");
+    const auto start = [&] {
+      io::remove_archive(out);
+      if (from_packed) std::filesystem::copy_file(packed, out);
+    };
+    start();
+    const std::vector<std::string> steps = steps_of_a_run(config, out, from_packed);
+    ASSERT_GT(steps.size(), 20u);
+    if (from_packed) {
+      EXPECT_EQ(steps[0], "packed: link");
+    }
+    // Every step but those of the second and later generations of the run, the same steps
+    // again, and (resuming) those of the pack, the new run's again: this keeps the test short.
+    std::vector<bool> tested(steps.size(), true);
+    int generation_updates = 0;
+    bool in_generation = false;
+    bool packing = false;
+    for (std::size_t k = 0; k < steps.size(); ++k) {
+      if (starts_a_generation(steps[k])) {
+        in_generation = true;
+        ++generation_updates;
+      }
+      packing = packing || steps[k] == "pack: create";
+      tested[k] = (!in_generation || generation_updates == 1) && !(from_packed && packing);
+      if (steps[k] == "root: fsync directory") in_generation = false;
+    }
+    for (std::size_t k = 0; k < steps.size(); ++k) {
+      if (!tested[k]) continue;
+      SCOPED_TRACE(std::string(from_packed ? "resume of a packed archive" : "new run") +
+                   ", killed before step " + std::to_string(k) + " (" + steps[k] + ")");
+      start();
+      ASSERT_TRUE(killed_at_step(config, out, from_packed, k));
+      // Killed before its root existed, a new run has nothing to resume: it starts again.
+      // Killed while packing, it has every generation: the resume only packs it.
+      const RunOutcome expected =
+          std::filesystem::exists(out) &&
+                  Archive(out).info().generations_done == config.run.generations
+              ? RunOutcome::already_complete
+              : RunOutcome::complete;
+      ASSERT_EQ(run_once(config, out, true), expected);
+      EXPECT_EQ(fitness_digest_of(out), expected_fitness);
+      EXPECT_EQ(hash_hex(io::content_digest(Archive(out))), expected_content);
+      EXPECT_EQ(Archive(out).info().state, "complete");
+      EXPECT_TRUE(Archive(out).self_contained());
+      expect_no_debris(dir.path);
     }
   }
 }

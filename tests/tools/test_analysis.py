@@ -122,6 +122,10 @@ class SyntheticGrid(unittest.TestCase):
         # A file that is not a run archive is skipped with a message, not fatal.
         with h5py.File(cls.runs / "trace.h5", "w") as f:
             f["positions"] = np.zeros((1, 1, 3))
+        # The segment directory of a run still writing is not a folder of archives.
+        (cls.runs / "gait-open-01.h5.d").mkdir()
+        with h5py.File(cls.runs / "gait-open-01.h5.d" / "gen-000009.h5", "w") as f:
+            f.attrs["format"] = "softevo.segment/1"
         cls.out = cls.tmp / "figs"
         cls.result = run_figures(cls.runs, cls.out)
 
@@ -136,6 +140,7 @@ class SyntheticGrid(unittest.TestCase):
             self.assertTrue(path.is_file(), f"{name} not written")
             self.assertGreater(path.stat().st_size, 200, name)
         self.assertIn("trace.h5", self.result.stderr)  # skipped, and said so
+        self.assertNotIn("gen-000009.h5", self.result.stderr)  # a segment: not even mentioned
 
     def test_fitness_curves_average_the_repetitions(self):
         with open(self.out / "fitness_gait-open.csv") as f:
