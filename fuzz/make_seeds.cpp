@@ -1,7 +1,7 @@
 // Seed corpora for the fuzz targets, made at build time (nothing binary is committed):
 //   make_seeds OUT_DIR CONFIG.toml...
 // OUT_DIR/config: each config, alone and with --set overrides after a NUL byte;
-// OUT_DIR/robot_file: a minimal open-loop robot and a closed-loop one with a genome section;
+// OUT_DIR/robot_file: a minimal open-loop robot, alone and with a "reference" section;
 // OUT_DIR/archive: tiny run archives (1 and 2 generations, gait and directed columns).
 #include <cstdint>
 #include <filesystem>
@@ -31,15 +31,14 @@ std::string numbers(std::size_t n, const char* value) {
 }
 
 // A 3x1x3 body with one chamber; an Elman controller of 4 hidden units.
-std::string robot_json(bool closed_loop, bool with_genome) {
+std::string robot_json(bool with_reference) {
   std::ostringstream j;
   j << "{\n  \"format\": \"softevo.robot/1\",\n  \"name\": \"seed\",\n  \"voxel_size\": 0.01,\n"
     << "  \"lattice\": [3, 1, 3],\n  \"cells\": [10, 10, 10, 10, 11, 10, 10, 10, 10],\n"
-    << "  \"controller\": {\n    \"kind\": \"elman\",\n    \"control\": \""
-    << (closed_loop ? "closed" : "open") << "\",\n    \"directed\": false,\n"
+    << "  \"controller\": {\n    \"kind\": \"elman\",\n    \"control\": \"open\",\n"
+    << "    \"directed\": false,\n"
     << "    \"hidden\": 4,\n    \"outputs\": 20,\n    \"frequency\": 3.2,\n";
-  const int inputs = closed_loop ? 4 : 2;
-  j << "    \"weights_hidden\": " << numbers(static_cast<std::size_t>(4 * inputs), "0.25") << ",\n"
+  j << "    \"weights_hidden\": " << numbers(8, "0.25") << ",\n"
     << "    \"bias_hidden\": " << numbers(4, "0.1") << ",\n"
     << "    \"weights_out\": " << numbers(80, "-0.5") << ",\n"
     << "    \"bias_out\": " << numbers(20, "0.3") << ",\n"
@@ -47,7 +46,7 @@ std::string robot_json(bool closed_loop, bool with_genome) {
     << "    \"weights_recurrent_self\": " << numbers(4, "0.2") << ",\n"
     << "    \"weights_context\": " << numbers(4, "0.3") << ",\n"
     << "    \"bias_context\": " << numbers(4, "0.4") << "\n  }";
-  if (with_genome) j << ",\n  \"reference\": {\"fitness\": 1.5, \"note\": [1, {\"a\": null}]}";
+  if (with_reference) j << ",\n  \"reference\": {\"fitness\": 1.5, \"note\": [1, {\"a\": null}]}";
   j << "\n}\n";
   return j.str();
 }
@@ -126,8 +125,8 @@ int main(int argc, char** argv) {
           text.str() + std::string(1, '\0') +
               "run.seed=3\nneat.pop_size=8\ntask.directions=[0.0, 90.0]\nbody.lattice=[4,4,4]");
     }
-    write_file(out / "robot_file" / "open.json", robot_json(false, false));
-    write_file(out / "robot_file" / "closed-reference.json", robot_json(true, true));
+    write_file(out / "robot_file" / "open.json", robot_json(false));
+    write_file(out / "robot_file" / "open-reference.json", robot_json(true));
     archive(out / "archive" / "gait-1.h5", 1, 1, {"fitness", "distance", "status"});
     archive(out / "archive" / "directed-2.h5", 2, 2,
             {"fitness", "direction_deg", "distance", "path_length", "angle_error",

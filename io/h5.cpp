@@ -230,7 +230,8 @@ std::shared_ptr<const HeapIndex> build_heap_index(const RawFile& f, const Where&
   auto index = std::make_shared<HeapIndex>();
   constexpr std::size_t kBlock = std::size_t{1} << 20;
   constexpr char kSignature[] = "GCOL";
-  std::vector<char> block(kBlock + 3);
+  // No larger than the file: a small file is scanned without clearing a megabyte first.
+  std::vector<char> block(static_cast<std::size_t>(std::min<std::uint64_t>(kBlock, f.bytes)) + 3);
   for (std::uint64_t start = 0; start < f.bytes; start += kBlock) {
     const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(block.size(), f.bytes - start));
     if (!read_at(f, start, block.data(), n)) where.fail(action, "cannot read the file");

@@ -212,20 +212,21 @@ case "${1:-}" in
       # is saved there as crash-* and printed.
       corpus="$dir/fuzz/corpus/$target"
       mkdir -p "$corpus" "$dir/fuzz/artifacts"
-      # An archive is one HDF5 file of ~20 kB: inputs up to 64 kB; leaks are not checked there
-      # (libhdf5 keeps free lists until exit).
+      # An archive is one HDF5 file of ~30 kB: inputs up to 64 kB. Leaks are not checked there:
+      # libhdf5 itself leaks on some of its error paths (an empty file leaks 37 kB in H5Fopen).
       extra=()
-      [ "$target" = archive ] && extra=(-max_len=65536 -detect_leaks=0)
+      leaks=1
+      [ "$target" = archive ] && extra=(-max_len=65536) && leaks=0
       t0=$SECONDS
-      if ! ASAN_OPTIONS=allocator_may_return_null=1 "$dir/bin/fuzz_$target" \
+      if ! ASAN_OPTIONS=allocator_may_return_null=1:detect_leaks=$leaks "$dir/bin/fuzz_$target" \
         -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
         -artifact_prefix="$dir/fuzz/artifacts/$target-" "${extra[@]}" \
         "$corpus" "$dir/fuzz/seeds/$target" >"$dir/fuzz/$target.log" 2>&1; then
         rc=1
         tail -40 "$dir/fuzz/$target.log"
       fi
-      runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$dir/fuzz/$target.log")
-      speed=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$dir/fuzz/$target.log")
+      runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$dir/fuzz/$target.log" | tail -1)
+      speed=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$dir/fuzz/$target.log" | tail -1)
       echo "== fuzz_$target: ${runs:-?} inputs in $((SECONDS - t0)) s (${speed:-?}/s)"
     done
     [ $rc -eq 0 ]
