@@ -39,6 +39,8 @@ auto archive_errors(Body&& body) -> decltype(body()) {
   }
 }
 
+constexpr auto kStringBytes = static_cast<std::size_t>(ArchiveLimits::string_bytes);
+
 const char* const kStatsColumnNames =
     "generation,best,mean,sd,species_count,evaluations_per_second";
 
@@ -156,6 +158,24 @@ std::vector<std::string> split_columns(const std::string& text) {
 
 void GenerationRecord::check() const {
   const std::size_t n = id.size();
+  const std::string at = "generation " + std::to_string(generation) + ": ";
+  const auto beyond = [&](const std::string& what, std::int64_t limit) {
+    return ArchiveError(at + what + " beyond the limit of " + std::to_string(limit) +
+                        " (docs/archive.md \"Limits\")");
+  };
+  if (generation < 0 || generation >= ArchiveLimits::generations)
+    throw beyond("generation number", ArchiveLimits::generations - 1);
+  if (n > static_cast<std::size_t>(ArchiveLimits::individuals))
+    throw beyond(std::to_string(n) + " rows", ArchiveLimits::individuals);
+  if (units > ArchiveLimits::units)
+    throw beyond(std::to_string(units) + " work units", ArchiveLimits::units);
+  if (component_columns.size() > static_cast<std::size_t>(ArchiveLimits::component_columns))
+    throw beyond(std::to_string(component_columns.size()) + " component columns",
+                 ArchiveLimits::component_columns);
+  for (const std::vector<std::uint8_t>& g : genome)
+    if (g.size() > static_cast<std::size_t>(ArchiveLimits::genome_bytes))
+      throw beyond("a genome of " + std::to_string(g.size()) + " bytes",
+                   ArchiveLimits::genome_bytes);
   const bool same =
       parent1.size() == n && parent2.size() == n && species.size() == n && status.size() == n &&
       fitness.size() == n && voxels.size() == n && chambers.size() == n &&
@@ -632,7 +652,7 @@ Archive::Archive(const std::string& path) : path_(path) {
     file_ = std::make_unique<h5::File>(h5::File::open(path));
     if (!file_->has_attribute("format"))
       throw ArchiveError(path + ": not a softevo run archive (no format attribute)");
-    const std::string format = file_->read_string_attribute("format");
+    const std::string format = file_->read_string_attribute("format", kStringBytes);
     if (format != kArchiveFormat)
       throw ArchiveError(path + ": unsupported archive format \"" + format + "\" (expected " +
                          kArchiveFormat + ")");
@@ -645,33 +665,41 @@ RunInfo Archive::info() const {
   return archive_errors([&] {
     const h5::File& f = *file_;
     RunInfo r;
-    r.format = f.read_string_attribute("format");
-    r.version = f.read_string_attribute("version");
-    r.git_commit = f.read_string_attribute("git_commit");
+    r.format = f.read_string_attribute("format", kStringBytes);
+    r.version = f.read_string_attribute("version", kStringBytes);
+    r.git_commit = f.read_string_attribute("git_commit", kStringBytes);
     r.physics_revision = f.has_attribute("physics_revision")
                              ? f.read_attribute<std::int32_t>("physics_revision")
                              : 1;
     r.seed = f.read_attribute<std::int64_t>("seed");
     r.ranks = f.read_attribute<std::int32_t>("ranks");
-    r.host = f.read_string_attribute("host");
-    r.start_time = f.read_string_attribute("start_time");
-    r.end_time = f.read_string_attribute("end_time");
-    r.config_hash = f.read_string_attribute("config_hash");
-    r.experiment = f.read_string_attribute("experiment");
-    r.state = f.read_string_attribute("state");
+    r.host = f.read_string_attribute("host", kStringBytes);
+    r.start_time = f.read_string_attribute("start_time", kStringBytes);
+    r.end_time = f.read_string_attribute("end_time", kStringBytes);
+    r.config_hash = f.read_string_attribute("config_hash", kStringBytes);
+    r.experiment = f.read_string_attribute("experiment", kStringBytes);
+    r.state = f.read_string_attribute("state", kStringBytes);
     r.generations_done = f.read_attribute<std::int64_t>("generations_done");
+    if (r.generations_done < 0 || r.generations_done > ArchiveLimits::generations)
+      throw ArchiveError(path_ +
+                         ": /: attribute generations_done = " + std::to_string(r.generations_done) +
+                         " is outside [0, " + std::to_string(ArchiveLimits::generations) + "]");
     return r;
   });
 }
 
 std::string Archive::config_text() const {
-  return archive_errors([&] { return file_->open_dataset("config").read_string(); });
+  return archive_errors([&] {
+    return file_->open_dataset("config").read_string(
+        static_cast<std::size_t>(ArchiveLimits::config_bytes));
+  });
 }
 
 std::vector<std::int64_t> Archive::generations() const {
   return archive_errors([&] {
     std::vector<std::int64_t> out;
-    for (const std::string& name : file_->open_group("generations").link_names()) {
+    for (const std::string& name :
+         file_->open_group("generations").link_names(ArchiveLimits::generations)) {
       char* end = nullptr;
       const long long v = std::strtoll(name.c_str(), &end, 10);
       if (end == name.c_str() || *end != '\0' || name.size() != 6)
@@ -692,27 +720,46 @@ GenerationRecord Archive::generation(std::int64_t gen) const {
     const h5::Group g = file_->open_group(name);
     GenerationRecord r;
     r.generation = gen;
-    r.id = g.read_dataset<std::int64_t>("id");
-    r.parent1 = g.read_dataset<std::int64_t>("parent1");
-    r.parent2 = g.read_dataset<std::int64_t>("parent2");
-    r.species = g.read_dataset<std::int64_t>("species");
-    r.status = g.read_dataset<std::uint8_t>("status");
-    r.fitness = g.read_dataset<double>("fitness");
-    r.voxels = g.read_dataset<std::int32_t>("voxels");
-    r.chambers = g.read_dataset<std::int32_t>("chambers");
-    r.wall_seconds = g.read_dataset<double>("wall_seconds");
-    r.worker_rank = g.read_dataset<std::int32_t>("worker_rank");
-    r.genome = g.open_dataset("genome").read_byte_rows();
+    // The rows of `id` (at most ArchiveLimits::individuals) fix n; every other column must
+    // have exactly n rows before it is read, so no extent is trusted beyond the schema's.
+    const h5::Dataset ids = g.open_dataset("id");
+    const std::vector<hsize_t> id_dims = ids.dims();
+    if (id_dims.size() != 1)
+      throw ArchiveError(path_ + ": /" + name + "/id is not one-dimensional");
+    r.id = ids.read<std::int64_t>(ArchiveLimits::individuals);
+    const hsize_t n = r.id.size();
+    const auto column = [&](const std::string& dataset) {
+      h5::Dataset ds = g.open_dataset(dataset);
+      if (ds.dims() != std::vector<hsize_t>{n})
+        throw ArchiveError(path_ + ": /" + name + "/" + dataset + " is not [" + std::to_string(n) +
+                           "] like /" + name + "/id");
+      return ds;
+    };
+    r.parent1 = column("parent1").read<std::int64_t>();
+    r.parent2 = column("parent2").read<std::int64_t>();
+    r.species = column("species").read<std::int64_t>();
+    r.status = column("status").read<std::uint8_t>();
+    r.fitness = column("fitness").read<double>();
+    r.voxels = column("voxels").read<std::int32_t>();
+    r.chambers = column("chambers").read<std::int32_t>();
+    r.wall_seconds = column("wall_seconds").read<double>();
+    r.worker_rank = column("worker_rank").read<std::int32_t>();
+    r.genome = column("genome").read_byte_rows(n, ArchiveLimits::genome_bytes);
     const h5::Dataset components = g.open_dataset("components");
+    r.component_columns =
+        components.has_attribute(kColumnsAttribute)
+            ? split_columns(components.read_string_attribute(kColumnsAttribute, kStringBytes))
+            : legacy_component_columns();
     const std::vector<hsize_t> dims = components.dims();
-    r.components = components.read<double>();
-    r.component_columns = components.has_attribute(kColumnsAttribute)
-                              ? split_columns(components.read_string_attribute(kColumnsAttribute))
-                              : legacy_component_columns();
-    if (dims.size() != 3 || dims[2] != r.component_columns.size())
-      throw ArchiveError(path_ + ": /" + name + "/components is not [n, units, " +
+    if (dims.size() != 3 || dims[0] != n || dims[1] < 1 ||
+        dims[1] > static_cast<hsize_t>(ArchiveLimits::units) ||
+        dims[2] != r.component_columns.size() ||
+        dims[2] > static_cast<hsize_t>(ArchiveLimits::component_columns))
+      throw ArchiveError(path_ + ": /" + name + "/components is not [" + std::to_string(n) +
+                         ", units <= " + std::to_string(ArchiveLimits::units) + ", " +
                          std::to_string(r.component_columns.size()) + "] (columns " +
                          join_columns(r.component_columns) + ")");
+    r.components = components.read<double>();
     r.units = static_cast<int>(dims[1]);
     r.best = g.read_attribute<double>("best");
     r.mean = g.read_attribute<double>("mean");
@@ -731,10 +778,13 @@ GenerationRecord Archive::generation(std::int64_t gen) const {
 
 std::vector<StatsRow> Archive::stats() const {
   return archive_errors([&] {
-    std::vector<hsize_t> dims;
-    const std::vector<double> v = file_->read_dataset<double>("stats", &dims);
-    if (dims.size() != 2 || dims[1] != kStatsColumns)
-      throw ArchiveError(path_ + ": /stats is not [G, 6]");
+    const h5::Dataset table = file_->open_dataset("stats");
+    const std::vector<hsize_t> dims = table.dims();
+    if (dims.size() != 2 || dims[1] != kStatsColumns ||
+        dims[0] > static_cast<hsize_t>(ArchiveLimits::generations))
+      throw ArchiveError(
+          path_ + ": /stats is not [G, 6] with G <= " + std::to_string(ArchiveLimits::generations));
+    const std::vector<double> v = table.read<double>();
     std::vector<StatsRow> rows(static_cast<std::size_t>(dims[0]));
     for (std::size_t i = 0; i < rows.size(); ++i) {
       const double* r = &v[i * kStatsColumns];
@@ -750,7 +800,10 @@ std::optional<Checkpoint> Archive::checkpoint() const {
     const h5::Group g = file_->open_group("checkpoint");
     Checkpoint c;
     c.generation = g.read_attribute<std::int64_t>("generation");
-    c.population = g.read_dataset<std::uint8_t>("population");
+    const h5::Dataset population = g.open_dataset("population");
+    if (population.dims().size() != 1)
+      throw ArchiveError(path_ + ": /checkpoint/population is not one-dimensional");
+    c.population = population.read<std::uint8_t>(ArchiveLimits::checkpoint_bytes);
     return c;
   });
 }
@@ -797,7 +850,8 @@ bool is_run_archive(const std::string& path) {
   try {
     if (!h5::File::is_hdf5(path)) return false;
     const h5::File file = h5::File::open(path);
-    return file.has_attribute("format") && file.read_string_attribute("format") == kArchiveFormat;
+    return file.has_attribute("format") &&
+           file.read_string_attribute("format", kStringBytes) == kArchiveFormat;
   } catch (const h5::Error&) {
     return false;
   }
@@ -853,7 +907,7 @@ std::optional<std::uint64_t> Archive::stored_generation_digest(std::int64_t gen)
     require_segment(name);
     const h5::Group g = file_->open_group(name);
     if (!g.has_attribute("digest")) return std::nullopt;
-    const std::string text = g.read_string_attribute("digest");
+    const std::string text = g.read_string_attribute("digest", kStringBytes);
     char* end = nullptr;
     const unsigned long long v = std::strtoull(text.c_str(), &end, 16);
     if (text.size() != 16 || end != text.c_str() + text.size())

@@ -33,6 +33,24 @@ const std::vector<std::string>& legacy_component_columns();
 // Columns of /stats: generation, best, mean, sd, species_count, evaluations_per_second.
 inline constexpr int kStatsColumns = 6;
 
+// What the schema allows (docs/archive.md "Limits"). The reader checks every extent, count and
+// length against these before it allocates anything, so a flipped byte costs an error, not
+// gigabytes; the writer refuses a generation beyond them (GenerationRecord::check), so it never
+// writes an archive the reader would refuse.
+struct ArchiveLimits {
+  // Generations of a run (run.generations <= 10^7): /generations groups, /stats rows.
+  static constexpr std::int64_t generations = 10'000'000;
+  // Rows of a generation: twice the largest neat.pop_size (10^6), since spawn rounding and
+  // rescue clones may exceed pop_size.
+  static constexpr std::int64_t individuals = 2'000'000;
+  static constexpr std::int64_t units = 4096;                  // work units per genome (directions)
+  static constexpr std::int64_t component_columns = 64;        // last axis of components
+  static constexpr std::int64_t genome_bytes = 1LL << 30;      // one genome (the wire's limit)
+  static constexpr std::int64_t checkpoint_bytes = 1LL << 32;  // /checkpoint/population
+  static constexpr std::int64_t config_bytes = 1LL << 20;      // /config text
+  static constexpr std::int64_t string_bytes = 4096;           // any string attribute
+};
+
 // A missing, unreadable, foreign or malformed archive, or a failed write; the message names the
 // file, the object and the reason.
 class ArchiveError : public std::runtime_error {
@@ -86,7 +104,8 @@ struct GenerationRecord {
   double eval_wall_seconds = 0.0;  // [s] wall time of the evaluation phase
 
   std::size_t size() const { return id.size(); }
-  // Throws ArchiveError if the columns have different lengths or ids are not ascending.
+  // Throws ArchiveError if the columns have different lengths, ids are not ascending or a size
+  // is beyond ArchiveLimits.
   void check() const;
 };
 

@@ -13,6 +13,7 @@
 #include <hdf5.h>
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -34,6 +35,14 @@ class Error : public std::runtime_error {
  private:
   std::string file_, object_, action_, reason_;
 };
+
+// Read limits. Every read is bounded before anything is allocated: a dataset never yields more
+// values than its file has bytes for (a flipped extent or length would otherwise make HDF5
+// allocate and fill gigabytes), and each caller passes the tighter limit its schema allows
+// (docs/archive.md, docs/trace.md "Limits"). kUnbounded = only the file's own size bounds it.
+inline constexpr hsize_t kUnbounded = std::numeric_limits<hsize_t>::max();
+// Strings read without an explicit limit (schema strings pass their own).
+inline constexpr std::size_t kDefaultMaxStringBytes = std::size_t{16} << 20;
 
 // Switches HDF5's automatic error printing off for the process (idempotent). Every entry of
 // this layer calls it, so callers need not.
@@ -178,8 +187,10 @@ class Object {
     read_attribute_raw(name, Number<T>::memory(), std::is_integral_v<T>, &value);
     return value;
   }
-  // A fixed- or variable-length string attribute. Throws when missing or not a string.
-  std::string read_string_attribute(const std::string& name) const;
+  // A fixed- or variable-length string attribute of at most `max_bytes` bytes. Throws when
+  // missing, not a string or longer.
+  std::string read_string_attribute(const std::string& name,
+                                    std::size_t max_bytes = kDefaultMaxStringBytes) const;
 
  protected:
   Object(Id id, Where where) : id_(std::move(id)), where_(std::move(where)) {}
@@ -201,14 +212,18 @@ class Dataset : public Object {
   H5T_class_t type_class() const;
 
   // The whole dataset, converted by HDF5 to T; a float or integer dataset (integer only when T
-  // is an integer type).
+  // is an integer type) of at most `max_points` values (checked before reading).
   template <typename T>
-  std::vector<T> read() const {
-    const Dataspace s = space();
-    std::vector<T> values(static_cast<std::size_t>(s.points()));
+  std::vector<T> read(hsize_t max_points = kUnbounded) const {
+    std::vector<T> values(static_cast<std::size_t>(checked_points(max_points)));
     read_raw(Number<T>::memory(), std::is_integral_v<T>, values.data(), values.size());
     return values;
   }
+  // The number of values, after checking that the extent is at most `max_points` values and
+  // fits in the bytes of the file that holds the dataset (a chunked dataset with a huge extent
+  // and no chunks would otherwise be filled in memory with its fill value). Throws naming the
+  // file, the dataset and the limit.
+  hsize_t checked_points(hsize_t max_points = kUnbounded) const;
   // The whole dataset; `values` must have one element per point.
   template <typename T>
   void write(const std::vector<T>& values) const {
@@ -222,10 +237,15 @@ class Dataset : public Object {
                    const std::vector<T>& values) const {
     write_block_raw(start, count, Number<T>::memory(), values.data(), values.size());
   }
-  // A scalar (or one-element) string dataset, fixed- or variable-length.
-  std::string read_string() const;
-  // A 1-D dataset of variable-length uint8 sequences.
-  std::vector<std::vector<std::uint8_t>> read_byte_rows() const;
+  // A scalar (or one-element) string dataset, fixed- or variable-length, of at most `max_bytes`.
+  std::string read_string(std::size_t max_bytes = kDefaultMaxStringBytes) const;
+  // A 1-D dataset of variable-length uint8 sequences: at most `max_rows` rows of at most
+  // `max_row_bytes` bytes each. Variable-length data is read from the file's bytes by this
+  // layer, every reference and global heap object checked, not by libhdf5 (whose global heap
+  // reader trusts the lengths it finds: a flipped byte there made it allocate gigabytes or
+  // copy past its buffers).
+  std::vector<std::vector<std::uint8_t>> read_byte_rows(hsize_t max_rows = kUnbounded,
+                                                        hsize_t max_row_bytes = kUnbounded) const;
 
  private:
   void read_raw(hid_t memory_type, bool integer, void* out, std::size_t count) const;
@@ -242,8 +262,9 @@ class Group : public Object {
   // is missing).
   bool has_link(const std::string& path) const;
   void delete_link(const std::string& name) const;
-  // Names of the direct children, in ascending name order.
-  std::vector<std::string> link_names() const;
+  // Names of the direct children, in ascending name order; at most `max_links` of them (more
+  // is an error naming the group and the limit).
+  std::vector<std::string> link_names(hsize_t max_links = kUnbounded) const;
 
   // Where the external link `name` points: the object `object` in the file `file` (HDF5 resolves
   // a relative `file` against the directory of the file holding the link first). nullopt when
@@ -284,12 +305,13 @@ class Group : public Object {
                           const std::vector<std::vector<std::uint8_t>>& rows) const;
 
   Dataset open_dataset(const std::string& name) const;
-  // open_dataset(name).read<T>(), with its shape in `dims` when given.
+  // open_dataset(name).read<T>(max_points), with its shape in `dims` when given.
   template <typename T>
-  std::vector<T> read_dataset(const std::string& name, std::vector<hsize_t>* dims = nullptr) const {
+  std::vector<T> read_dataset(const std::string& name, std::vector<hsize_t>* dims = nullptr,
+                              hsize_t max_points = kUnbounded) const {
     const Dataset ds = open_dataset(name);
     if (dims != nullptr) *dims = ds.dims();
-    return ds.read<T>();
+    return ds.read<T>(max_points);
   }
 
  private:

@@ -81,55 +81,74 @@ void write_trace(const std::string& path, const Trace& t) {
 Trace read_trace(const std::string& path) {
   const h5::File file = h5::File::open(path);
   Trace t;
-  std::vector<hsize_t> dims;
-  t.voxel_cells = file.read_dataset<std::int32_t>("voxel_cells", &dims);
-  if (dims.size() != 2 || dims[1] != 3) bad_shape(file.where().child("voxel_cells"), "[voxels, 3]");
-  t.voxels = static_cast<std::int64_t>(dims[0]);
+  // Every extent is checked against the counts already read and TraceLimits before the
+  // dataset is read, so a damaged extent costs an error, not its allocation.
+  const auto beyond = [&](const std::string& dataset, const std::string& what, std::int64_t limit) {
+    file.where().child(dataset).fail(
+        "read dataset",
+        what + " beyond the limit of " + std::to_string(limit) + " (docs/trace.md \"Limits\")");
+  };
+  const auto within = [&](const std::string& dataset, hsize_t extent, std::int64_t limit,
+                          const std::string& what) {
+    if (extent > static_cast<hsize_t>(limit))
+      beyond(dataset, std::to_string(extent) + " " + what, limit);
+    return static_cast<std::int64_t>(extent);
+  };
+  h5::Dataset cells = file.open_dataset("voxel_cells");
+  std::vector<hsize_t> dims = cells.dims();
+  if (dims.size() != 2 || dims[1] != 3) bad_shape(cells.where(), "[voxels, 3]");
+  t.voxels = within("voxel_cells", dims[0], TraceLimits::voxels, "voxels");
+  t.voxel_cells = cells.read<std::int32_t>();
   if (std::any_of(t.voxel_cells.begin(), t.voxel_cells.end(), [](std::int32_t c) { return c < 0; }))
-    file.where().child("voxel_cells").fail("read dataset", "negative voxel cell index");
-  t.voxel_material = file.read_dataset<std::int32_t>("voxel_material", &dims);
-  if (dims != std::vector<hsize_t>{static_cast<hsize_t>(t.voxels)})
-    bad_shape(file.where().child("voxel_material"), shape({t.voxels}));
+    cells.where().fail("read dataset", "negative voxel cell index");
+  // `name` must have exactly the shape `expected` (checked before it is read).
+  const auto exact = [&](const std::string& name, std::initializer_list<std::int64_t> expected) {
+    h5::Dataset ds = file.open_dataset(name);
+    if (ds.dims() != std::vector<hsize_t>(expected.begin(), expected.end()))
+      bad_shape(ds.where(), shape(expected));
+    return ds;
+  };
+  t.voxel_material = exact("voxel_material", {t.voxels}).read<std::int32_t>();
 
-  t.positions = file.read_dataset<double>("positions", &dims);
+  h5::Dataset positions = file.open_dataset("positions");
+  dims = positions.dims();
   if (dims.size() != 3 || dims[1] != static_cast<hsize_t>(t.voxels) || dims[2] != 3)
-    bad_shape(file.where().child("positions"), "[frames, " + std::to_string(t.voxels) + ", 3]");
-  t.frames = static_cast<std::int64_t>(dims[0]);
-  t.orientations = file.read_dataset<double>("orientations", &dims);
-  if (dims !=
-      std::vector<hsize_t>{static_cast<hsize_t>(t.frames), static_cast<hsize_t>(t.voxels), 4})
-    bad_shape(file.where().child("orientations"), shape({t.frames, t.voxels, 4}));
+    bad_shape(positions.where(), "[frames, " + std::to_string(t.voxels) + ", 3]");
+  t.frames = within("positions", dims[0], TraceLimits::frames, "frames");
+  t.positions = positions.read<double>();
+  t.orientations = exact("orientations", {t.frames, t.voxels, 4}).read<double>();
 
   if (file.has_link("pressures")) {
-    t.pressures = file.read_dataset<double>("pressures", &dims);
+    h5::Dataset pressures = file.open_dataset("pressures");
+    dims = pressures.dims();
     if (dims.size() != 2 || dims[0] != static_cast<hsize_t>(t.frames))
-      bad_shape(file.where().child("pressures"), "[" + std::to_string(t.frames) + ", chambers]");
-    t.chambers = static_cast<std::int64_t>(dims[1]);
+      bad_shape(pressures.where(), "[" + std::to_string(t.frames) + ", chambers]");
+    t.chambers = within("pressures", dims[1], TraceLimits::chambers, "chambers");
+    t.pressures = pressures.read<double>();
   }
   if (file.has_link("valve_commands")) {
-    t.valve_commands = file.read_dataset<float>("valve_commands", &dims);
-    if (dims !=
-        std::vector<hsize_t>{static_cast<hsize_t>(t.frames), static_cast<hsize_t>(2 * t.chambers)})
-      bad_shape(file.where().child("valve_commands"), shape({t.frames, 2 * t.chambers}));
+    t.valve_commands = exact("valve_commands", {t.frames, 2 * t.chambers}).read<float>();
   } else {
+    // Within the file's size: frames x chambers values of pressure were read.
     t.valve_commands.assign(static_cast<std::size_t>(t.frames * 2 * t.chambers), 0.0f);
   }
 
   t.frame_rate = file.has_attribute("frame_rate") ? file.read_attribute<double>("frame_rate")
                                                   : kDefaultFrameRate;
   if (file.has_link("time")) {
-    t.time = file.read_dataset<double>("time", &dims);
-    if (dims != std::vector<hsize_t>{static_cast<hsize_t>(t.frames)})
-      bad_shape(file.where().child("time"), shape({t.frames}));
+    t.time = exact("time", {t.frames}).read<double>();
   } else {
+    t.time.reserve(static_cast<std::size_t>(t.frames));
     for (std::int64_t f = 0; f < t.frames; ++f)
       t.time.push_back(static_cast<double>(f) / t.frame_rate);
   }
   // Early traces kept the robot file in an attribute.
+  constexpr auto kRobotBytes = static_cast<std::size_t>(TraceLimits::robot_json_bytes);
+  constexpr auto kStringBytes = static_cast<std::size_t>(TraceLimits::string_bytes);
   if (file.has_link("robot_json")) {
-    t.robot_json = file.open_dataset("robot_json").read_string();
+    t.robot_json = file.open_dataset("robot_json").read_string(kRobotBytes);
   } else if (file.has_attribute("robot_json")) {
-    t.robot_json = file.read_string_attribute("robot_json");
+    t.robot_json = file.read_string_attribute("robot_json", kRobotBytes);
   }
   t.voxel_size = file.has_attribute("voxel_size") ? file.read_attribute<double>("voxel_size")
                                                   : kDefaultVoxelSize;
@@ -139,7 +158,7 @@ Trace read_trace(const std::string& path) {
   if (file.has_attribute("direction_deg"))
     t.direction_deg = file.read_attribute<double>("direction_deg");
   if (file.has_attribute("fitness")) t.fitness = file.read_attribute<double>("fitness");
-  if (file.has_attribute("status")) t.status = file.read_string_attribute("status");
+  if (file.has_attribute("status")) t.status = file.read_string_attribute("status", kStringBytes);
   return t;
 }
 

@@ -12,6 +12,16 @@ namespace softevo::io {
 
 inline constexpr const char* kTraceFormat = "softevo.trace/1";
 
+// What a trace may hold (docs/trace.md "Limits"): read_trace checks every extent against these
+// before it allocates, and never reads more values than the file has bytes for.
+struct TraceLimits {
+  static constexpr std::int64_t voxels = 64 * 64 * 64;  // body.lattice <= 64 cells per axis
+  static constexpr std::int64_t chambers = 64 * 64 * 64;
+  static constexpr std::int64_t frames = 100'000'000;  // records (> 19 days at 60 Hz)
+  static constexpr std::int64_t robot_json_bytes = 64LL << 20;
+  static constexpr std::int64_t string_bytes = 4096;  // format, status
+};
+
 // Everything a trace holds. Per-frame arrays are row-major with the frame index outermost.
 struct Trace {
   std::int64_t frames = 0;

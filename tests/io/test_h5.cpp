@@ -117,6 +117,55 @@ TEST(H5, GrowableDatasetTakesBlocks) {
   EXPECT_EQ(dims, (std::vector<hsize_t>{3, 2}));
 }
 
+// Issue 21 item 4: no read allocates more than its limit or its file allows, whatever extent
+// or length the file claims; the error names the file, the object and the limit.
+TEST(H5, ReadsAreBoundedByTheirLimitAndByTheFile) {
+  TmpDir d;
+  const std::string path = d.file("bounds.h5");
+  {
+    const File file = File::create(path);
+    file.write_dataset<double>("three", {3}, {1, 2, 3});
+    file.write_string_dataset("text", "twelve bytes", Charset::utf8);
+    file.write_string_attribute("label", "twelve bytes", Charset::utf8);
+    file.write_byte_rows("rows", {{1, 2, 3}, {4}});
+    // A growable dataset whose extent claims 2^40 rows that were never written: reading it
+    // would fill 8 TiB in memory with its fill value.
+    PropertyList creation = PropertyList::dataset_creation();
+    creation.chunk({16});
+    const Dataset huge =
+        file.create_dataset<double>("huge", Dataspace::simple({0}, {H5S_UNLIMITED}), &creation);
+    huge.set_extent({hsize_t{1} << 40});
+  }
+  const File file = File::open(path);
+  EXPECT_EQ(file.read_dataset<double>("three", nullptr, 3).size(), 3u);
+  const Error over = error_of([&] { file.read_dataset<double>("three", nullptr, 2); });
+  EXPECT_EQ(over.file(), path);
+  EXPECT_EQ(over.object(), "/three");
+  EXPECT_NE(over.reason().find("3 values, more than the limit of 2"), std::string::npos);
+  const Error huge = error_of([&] { file.read_dataset<double>("huge"); });
+  EXPECT_EQ(huge.object(), "/huge");
+  EXPECT_NE(huge.reason().find("more than its file"), std::string::npos) << huge.what();
+  EXPECT_EQ(file.open_dataset("text").read_string(12), "twelve bytes");
+  EXPECT_NE(error_of([&] { file.open_dataset("text").read_string(11); })
+                .reason()
+                .find("12 bytes long, more than the limit of 11 bytes"),
+            std::string::npos);
+  EXPECT_EQ(file.read_string_attribute("label", 12), "twelve bytes");
+  EXPECT_THROW(file.read_string_attribute("label", 11), Error);
+  EXPECT_EQ(file.open_dataset("rows").read_byte_rows(2, 3).size(), 2u);
+  EXPECT_NE(error_of([&] { file.open_dataset("rows").read_byte_rows(1, 3); })
+                .reason()
+                .find("2 rows, more than the limit of 1"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { file.open_dataset("rows").read_byte_rows(2, 2); })
+                .reason()
+                .find("row 0 is 3 bytes long"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of([&] { file.link_names(3); }).reason().find("4 links, more than the limit of 3"),
+      std::string::npos);
+}
+
 TEST(H5, FixedLengthStringsWrittenByOtherToolsAreRead) {
   TmpDir d;
   const std::string path = d.file("fixed.h5");

@@ -8,7 +8,12 @@
 #include <gtest/gtest.h>
 #include <hdf5.h>
 
+#include <fcntl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
 
 #include <cstdlib>
 #include <cstring>
@@ -175,6 +180,125 @@ int softevo(const std::string& args) {
   const int rc =
       std::system((test::build_dir() + "/bin/softevo " + args + " >/dev/null 2>&1").c_str());
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+// A run of `softevo ARGS...` with its exit code, output, wall time and peak memory.
+struct Measured {
+  int code = -1;  // -1: killed by a signal
+  std::string output;
+  double seconds = 0.0;
+  long max_rss_kib = 0;
+};
+
+Measured softevo_measured(const std::vector<std::string>& args, const std::string& log) {
+  const auto start = std::chrono::steady_clock::now();
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(fd, 1);
+    ::dup2(fd, 2);
+#ifndef __SANITIZE_ADDRESS__
+    // Before the bounds, one damaged length made info allocate 8.4 GB: fail instead of
+    // exhausting the machine (the sanitizer's shadow memory needs an unlimited address space).
+    const rlimit as{rlim_t{2} << 30, rlim_t{2} << 30};
+    ::setrlimit(RLIMIT_AS, &as);
+#endif
+    const std::string exe = test::build_dir() + "/bin/softevo";
+    std::vector<char*> argv{const_cast<char*>(exe.c_str())};
+    for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(exe.c_str(), argv.data());
+    ::_exit(127);
+  }
+  Measured m;
+  int status = 0;
+  rusage usage{};
+  ::wait4(pid, &status, 0, &usage);
+  m.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  m.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  m.max_rss_kib = usage.ru_maxrss;
+  m.output = file_bytes(log);
+  return m;
+}
+
+// Overwrites `bytes.size()` bytes of the file at `offset` (damage below the HDF5 layer).
+void patch(const std::string& path, std::uint64_t offset, const std::string& bytes) {
+  std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+  f.seekp(static_cast<std::streamoff>(offset));
+  f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+// File offsets of generation 1's first genome: its reference (length u32, collection address,
+// object index u32) and the size field of the object in the global heap it points to.
+struct GenomeBytes {
+  std::uint64_t reference = 0;
+  std::uint64_t heap_object_size = 0;
+};
+
+GenomeBytes genome_bytes(const std::string& path) {
+  const io::h5::File file = io::h5::File::open(path);
+  const io::h5::Dataset ds = file.open_dataset("generations/000001/genome");
+  GenomeBytes at;
+  at.reference = H5Dget_offset(ds.id());
+  const std::string bytes = file_bytes(path);
+  std::uint64_t collection = 0, object = 0;
+  std::memcpy(&collection, bytes.data() + at.reference + 4, 8);
+  std::memcpy(&object, bytes.data() + at.reference + 12, 4);
+  // Objects follow the 16-byte collection header: index u16, references u16, 4 reserved, size.
+  std::uint64_t pos = collection + 16;
+  for (;;) {
+    std::uint16_t index = 0;
+    std::uint64_t size = 0;
+    std::memcpy(&index, bytes.data() + pos, 2);
+    std::memcpy(&size, bytes.data() + pos + 8, 8);
+    if (index == object) break;
+    pos += 16 + (size + 7) / 8 * 8;
+  }
+  at.heap_object_size = pos + 8;
+  return at;
+}
+
+// Issue 21 item 4: `softevo info` on an archive with one flipped byte took 73 s and 8.4 GB. A
+// damaged length, object size or extent is now refused before anything is allocated: info
+// ends within seconds, in a few tens of MB, with a message naming the file, the object and
+// the limit.
+TEST(ArchiveCheck, InfoRefusesDamagedSizesFastAndInBoundedMemory) {
+  test::TmpDir dir;
+  const std::string clean = interrupted_run(dir, "clean.h5");
+  const GenomeBytes at = genome_bytes(clean);
+  struct Damage {
+    const char* name;
+    std::function<void(const std::string&)> apply;
+    int code;              // expected exit code of info
+    const char* expected;  // in its output
+  };
+  const std::vector<Damage> cases = {
+      {"genome length flipped to 2 GiB",
+       [&](const std::string& p) { patch(p, at.reference + 3, "\x7f"); }, 1,
+       "/generations/000001/genome: read dataset: row 0 is 2130709"},
+      {"heap object size flipped to 1 GiB",
+       [&](const std::string& p) { patch(p, at.heap_object_size + 3, "\x40"); }, 2,
+       "runs past the end of the collection"},
+      {"/stats extent of 2^40 rows",
+       [](const std::string& p) {
+         damage(p, [](const io::h5::File& f) {
+           f.open_dataset("stats").set_extent({hsize_t{1} << 40, io::kStatsColumns});
+         });
+       },
+       1, "/stats is not [G, 6] with G <= 10000000"},
+  };
+  for (const Damage& d : cases) {
+    SCOPED_TRACE(d.name);
+    const std::string out = dir.file("damaged.h5");
+    fs::copy_file(clean, out, fs::copy_options::overwrite_existing);
+    d.apply(out);
+    const Measured m = softevo_measured({"info", out}, dir.file("info.log"));
+    EXPECT_EQ(m.code, d.code) << m.output;
+    EXPECT_NE(m.output.find(d.expected), std::string::npos) << m.output;
+    EXPECT_NE(m.output.find(out), std::string::npos) << m.output;
+    EXPECT_LT(m.seconds, 20.0);
+    EXPECT_LT(m.max_rss_kib, 400 * 1024) << m.output;
+  }
 }
 
 // `softevo info` exits 1 on a damaged archive; `softevo repair` writes its consistent
