@@ -107,9 +107,12 @@ case "${1:-}" in
     install_dependencies
     build "$ROOT/build-sanitize" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSOFTEVO_SANITIZE=ON \
       -DSOFTEVO_WERROR=ON "${REQUIRE_ALL[@]}"
-    # Open MPI's own allocations are reported as leaks; they are not ours.
+    # Open MPI's own allocations are reported as leaks; they are not ours. The launcher fault
+    # tests (SoftevoMpiFaults) time signals against mpirun's one-second grace, which an
+    # instrumented build does not keep: the test mode runs them.
     ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1 \
-      ctest --test-dir "$ROOT/build-sanitize" --output-on-failure -j"$JOBS" -LE "long|no_sanitize"
+      ctest --test-dir "$ROOT/build-sanitize" --output-on-failure -j"$JOBS" -LE "long|no_sanitize" \
+      -E '^SoftevoMpiFaults\.'
     ;;
   clang)
     # The physics gives the same bits with clang as with GCC: the golden hashes (every SIMD
