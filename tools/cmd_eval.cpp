@@ -104,23 +104,14 @@ double component(const std::vector<tasks::ComponentName>& names, const UnitFitne
 
 int run_eval(const EvalArgs& a) {
   const RobotFile robot = read_robot_file(a.robot);
-  // The task: --task, else the config file's, else the one the controller's inputs fit. It is
-  // applied as the last override, so that a key of that task (--set) is accepted.
-  std::vector<std::string> overrides = a.overrides;
-  if (!a.task.empty())
-    overrides.push_back("task.kind=" + a.task);
-  else if (a.config_file.empty())
-    overrides.push_back(std::string("task.kind=") +
-                        to_string(tasks::default_task_for(robot.controller.task_inputs())));
-  Config config = a.config_file.empty() ? parse_config("", "<built-in defaults>", overrides)
-                                        : load_config(a.config_file, overrides);
-  if (a.config_file.empty()) {
-    config.task.control = robot.controller.closed_loop ? "closed" : "open";
-    config.run.eval_timeout_seconds = 0.0;  // interactive: no wall-clock limit
-  }
-  if (!a.integrator.empty()) config.physics.integrator = a.integrator;
-  if (a.seconds > 0.0) config.task.eval_seconds = a.seconds;
-  if (a.direction_set) config.task.directions = {a.direction};
+  worker::RobotEvalSettings settings;
+  settings.config_path = a.config_file;
+  settings.overrides = a.overrides;
+  settings.task = a.task;
+  settings.integrator = a.integrator;
+  settings.seconds = a.seconds;
+  if (a.direction_set) settings.direction = a.direction;
+  const Config config = worker::robot_eval_config(robot.controller, settings);
   const std::unique_ptr<tasks::Task> task = tasks::make_task(config);
   const std::vector<tasks::ComponentName> names = task->component_names();
 

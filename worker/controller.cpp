@@ -3,10 +3,13 @@
 
 #include "worker/elman_tanh.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 #include <string>
+
+#include "physics/pneumatics.hpp"
 
 namespace softevo::worker {
 namespace {
@@ -84,6 +87,59 @@ void elman_forward(const ElmanWeights& w, ElmanState& s, std::span<const float> 
     const float from_self = w.w_self[i] * s.context[i] + w.b_ctx[i];
     s.context[i] = tanh_binary32(from_hidden + from_self);
   }
+}
+
+ElmanController::ElmanController(const ControllerSpec& spec, double control_rate_hz,
+                                 bool ablate_oscillator, bool ablate_sensors)
+    : spec_(spec),
+      weights_(make_elman_weights(spec)),
+      brain_(initial_elman_state(weights_)),
+      control_rate_hz_(control_rate_hz),
+      ablate_oscillator_(ablate_oscillator),
+      ablate_sensors_(ablate_sensors),
+      inputs_(static_cast<std::size_t>(weights_.inputs), 0.0f),
+      outputs_(static_cast<std::size_t>(weights_.outputs), 0.0f) {}
+
+void ElmanController::reset() {
+  brain_ = initial_elman_state(weights_);
+  std::fill(inputs_.begin(), inputs_.end(), 0.0f);
+}
+
+void ElmanController::check_chambers(int chambers) const {
+  if (2 * chambers > weights_.outputs)
+    throw std::invalid_argument(
+        std::to_string(chambers) + " chambers need " + std::to_string(2 * chambers) +
+        " controller outputs, controller has " + std::to_string(weights_.outputs));
+}
+
+void ElmanController::act(std::span<const float> task_inputs, std::span<const float> sensor_bar,
+                          std::span<float> commands) {
+  const int chambers = static_cast<int>(sensor_bar.size());
+  check_chambers(chambers);
+  if (commands.size() != 2 * sensor_bar.size())
+    throw std::invalid_argument("ElmanController::act: " + std::to_string(commands.size()) +
+                                " valve commands for " + std::to_string(chambers) + " chambers");
+  constexpr int kMaxSensorValues = 10;                     // §4.1: cap after the oscillator inputs
+  advance_oscillator(weights_, brain_, control_rate_hz_);  // §4.2: before the inputs are read
+  inputs_[0] = ablate_oscillator_ ? 0.0f : static_cast<float>(std::sin(brain_.phase));
+  inputs_[1] = ablate_oscillator_ ? 0.0f : static_cast<float>(std::cos(brain_.phase));
+  std::fill(inputs_.begin() + kOscillatorInputs, inputs_.end(), 0.0f);
+  const int sensor_slots = weights_.inputs - kOscillatorInputs;
+  int sensor = 0;
+  auto push_sensor = [&](float value) {
+    if (sensor < kMaxSensorValues && sensor < sensor_slots)
+      inputs_[kOscillatorInputs + sensor] = value;
+    ++sensor;
+  };
+  const int fed_task_inputs = std::min(static_cast<int>(task_inputs.size()), spec_.task_inputs());
+  for (int i = 0; i < fed_task_inputs; ++i) push_sensor(task_inputs[i]);
+  for (int i = fed_task_inputs; i < spec_.task_inputs(); ++i) push_sensor(0.0f);
+  if (spec_.closed_loop)
+    for (int q = 0; q < chambers; ++q)
+      push_sensor(ablate_sensors_ ? 0.0f : physics::pressure_sensor_input(sensor_bar[q]));
+  // Network -> valve commands (y + 1)/2, output 2q inlet / 2q+1 outlet of chamber q (§4.5).
+  elman_forward(weights_, brain_, inputs_, outputs_);
+  for (std::size_t k = 0; k < commands.size(); ++k) commands[k] = (outputs_[k] + 1.0f) / 2.0f;
 }
 
 }  // namespace softevo::worker

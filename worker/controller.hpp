@@ -50,4 +50,42 @@ void advance_oscillator(const ElmanWeights& w, ElmanState& s, double control_rat
 void elman_forward(const ElmanWeights& w, ElmanState& s, std::span<const float> inputs,
                    std::span<float> outputs);
 
+// The controller of a robot as one control frame's mapping from what it senses to valve
+// commands (§5 frame steps 1-2): oscillator advance, inputs [sin, cos, task inputs, pressure
+// sensors] with the sensor part capped at 10 values and zero-padded (§4.1), network, u = (y + 1)/2.
+// Task inputs the controller has but the task does not feed read 0; task inputs beyond the
+// controller's are not fed.
+class ElmanController {
+ public:
+  // Throws std::invalid_argument for controller vectors of the wrong length.
+  ElmanController(const ControllerSpec& spec, double control_rate_hz,
+                  bool ablate_oscillator = false, bool ablate_sensors = false);
+
+  // One frame: `task_inputs` as the task gives them (Simulation::task_inputs), `sensor_bar`
+  // the pressure sensor reading of every chamber [bar] (read only by a closed-loop controller),
+  // `commands` receives 2 x chambers valve openings (2q inlet, 2q+1 outlet). Throws
+  // std::invalid_argument when the controller has fewer than 2 x chambers outputs.
+  void act(std::span<const float> task_inputs, std::span<const float> sensor_bar,
+           std::span<float> commands);
+  // Throws std::invalid_argument when the controller has fewer than 2 x `chambers` outputs.
+  void check_chambers(int chambers) const;
+  // The network inputs of the last act() (input_count values).
+  std::span<const float> inputs() const { return inputs_; }
+  const ElmanState& state() const { return brain_; }
+  int input_count() const { return weights_.inputs; }
+  int output_count() const { return weights_.outputs; }
+  // Back to the state before the first frame (phase 0, context 0).
+  void reset();
+
+ private:
+  ControllerSpec spec_;
+  ElmanWeights weights_;
+  ElmanState brain_;
+  double control_rate_hz_;
+  bool ablate_oscillator_;
+  bool ablate_sensors_;
+  std::vector<float> inputs_;
+  std::vector<float> outputs_;
+};
+
 }  // namespace softevo::worker

@@ -9,180 +9,72 @@
 #include <vector>
 
 #include "evo/development.hpp"
-#include "physics/observables.hpp"
 #include "physics/pneumatics.hpp"
-#include "physics/state.hpp"
-#include "physics/step.hpp"
 #include "worker/controller.hpp"
+#include "worker/simulation.hpp"
 
 namespace softevo::worker {
 namespace {
-
-constexpr int kOscillatorInputs = 2;  // sin, cos (§4.1)
-constexpr int kMaxSensorValues = 10;  // §4.1: cap after the oscillator inputs
-
-EvalStatus status_of(physics::StepStatus s) {
-  return s == physics::StepStatus::ok ? EvalStatus::ok : EvalStatus::diverged;
-}
 
 double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-// The main loop; throws std::invalid_argument for a body, controller or config that cannot be
-// simulated (evaluate() turns it into status failed).
+// The main loop: the stepping simulation driven by the robot's own controller. Throws
+// std::invalid_argument for a body, controller or config that cannot be simulated (evaluate()
+// turns it into status failed).
 EvalResult simulate(const Config& config, const tasks::Task& task, const BodyPlan& plan,
                     const ControllerSpec& controller, int unit, const EvaluateOptions& opts) {
-  const TaskConfig& tc = config.task;
-  if (unit < 0 || unit >= task.units())
-    throw std::invalid_argument("work unit " + std::to_string(unit) + " outside the " +
-                                std::to_string(task.units()) + " units of task " +
-                                to_string(task.kind()));
-  if (!(tc.control_rate > 0.0) || !(tc.eval_seconds >= 0.0))
-    throw std::invalid_argument("task.control_rate must be > 0 and task.eval_seconds >= 0");
+  Simulation sim(config, task, plan, unit, opts.simd);
+  if (sim.status() == EvalStatus::invalid_body) return sim.finish();
+  ElmanController brain(controller, config.task.control_rate, opts.ablate_oscillator,
+                        opts.ablate_sensors);
+  brain.check_chambers(sim.chambers());
 
-  EvalResult result;
-  result.unit = unit;
-
-  // ---- setup (§5 steps 1-8) -------------------------------------------------------------------
-  physics::BuildOptions build_options;
-  build_options.simd = opts.simd;
-  const physics::Model model = physics::build_model(plan, config.physics, build_options);
-  const physics::PneumaticsModel pm = physics::build_pneumatics(plan, model, config.pneumatics);
-  result.voxels = model.voxel_count;
-  result.chambers = pm.chamber_count;
-  if (model.voxel_count == 0 || pm.chamber_count == 0) {
-    result.status = EvalStatus::invalid_body;
-    result.message = "body has no voxels or no chamber (not actuatable)";
-    return result;
-  }
-  physics::State state = physics::initial_state(model);
-  physics::Scratch scratch = physics::make_scratch(model);
-  physics::PneumaticsState ps = physics::initial_pneumatics_state(pm, state.pos);
-  physics::PneumaticsScratch pscratch = physics::make_pneumatics_scratch(pm);
-  std::vector<physics::Vec3> external_force(static_cast<std::size_t>(model.voxel_count),
-                                            physics::Vec3::Zero());
-
-  const ElmanWeights weights = make_elman_weights(controller);
-  ElmanState brain = initial_elman_state(weights);
-  std::vector<float> inputs(static_cast<std::size_t>(weights.inputs), 0.0f);
-  std::vector<float> outputs(static_cast<std::size_t>(weights.outputs), 0.0f);
-  std::vector<float> commands(static_cast<std::size_t>(pm.valve_count), 1.0f);
-  std::vector<double> pressures_pa(static_cast<std::size_t>(pm.chamber_count), 0.0);
-  if (2 * pm.chamber_count > weights.outputs)
-    throw std::invalid_argument(std::to_string(pm.chamber_count) + " chambers need " +
-                                std::to_string(2 * pm.chamber_count) +
-                                " controller outputs, controller has " +
-                                std::to_string(weights.outputs));
-  const std::unique_ptr<tasks::UnitScore> score = task.start_unit(unit, model);
   std::vector<float> task_inputs(static_cast<std::size_t>(task.controller_inputs()), 0.0f);
-  const auto fed_task_inputs =
-      static_cast<std::size_t>(std::min(task.controller_inputs(), controller.task_inputs()));
-
-  // §5 step 8: stepsPerFrame = (int)(1.0f / 60.0f / dt) in float arithmetic.
-  const float frame_seconds_f = 1.0f / static_cast<float>(tc.control_rate);
-  const int steps_per_frame = static_cast<int>(frame_seconds_f / model.dt_f);
-  const int frames = static_cast<int>(std::lround(tc.control_rate * tc.eval_seconds));
-  // First sensor reading (§3.7): config value for every chamber, in bar.
-  const float initial_sensor_bar =
-      static_cast<float>(config.pneumatics.initial_sensor_pressure / physics::kPascalPerBar);
-
+  std::vector<float> sensor_bar(static_cast<std::size_t>(sim.chambers()), 0.0f);
+  std::vector<float> commands(static_cast<std::size_t>(sim.valve_count()), 1.0f);
+  std::vector<double> pressures_pa(static_cast<std::size_t>(sim.chambers()), 0.0);
   auto emit = [&](int frame) {
     if (!opts.on_frame) return;
-    for (int q = 0; q < pm.chamber_count; ++q)
-      pressures_pa[q] = physics::chamber_pressure_pa(ps, q);
+    for (int q = 0; q < sim.chambers(); ++q)
+      pressures_pa[q] = physics::chamber_pressure_pa(sim.pneumatics(), q);
     TraceFrame tf;
     tf.frame = frame;
-    tf.time = state.time;
-    tf.positions = state.pos;
-    tf.orientations = state.orient;
+    tf.time = sim.time();
+    tf.positions = sim.state().pos;
+    tf.orientations = sim.state().orient;
     tf.pressures = pressures_pa;
     tf.valve_commands = commands;
-    tf.inputs = inputs;
+    tf.inputs = brain.inputs();
     opts.on_frame(tf);
   };
   if (opts.on_start) {
     TraceHeader h;
-    h.model = &model;
-    h.chambers = pm.chamber_count;
-    h.frames = frames;
-    h.steps_per_frame = steps_per_frame;
+    h.model = &sim.model();
+    h.chambers = sim.chambers();
+    h.frames = sim.frames();
+    h.steps_per_frame = sim.steps_per_frame();
     opts.on_start(h);
   }
 
-  const int sensor_slots = weights.inputs - kOscillatorInputs;
-  for (int frame = 0; frame < frames; ++frame) {
-    // 1. Inputs [sin, cos, (task inputs), (pressures)], the sensor part capped at 10 values and
-    //    zero-padded (§4.1).
-    advance_oscillator(weights, brain, tc.control_rate);  // §4.2: before the inputs are read
-    inputs[0] = opts.ablate_oscillator ? 0.0f : static_cast<float>(std::sin(brain.phase));
-    inputs[1] = opts.ablate_oscillator ? 0.0f : static_cast<float>(std::cos(brain.phase));
-    std::fill(inputs.begin() + kOscillatorInputs, inputs.end(), 0.0f);
-    int sensor = 0;
-    auto push_sensor = [&](float value) {
-      if (sensor < kMaxSensorValues && sensor < sensor_slots)
-        inputs[kOscillatorInputs + sensor] = value;
-      ++sensor;
-    };
-    if (!task_inputs.empty()) score->controller_inputs(model, state, task_inputs);
-    for (std::size_t i = 0; i < fed_task_inputs; ++i) push_sensor(task_inputs[i]);
-    for (int i = static_cast<int>(fed_task_inputs); i < controller.task_inputs(); ++i)
-      push_sensor(0.0f);
-    if (controller.closed_loop) {
-      for (int q = 0; q < pm.chamber_count; ++q) {
-        const float p_bar = frame == 0 ? initial_sensor_bar : ps.pressure[q];  // §3.7
-        push_sensor(opts.ablate_sensors ? 0.0f : physics::pressure_sensor_input(p_bar));
-      }
-    }
-    // 2. Network -> valve commands (y + 1)/2, output 2q inlet / 2q+1 outlet of chamber q (§4.5).
-    elman_forward(weights, brain, inputs, outputs);
-    for (int k = 0; k < pm.valve_count; ++k) commands[k] = (outputs[k] + 1.0f) / 2.0f;
-    physics::set_valve_commands(ps, commands);
-    emit(frame);
-    // 3. Kill checks at the start of the frame (§2.15).
-    if (physics::flipped(model, state)) {
-      result.status = EvalStatus::killed_flipped;
-      break;
-    }
-    if (physics::exploded(model, state)) {
-      result.status = EvalStatus::killed_exploded;
-      break;
-    }
-    // 4. The task's observation of the frame.
-    score->observe(frame, model, state);
-    // 5. Physics: pneumatics before every step (§3.6).
-    for (int s = 0; s < steps_per_frame && result.status == EvalStatus::ok; ++s) {
-      physics::pneumatics_update(pm, ps, pscratch, state.pos, external_force);
-      result.status = status_of(physics::step(model, state, scratch, external_force));
-      ++result.steps;
-    }
-    if (result.status != EvalStatus::ok) {
-      result.message = "physics step failed (link strain > 100 or non-finite state)";
-      break;
-    }
+  while (sim.running()) {
+    // 1-2. What the controller senses -> valve commands.
+    sim.task_inputs(task_inputs);
+    for (int q = 0; q < sim.chambers(); ++q) sensor_bar[q] = sim.sensor_pressure_bar(q);
+    brain.act(task_inputs, sensor_bar, commands);
+    emit(sim.frame());
+    // 3-5. Kill checks, the task's observation, the physics steps.
+    if (sim.step(commands) != EvalStatus::ok) break;
     // 6. Deadline and abandon request.
-    if (opts.deadline && Clock::now() > *opts.deadline) {
-      result.status = EvalStatus::timeout;
-      result.message = "evaluation exceeded its wall-clock deadline (run.eval_timeout_seconds)";
-      break;
-    }
-    if (opts.abandon && opts.abandon()) {
-      result.status = EvalStatus::timeout;
-      result.message = "evaluation abandoned: the run is stopping";
-      break;
-    }
+    if (opts.deadline && Clock::now() > *opts.deadline)
+      sim.stop(EvalStatus::timeout,
+               "evaluation exceeded its wall-clock deadline (run.eval_timeout_seconds)");
+    else if (opts.abandon && opts.abandon())
+      sim.stop(EvalStatus::timeout, "evaluation abandoned: the run is stopping");
   }
-  result.sim_seconds = state.time;
-
-  UnitFitness unit_fitness;
-  if (result.status == EvalStatus::ok) {
-    emit(frames);
-    unit_fitness = score->finish(model, state);
-    result.fitness = unit_fitness.fitness;
-  }  // killed / diverged / timeout: fitness and components 0 (§7.1, §7.2 "Killed")
-  unit_fitness.values.resize(task.component_names().size(), 0.0);
-  result.components.push_back(std::move(unit_fitness));
-  return result;
+  if (sim.status() == EvalStatus::ok) emit(sim.frames());
+  return sim.finish();
 }
 
 EvalResult failed(int unit, EvalStatus status, std::string message) {
@@ -201,15 +93,7 @@ std::optional<Clock::time_point> deadline_after(double seconds) {
          std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
 }
 
-EvalResult evaluate(const Config& config, const tasks::Task& task, const BodyPlan& body,
-                    const ControllerSpec& controller, int unit, const EvaluateOptions& options) {
-  const auto start = Clock::now();
-  EvalResult result;
-  try {
-    result = simulate(config, task, body, controller, unit, options);
-  } catch (const std::exception& e) {
-    result = failed(unit, EvalStatus::failed, e.what());
-  }
+void finalize_unit_result(const tasks::Task& task, EvalResult& result) {
   // A non-finite fitness is numerical trouble that escaped the physics' own checks.
   if (result.status == EvalStatus::ok && !std::isfinite(result.fitness)) {
     result.status = EvalStatus::diverged;
@@ -220,6 +104,18 @@ EvalResult evaluate(const Config& config, const tasks::Task& task, const BodyPla
     result.components.emplace_back().values.resize(task.component_names().size(), 0.0);
   result.components.front().fitness = result.fitness;
   result.components.front().status = result.status;
+}
+
+EvalResult evaluate(const Config& config, const tasks::Task& task, const BodyPlan& body,
+                    const ControllerSpec& controller, int unit, const EvaluateOptions& options) {
+  const auto start = Clock::now();
+  EvalResult result;
+  try {
+    result = simulate(config, task, body, controller, unit, options);
+  } catch (const std::exception& e) {
+    result = failed(unit, EvalStatus::failed, e.what());
+  }
+  finalize_unit_result(task, result);
   result.wall_seconds = seconds_since(start);
   return result;
 }
@@ -230,6 +126,27 @@ EvalResult evaluate_all_units(const Config& config, const tasks::Task& task, con
   for (int u = 0; u < task.units(); ++u)
     units.push_back(evaluate(config, task, body, controller, u, options));
   return tasks::combine_units(task, units);
+}
+
+Config robot_eval_config(const ControllerSpec& controller, const RobotEvalSettings& settings) {
+  std::vector<std::string> overrides = settings.overrides;
+  if (!settings.task.empty()) overrides.push_back("task.kind=" + settings.task);
+  const bool built_in = settings.config_path.empty() && !settings.config_text;
+  if (settings.task.empty() && built_in)
+    overrides.push_back(std::string("task.kind=") +
+                        to_string(tasks::default_task_for(controller.task_inputs())));
+  Config config = !settings.config_path.empty() ? load_config(settings.config_path, overrides)
+                  : settings.config_text
+                      ? parse_config(*settings.config_text, settings.source_name, overrides)
+                      : parse_config("", "<built-in defaults>", overrides);
+  if (built_in) {
+    config.task.control = controller.closed_loop ? "closed" : "open";
+    config.run.eval_timeout_seconds = 0.0;  // interactive: no wall-clock limit
+  }
+  if (!settings.integrator.empty()) config.physics.integrator = settings.integrator;
+  if (settings.seconds > 0.0) config.task.eval_seconds = settings.seconds;
+  if (settings.direction) config.task.directions = {*settings.direction};
+  return config;
 }
 
 BuiltRobot build_robot(const Config& config, const evo::Genome& genome) {

@@ -30,6 +30,7 @@
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "common/body_plan.hpp"
 #include "common/config.hpp"
@@ -102,6 +103,11 @@ EvalResult evaluate(const Config& config, const tasks::Task& task, const BodyPla
                     const ControllerSpec& controller, int unit,
                     const EvaluateOptions& options = {});
 
+// How a unit's result from worker::Simulation::finish() is scored: a non-finite fitness is
+// status diverged, any status but ok scores 0, the unit's component row carries fitness and
+// status. evaluate() applies it; a driver of its own Simulation applies it too.
+void finalize_unit_result(const tasks::Task& task, EvalResult& result);
+
 // Every unit of `task`, one after the other, combined (tasks::combine_units).
 EvalResult evaluate_all_units(const Config& config, const tasks::Task& task, const BodyPlan& body,
                               const ControllerSpec& controller,
@@ -119,6 +125,27 @@ class ConfigMismatch : public std::runtime_error {
 // throws otherwise (an undecodable genome is status failed).
 EvalResult evaluate(const Config& config, const tasks::Task& task, std::uint64_t config_hash,
                     const EvalRequest& request, const EvaluateOptions& options = {});
+
+// How a robot file is evaluated on its own (`softevo eval` and the Python package share it, so
+// both give the same bits for the same inputs).
+struct RobotEvalSettings {
+  // The config: a TOML file, else TOML text (named `source_name` in error messages), else the
+  // built-in thesis defaults with task.control taken from the robot's controller and no
+  // wall-clock limit.
+  std::string config_path;
+  std::optional<std::string> config_text;
+  std::string source_name = "<config>";
+  std::vector<std::string> overrides;  // "section.key=value"
+  // The task: this name, else the config text's, else (built-in defaults) the one the
+  // controller's inputs fit (tasks::default_task_for). Applied as the last override, so that a
+  // key of that task is accepted.
+  std::string task;
+  std::string integrator;           // "" = the config's physics.integrator
+  double seconds = 0.0;             // > 0 replaces task.eval_seconds
+  std::optional<double> direction;  // replaces task.directions by [direction] [deg]
+};
+// The resolved config; throws ConfigError.
+Config robot_eval_config(const ControllerSpec& controller, const RobotEvalSettings& settings);
 
 // The controller gets the inputs of config's task.
 BuiltRobot build_robot(const Config& config, const evo::Genome& genome);
