@@ -15,6 +15,7 @@
 #include "evo/population.hpp"
 #include "tasks/task.hpp"
 #include "tests/test_controller_spec.hpp"
+#include "tests/worker/two_chamber_block.hpp"
 #include "worker/evaluate.hpp"
 
 namespace fs = std::filesystem;
@@ -27,22 +28,7 @@ fs::path shared_dir() {
   return (env ? fs::path(env) : fs::current_path()) / ".." / "shared";
 }
 
-// 6x4x4 block of material 10 with two chambers (cells 11 and 12) side by side.
-BodyPlan two_chamber_block() {
-  BodyPlan plan;
-  plan.lattice = {7, 4, 4};
-  plan.voxel_size = 0.01;
-  for (int k = 1; k <= 10; ++k) plan.materials.push_back({1.0e4 * k, 1000.0});
-  plan.cells.assign(7 * 4 * 4, 10);
-  for (int y = 1; y <= 2; ++y)
-    for (int z = 1; z <= 2; ++z) {
-      plan.cells[plan.cell_index(1, y, z)] = 11;
-      plan.cells[plan.cell_index(2, y, z)] = 11;
-      plan.cells[plan.cell_index(4, y, z)] = 12;
-      plan.cells[plan.cell_index(5, y, z)] = 12;
-    }
-  return plan;
-}
+using test::two_chamber_block;
 
 ControllerSpec controller(bool closed, bool directed) {
   return test::make_controller(
