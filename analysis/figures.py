@@ -28,7 +28,11 @@ import pathlib
 import sys
 import warnings
 
-import matplotlib
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from requirements import require  # noqa: E402
+
+require("figures.py")
+import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")  # headless
 import matplotlib.pyplot as plt  # noqa: E402
@@ -36,8 +40,7 @@ import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from softevo_archive import EXPERIMENTS, STATUS_NAMES, Run, find_runs  # noqa: E402
+from softevo_archive import EXPERIMENTS, Run, find_runs, status_name  # noqa: E402
 
 TASKS = {"gait": ("gait-open", "gait-closed"), "directed": ("dir-open", "dir-closed")}
 TASK_TITLES = {"gait": "Gait learning", "directed": "Directed locomotion"}
@@ -200,7 +203,7 @@ def champions(runs: list[Run], out: pathlib.Path, written: list[pathlib.Path]) -
                 best_ever = (float(gen.fitness[j]), gen.number, int(gen.id[j]))
         rows.append([r.experiment, r.seed, r.path.name, r.state, len(r.generation_numbers),
                      last.number, int(last.id[i]), float(last.fitness[i]),
-                     STATUS_NAMES.get(int(last.status[i]), str(int(last.status[i]))),
+                     status_name(last.status[i]),
                      int(last.voxels[i]), int(last.chambers[i]), best_ever[0], best_ever[1],
                      best_ever[2]])
     write_csv(out / "champions.csv", header, rows, written)
@@ -263,8 +266,6 @@ def main(argv: list[str] | None = None) -> int:
               f" vs closed {row[7]:.4g} +- {row[8]:.3g} (n={row[4]}); Welch p = {row[10]:.3g},"
               f" Mann-Whitney p = {row[12]:.3g}")
     champions([r for rs in by_exp.values() for r in rs], out, written)
-    for r in runs:
-        r.close()
     print("wrote:")
     for p in written:
         print(f"  {p}")

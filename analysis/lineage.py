@@ -17,56 +17,11 @@ import argparse
 import pathlib
 import sys
 
-import numpy as np
-
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from softevo_archive import STATUS_NAMES, ArchiveError, Run  # noqa: E402
+from requirements import require  # noqa: E402
 
-
-def lineage(run: Run, generation: int, individual: int) -> list[dict]:
-    """The line of ancestors, newest first."""
-    # id -> generations where it was evaluated, ascending.
-    where: dict[int, list[int]] = {}
-    tables = {}
-    for gen in run.generations():
-        tables[gen.number] = gen
-        for i in gen.id.tolist():
-            where.setdefault(int(i), []).append(gen.number)
-    line = []
-    g, ind = generation, individual
-    seen = set()
-    while True:
-        table = tables[g]
-        row = table.row_of(ind)
-        if row is None:
-            raise ArchiveError(f"{run.path}: id {ind} is not in generation {g}")
-        if (g, ind) in seen:  # cannot happen in a well-formed archive; never loop forever
-            break
-        seen.add((g, ind))
-        entry = {
-            "generation": g,
-            "id": ind,
-            "fitness": float(table.fitness[row]),
-            "status": STATUS_NAMES.get(int(table.status[row]), str(int(table.status[row]))),
-            "voxels": int(table.voxels[row]),
-            "chambers": int(table.chambers[row]),
-            "species": int(table.species[row]),
-            "parent1": int(table.parent1[row]),
-            "parent2": int(table.parent2[row]),
-        }
-        first = where[ind][0]
-        if first < g:
-            entry["note"] = f"same id evaluated since generation {first} (carried over as an elite)"
-        line.append(entry)
-        parent = entry["parent1"]
-        if parent < 0:
-            break  # initial population
-        earlier = [x for x in where.get(parent, []) if x < g]
-        if not earlier:
-            entry["note"] = f"parent {parent} not archived before generation {g}"
-            break
-        g, ind = earlier[-1], parent
-    return line
+require("lineage.py", group=None)
+import softevo  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -79,22 +34,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--csv", action="store_true", help="comma-separated output")
     args = ap.parse_args(argv)
     try:
-        with Run(args.archive) as run:
-            if not run.generation_numbers:
-                print(f"lineage: {args.archive} has no generation yet", file=sys.stderr)
-                return 2
-            g = args.generation if args.generation is not None else run.generation_numbers[-1]
-            if g not in run.generation_numbers:
-                print(f"lineage: {args.archive} has no generation {g}", file=sys.stderr)
-                return 2
-            table = run.generation(g)
-            if args.id is None:
-                ind = int(table.id[int(np.argmax(table.fitness))])
-            else:
-                ind = args.id
-            line = lineage(run, g, ind)
-            experiment = run.experiment
-    except ArchiveError as e:
+        run = softevo.open_run(args.archive)
+        if not run.generations:
+            print(f"lineage: {args.archive} has no generation yet", file=sys.stderr)
+            return 2
+        g = args.generation if args.generation is not None else run.generations[-1]
+        if g not in run.generations:
+            print(f"lineage: {args.archive} has no generation {g}", file=sys.stderr)
+            return 2
+        ind = run.best(g)[1] if args.id is None else args.id
+        line = run.lineage(ind, generation=g)
+        experiment = run.info["experiment"] or run.config.experiment
+    except (OSError, ValueError, KeyError) as e:
         print(f"lineage: {e}", file=sys.stderr)
         return 2
     cols = ["generation", "id", "fitness", "status", "voxels", "chambers", "species", "parent1",

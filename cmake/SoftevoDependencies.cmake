@@ -6,6 +6,7 @@
 #   PNG    libpng                 `softevo render` to .png (without it: .mp4 only, via ffmpeg)
 #   MPI    MPI (C++ bindings off) softevo-mpi and the MPI tests
 #   HDF5   HDF5 C                 io (run archive, trace), the master, softevo-mpi, the softevo CLI
+#   PYTHON Python 3 + pybind11    the `softevo` Python package (python/; also needs HDF5)
 # The core (common, physics, evo, worker and their tests) needs none of them, only the
 # header-only libraries below.
 #
@@ -19,6 +20,8 @@ option(SOFTEVO_REQUIRE_TESTS "fail at configure time unless GoogleTest is found"
 option(SOFTEVO_REQUIRE_PNG "fail at configure time unless libpng is found" OFF)
 option(SOFTEVO_REQUIRE_MPI "fail at configure time unless MPI is found" OFF)
 option(SOFTEVO_REQUIRE_HDF5 "fail at configure time unless HDF5 (C) is found" OFF)
+option(SOFTEVO_REQUIRE_PYTHON
+       "fail at configure time unless Python 3 (headers) and pybind11 are found" OFF)
 
 include(FetchContent)
 
@@ -51,6 +54,24 @@ softevo_optional(NAME MPI FOUND MPI_FOUND
 find_package(HDF5 QUIET COMPONENTS C)
 softevo_optional(NAME HDF5 FOUND HDF5_FOUND
                  HOW "install libhdf5-dev (Debian), or load your cluster's HDF5 module")
+
+# The Python package is built for Debian's interpreter (/usr/bin/python3, where python3-numpy,
+# -pandas and -pytest live) even when another python3 comes first on PATH (pyenv, conda);
+# -DPython_EXECUTABLE=... chooses another. It binds the run archive reader, so it needs HDF5.
+if(NOT DEFINED Python_EXECUTABLE AND EXISTS /usr/bin/python3)
+  set(Python_EXECUTABLE /usr/bin/python3 CACHE FILEPATH "Python interpreter of the softevo package")
+endif()
+find_package(Python 3.9 QUIET COMPONENTS Interpreter Development.Module)
+if(Python_FOUND)
+  find_package(pybind11 2.6 CONFIG QUIET)
+endif()
+if(Python_FOUND AND pybind11_FOUND AND SOFTEVO_ENABLE_HDF5)
+  set(softevo_python_found ON)
+else()
+  set(softevo_python_found OFF)
+endif()
+softevo_optional(NAME PYTHON FOUND softevo_python_found
+                 HOW "install python3-dev and pybind11-dev (Debian); the package also needs HDF5")
 
 # softevo_header_library(PACKAGE P TARGET T DEBIAN deb [MINIMUM v] [FIND_ARGS ...]
 #                        [VERSION v URLS u ... SHA256 h INCLUDE_DIR dir [DEBIAN_PACKAGE_FILE]])
@@ -177,6 +198,9 @@ function(softevo_print_summary)
       string(APPEND built "(render .mp4 only)")
     endif()
   endif()
+  if(SOFTEVO_ENABLE_PYTHON)
+    string(APPEND built " python")
+  endif()
   if(SOFTEVO_ENABLE_TESTS)
     string(APPEND built " tests")
   endif()
@@ -185,6 +209,11 @@ function(softevo_print_summary)
   message(STATUS "  libpng        ${SOFTEVO_ENABLE_PNG}")
   message(STATUS "  MPI           ${SOFTEVO_ENABLE_MPI}")
   message(STATUS "  HDF5 C        ${SOFTEVO_ENABLE_HDF5}")
+  if(SOFTEVO_ENABLE_PYTHON)
+    message(STATUS "  Python        ${Python_EXECUTABLE} ${Python_VERSION}, pybind11 ${pybind11_VERSION}")
+  else()
+    message(STATUS "  Python        OFF")
+  endif()
   foreach(p Eigen3 tomlplusplus nlohmann_json CLI11)
     if(DEFINED SOFTEVO_SOURCE_${p})
       string(SUBSTRING "${p}              " 0 14 label)

@@ -1,0 +1,187 @@
+"""Run archives (softevo.run/1, docs/archive.md) through the C++ reader (io::Archive)."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from . import _softevo
+
+_FIXED_COLUMNS = ("generation", "id", "parent1", "parent2", "species", "status_code",
+                  "fitness", "voxels", "chambers", "wall_seconds", "worker_rank")
+
+
+def _table(columns: dict[str, np.ndarray], names: list[str]):
+    """A pandas DataFrame of the columns in this order when pandas imports, else a numpy
+    structured array."""
+    try:
+        import pandas
+    except ImportError:
+        pandas = None
+    if pandas is not None:
+        return pandas.DataFrame({n: columns[n] for n in names})
+    n = len(columns[names[0]]) if names else 0
+    dtype = [(name, columns[name].dtype) for name in names]
+    out = np.empty(n, dtype=dtype)
+    for name in names:
+        out[name] = columns[name]
+    return out
+
+
+class Run:
+    """One run archive, opened read-only (see softevo.open_run)."""
+
+    def __init__(self, path: str | os.PathLike):
+        text = os.fspath(path)
+        if not os.path.exists(text):
+            raise FileNotFoundError(2, "run archive not found", text)
+        self.path = text
+        self._archive = _softevo.Archive(text)
+        self._columns = None
+
+    def __repr__(self) -> str:
+        info = self.info
+        return (f"<softevo.Run {self.path!r}: {info['experiment']}, "
+                f"{info['generations_done']} generations, {info['state']}>")
+
+    @property
+    def info(self) -> dict:
+        """The root attributes: format, version, git_commit, seed, ranks, host, start_time,
+        end_time, config_hash, experiment, state, generations_done, physics_revision."""
+        return self._archive.info
+
+    @property
+    def config(self) -> _softevo.Config:
+        """The archived config (/config), parsed strictly; ConfigError names the archive."""
+        return _softevo._parse_config(self._archive.config_text, f"{self.path}:/config", [])
+
+    @property
+    def generations(self) -> list[int]:
+        """The archived generation numbers, ascending."""
+        return list(self._archive.generations)
+
+    def _all_columns(self) -> dict:
+        if self._columns is None:
+            self._columns = self._archive.individual_columns()
+        return self._columns
+
+    def individuals(self):
+        """One row per individual of every generation (generations ascending, ids ascending).
+
+        Columns: generation, id, parent1, parent2 (-1: none), species, status (name),
+        status_code, fitness, voxels, chambers, wall_seconds, worker_rank, then the archived
+        components (the task's named components of every work unit; for a task with several
+        units, e.g. the directed task's directions, as name_<unit>). A pandas DataFrame when
+        pandas imports, else a numpy structured array.
+        """
+        c = self._all_columns()
+        columns = {k: c[k] for k in _FIXED_COLUMNS}
+        codes = c["status_code"]
+        names = {int(code): _softevo.status_name(int(code)) for code in np.unique(codes)}
+        columns["status"] = np.array([names[int(x)] for x in codes], dtype=object)
+        order = ["generation", "id", "parent1", "parent2", "species", "status", "status_code",
+                 "fitness", "voxels", "chambers", "wall_seconds", "worker_rank"]
+        for name, values in c["components"].items():
+            if name in ("fitness", "status"):  # already columns of the row (one-unit tasks)
+                continue
+            columns[name] = values
+            order.append(name)
+        if not _has_pandas():
+            columns["status"] = columns["status"].astype("U20")
+        return _table(columns, order)
+
+    def stats(self):
+        """Per-generation statistics (/stats): generation, best, mean, sd, species_count,
+        evaluations_per_second. A DataFrame, or a numpy structured array without pandas."""
+        c = self._archive.stats_columns()
+        return _table(c, ["generation", "best", "mean", "sd", "species_count",
+                          "evaluations_per_second"])
+
+    def genome(self, id: int, generation: int | None = None) -> _softevo.Robot:
+        """Individual `id` as a Robot: its archived genome developed with the archived config,
+        as the run evaluated it (from `generation`, default the latest one it is in).
+        KeyError when the archive has no such individual."""
+        return self._archive.robot(int(id), None if generation is None else int(generation))
+
+    def best(self, generation: int | None = None) -> tuple[int, int]:
+        """(generation, id) of the fittest individual of `generation` (default: the last), the
+        lowest id on ties."""
+        c = self._all_columns()
+        if len(c["id"]) == 0:
+            raise KeyError(f"{self.path}: the archive has no generation yet")
+        g = int(c["generation"][-1]) if generation is None else int(generation)
+        rows = np.flatnonzero(c["generation"] == g)
+        if len(rows) == 0:
+            raise KeyError(f"{self.path}: no generation {g}")
+        best = rows[int(np.argmax(c["fitness"][rows]))]
+        return g, int(c["id"][best])
+
+    def lineage(self, id: int, generation: int | None = None) -> list[dict]:
+        """The line of ancestors of individual `id`, newest first, following parent1 (the
+        fitter parent of a crossover, the only one after mutation) back to the initial
+        population. Each entry: generation, id, fitness, status, voxels, chambers, species,
+        parent1, parent2, and a note where an id was carried over as an elite or a parent is
+        not archived. `generation` defaults to the latest one the individual is in."""
+        c = self._all_columns()
+        gens, ids = c["generation"], c["id"]
+        where: dict[int, list[int]] = {}
+        for row, ind in enumerate(ids.tolist()):
+            where.setdefault(int(ind), []).append(row)
+        rows_of_id = where.get(int(id))
+        if not rows_of_id:
+            raise KeyError(f"{self.path}: no individual with id {id}")
+        if generation is None:
+            row = rows_of_id[-1]
+        else:
+            matching = [r for r in rows_of_id if int(gens[r]) == int(generation)]
+            if not matching:
+                raise KeyError(f"{self.path}: id {id} is not in generation {generation}")
+            row = matching[0]
+        line = []
+        seen = set()
+        while row not in seen:  # an archive is acyclic; never loop on a malformed one
+            seen.add(row)
+            g, ind = int(gens[row]), int(ids[row])
+            entry = {
+                "generation": g, "id": ind, "fitness": float(c["fitness"][row]),
+                "status": _softevo.status_name(int(c["status_code"][row])),
+                "voxels": int(c["voxels"][row]), "chambers": int(c["chambers"][row]),
+                "species": int(c["species"][row]), "parent1": int(c["parent1"][row]),
+                "parent2": int(c["parent2"][row]),
+            }
+            first = int(gens[where[ind][0]])
+            if first < g:
+                entry["note"] = f"same id evaluated since generation {first} (carried over as an elite)"
+            line.append(entry)
+            parent = entry["parent1"]
+            if parent < 0:
+                break  # initial population
+            earlier = [r for r in where.get(parent, []) if int(gens[r]) < g]
+            if not earlier:
+                entry["note"] = f"parent {parent} not archived before generation {g}"
+                break
+            row = earlier[-1]
+        return line
+
+    def fitness_digest(self) -> str:
+        """The archive's fitness digest (16 hex digits, as `softevo info --json`)."""
+        return self._archive.fitness_digest()
+
+
+def _has_pandas() -> bool:
+    try:
+        import pandas  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def open_run(path: str | os.PathLike) -> Run:
+    """Open a run archive (softevo.run/1) read-only with the C++ reader.
+
+    run.config, run.info, run.individuals(), run.stats(), run.genome(id), run.lineage(id).
+    A missing file raises FileNotFoundError; a file that is not a run archive, or a malformed
+    one, ArchiveError (an OSError) naming the file and the object.
+    """
+    return Run(path)

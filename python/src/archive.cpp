@@ -1,0 +1,174 @@
+// Run archives from Python: the C++ reader (io::Archive), its tables as numpy columns.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/config.hpp"
+#include "evo/genome.hpp"
+#include "io/archive.hpp"
+#include "python/src/bindings.hpp"
+#include "worker/evaluate.hpp"
+
+namespace py = pybind11;
+using namespace pybind11::literals;
+
+namespace softevo::python {
+namespace {
+
+py::dict info_dict(const io::RunInfo& i) {
+  py::dict d;
+  d["format"] = i.format;
+  d["version"] = i.version;
+  d["git_commit"] = i.git_commit;
+  d["physics_revision"] = i.physics_revision;
+  d["seed"] = i.seed;
+  d["ranks"] = i.ranks;
+  d["host"] = i.host;
+  d["start_time"] = i.start_time;
+  d["end_time"] = i.end_time;
+  d["config_hash"] = i.config_hash;
+  d["experiment"] = i.experiment;
+  d["state"] = i.state;
+  d["generations_done"] = i.generations_done;
+  return d;
+}
+
+// Column name of component `name` of unit u: the name itself for a one-unit task, name_u else.
+std::string unit_column(const std::string& name, int unit, int units) {
+  return units == 1 ? name : name + "_" + std::to_string(unit);
+}
+
+// Every individual of every generation as columns (dict name -> 1-D array), generations
+// ascending, rows in id order; the component columns of every unit after the fixed ones.
+py::dict individual_columns(const io::Archive& archive) {
+  std::vector<std::int64_t> generation, id, parent1, parent2, species;
+  std::vector<std::uint8_t> status;
+  std::vector<double> fitness, wall_seconds;
+  std::vector<std::int32_t> voxels, chambers, worker_rank;
+  std::vector<std::string> component_names;
+  std::vector<std::vector<double>> components;
+  int units = 0;
+  for (const std::int64_t g : archive.generations()) {
+    const io::GenerationRecord r = archive.generation(g);
+    r.check();
+    if (components.empty()) {
+      units = r.units;
+      for (int u = 0; u < units; ++u)
+        for (const std::string& c : r.component_columns)
+          component_names.push_back(unit_column(c, u, units));
+      components.resize(component_names.size());
+    } else if (r.units * r.component_columns.size() != components.size()) {
+      throw io::ArchiveError(archive.path() + ": /generations/" + io::generation_group_name(g) +
+                             "/components has a different shape from the earlier generations'");
+    }
+    generation.insert(generation.end(), r.size(), g);
+    id.insert(id.end(), r.id.begin(), r.id.end());
+    parent1.insert(parent1.end(), r.parent1.begin(), r.parent1.end());
+    parent2.insert(parent2.end(), r.parent2.begin(), r.parent2.end());
+    species.insert(species.end(), r.species.begin(), r.species.end());
+    status.insert(status.end(), r.status.begin(), r.status.end());
+    fitness.insert(fitness.end(), r.fitness.begin(), r.fitness.end());
+    voxels.insert(voxels.end(), r.voxels.begin(), r.voxels.end());
+    chambers.insert(chambers.end(), r.chambers.begin(), r.chambers.end());
+    wall_seconds.insert(wall_seconds.end(), r.wall_seconds.begin(), r.wall_seconds.end());
+    worker_rank.insert(worker_rank.end(), r.worker_rank.begin(), r.worker_rank.end());
+    const std::size_t width = components.size();
+    if (r.components.size() != r.size() * width)
+      throw io::ArchiveError(archive.path() + ": /generations/" + io::generation_group_name(g) +
+                             "/components has " + std::to_string(r.components.size()) +
+                             " values, expected " + std::to_string(r.size() * width));
+    for (std::size_t row = 0; row < r.size(); ++row)
+      for (std::size_t c = 0; c < width; ++c)
+        components[c].push_back(r.components[row * width + c]);
+  }
+  py::dict d;
+  d["generation"] = array_of(generation);
+  d["id"] = array_of(id);
+  d["parent1"] = array_of(parent1);
+  d["parent2"] = array_of(parent2);
+  d["species"] = array_of(species);
+  d["status_code"] = array_of(status);
+  d["fitness"] = array_of(fitness);
+  d["voxels"] = array_of(voxels);
+  d["chambers"] = array_of(chambers);
+  d["wall_seconds"] = array_of(wall_seconds);
+  d["worker_rank"] = array_of(worker_rank);
+  py::dict comps;
+  for (std::size_t c = 0; c < components.size(); ++c)
+    comps[py::str(component_names[c])] = array_of(components[c]);
+  d["components"] = comps;
+  d["units"] = units;
+  return d;
+}
+
+py::dict stats_columns(const io::Archive& archive) {
+  std::vector<double> generation, best, mean, sd, species, rate;
+  for (const io::StatsRow& s : archive.stats()) {
+    generation.push_back(s.generation);
+    best.push_back(s.best);
+    mean.push_back(s.mean);
+    sd.push_back(s.sd);
+    species.push_back(s.species_count);
+    rate.push_back(s.evaluations_per_second);
+  }
+  py::dict d;
+  d["generation"] = array_of(generation);
+  d["best"] = array_of(best);
+  d["mean"] = array_of(mean);
+  d["sd"] = array_of(sd);
+  d["species_count"] = array_of(species);
+  d["evaluations_per_second"] = array_of(rate);
+  return d;
+}
+
+// Individual `id` of generation `generation` (default: the latest one that has it) as a robot,
+// developed with the archived config as the run did.
+RobotFile archived_robot(const io::Archive& archive, std::int64_t id,
+                         std::optional<std::int64_t> generation) {
+  std::vector<std::int64_t> gens = archive.generations();
+  if (generation) {
+    if (!std::binary_search(gens.begin(), gens.end(), *generation))
+      throw py::key_error(archive.path() + ": no generation " + std::to_string(*generation));
+    gens = {*generation};
+  }
+  const Config config = parse_config(archive.config_text(), archive.path() + ":/config");
+  for (auto g = gens.rbegin(); g != gens.rend(); ++g) {
+    const io::GenerationRecord r = archive.generation(*g);
+    r.check();
+    const auto at = std::lower_bound(r.id.begin(), r.id.end(), id);
+    if (at == r.id.end() || *at != id) continue;
+    const auto row = static_cast<std::size_t>(at - r.id.begin());
+    if (row >= r.genome.size())
+      throw io::ArchiveError(archive.path() + ": /generations/" + io::generation_group_name(*g) +
+                             "/genome has no row " + std::to_string(row));
+    const evo::Genome genome = evo::decode_genome(r.genome[row]);
+    return worker::robot_file_of(
+        config, genome,
+        archive.info().experiment + " gen " + std::to_string(*g) + " id " + std::to_string(id));
+  }
+  throw py::key_error(archive.path() + ": no individual with id " + std::to_string(id) +
+                      (generation ? " in generation " + std::to_string(*generation) : ""));
+}
+
+}  // namespace
+
+void bind_archive(py::module_& m) {
+  py::class_<io::Archive>(m, "Archive", "A run archive (softevo.run/1) opened read-only.")
+      .def(py::init<const std::string&>(), "path"_a)
+      .def_property_readonly("path", &io::Archive::path)
+      .def_property_readonly("info", [](const io::Archive& a) { return info_dict(a.info()); })
+      .def_property_readonly("config_text", &io::Archive::config_text)
+      .def_property_readonly("generations", &io::Archive::generations)
+      .def("individual_columns", &individual_columns)
+      .def("stats_columns", &stats_columns)
+      .def("robot", &archived_robot, "id"_a, "generation"_a = py::none())
+      .def("fitness_digest", [](const io::Archive& a) { return hash_hex(io::fitness_digest(a)); });
+}
+
+}  // namespace softevo::python

@@ -1,0 +1,60 @@
+"""softevo.env.SoftRobotEnv: the Gymnasium-style interface without gymnasium (spaces, reset,
+step, termination) and its reward, whose episode return is the task's fitness."""
+
+import numpy as np
+import pytest
+
+import softevo
+import softevo.env
+from conftest import block_robot
+
+
+def test_spaces_and_reset():
+    env = softevo.env.SoftRobotEnv(block_robot(), seconds=0.1)
+    obs, info = env.reset(seed=1)
+    assert env.action_space.shape == (2, 2)
+    assert env.observation_space.shape == obs.shape == (2 + 0 + 5,)
+    assert obs.dtype == np.float32
+    assert info["frame"] == 0
+    a = env.action_space.sample()
+    assert env.action_space.contains(a)
+
+
+@pytest.mark.parametrize("task,kwargs", [("gait", {}), ("rotate", {}), ("directed", {"direction": 20.0})])
+def test_return_is_the_task_fitness(task, kwargs):
+    robot = block_robot(directed=task == "directed")
+    env = softevo.env.SoftRobotEnv(robot, task=task, seconds=0.25, **kwargs)
+    env.reset(seed=0)
+    controller = softevo.Controller(robot)
+    total, done, steps = 0.0, False, 0
+    sim = env.simulation
+    obs = sim.observation()
+    while not done:
+        _, reward, terminated, truncated, info = env.step(controller.act(obs))
+        obs = sim.observation()
+        total += reward
+        steps += 1
+        done = terminated or truncated
+    assert steps == 15 and truncated and not terminated
+    expected = softevo.evaluate(robot, task=task, seconds=0.25, **kwargs).fitness
+    assert info["fitness"] == expected
+    assert total == pytest.approx(expected, abs=1e-9)
+
+
+def test_actions_are_clipped_and_seeded_sampling_repeats():
+    env = softevo.env.SoftRobotEnv(block_robot(), seconds=0.1)
+    env.reset(seed=5)
+    first = env.action_space.sample()
+    env.reset(seed=5)
+    assert np.array_equal(env.action_space.sample(), first)
+    obs, reward, terminated, truncated, info = env.step(np.full((2, 2), 7.0))
+    assert info["status"] == "ok" and np.isfinite(reward)
+
+
+def test_is_a_gymnasium_env_when_gymnasium_is_installed():
+    try:
+        import gymnasium
+    except ImportError:
+        assert softevo.env.SoftRobotEnv.__mro__[1] is object
+        return
+    assert issubclass(softevo.env.SoftRobotEnv, gymnasium.Env)

@@ -1,0 +1,101 @@
+"""softevo.load_robot / Robot.save / Robot: the softevo.robot/1 reader and writer from Python,
+its strict errors as exceptions naming file and key, the controller parameters, develop()."""
+
+import json
+
+import numpy as np
+import pytest
+
+import softevo
+from conftest import block_robot, block_robot_json, champion
+
+
+def test_save_and_load_give_the_same_robot(tmp_path):
+    robot = block_robot(closed=True)
+    path = tmp_path / "block.robot.json"
+    robot.save(path)
+    again = softevo.load_robot(path)
+    assert again.to_json() == robot.to_json()
+    assert again.lattice == (7, 4, 4)
+    assert again.cells.shape == (7, 4, 4)
+    assert again.chambers == 2
+    assert again.voxels == 7 * 4 * 4 - 16
+    assert again.closed_loop and not again.directed
+    assert again.frequency == 3.0
+
+
+def test_save_refuses_an_existing_file_unless_asked(tmp_path):
+    path = tmp_path / "r.json"
+    block_robot().save(path)
+    with pytest.raises(softevo.OutputFileError, match="r.json"):
+        block_robot().save(path, overwrite=False)
+    assert isinstance(softevo.OutputFileError("x"), OSError)
+
+
+def test_missing_file_is_file_not_found(tmp_path):
+    with pytest.raises(FileNotFoundError, match="robot file not found"):
+        softevo.load_robot(tmp_path / "absent.json")
+
+
+def test_unknown_key_names_file_and_key(tmp_path):
+    j = block_robot_json()
+    j["controller"]["colour"] = "red"
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(j))
+    with pytest.raises(softevo.RobotFileError) as e:
+        softevo.load_robot(path)
+    assert "bad.json" in str(e.value) and "colour" in str(e.value)
+    assert isinstance(e.value, ValueError)
+
+
+def test_wrong_length_and_type_are_errors():
+    j = block_robot_json()
+    j["controller"]["bias_out"] = [0.0] * 3
+    with pytest.raises(softevo.RobotFileError, match="bias_out"):
+        softevo.Robot.from_json(json.dumps(j), "short.json")
+    j = block_robot_json()
+    j["lattice"] = "big"
+    with pytest.raises(softevo.RobotFileError, match="lattice"):
+        softevo.Robot.from_json(json.dumps(j), "typed.json")
+    with pytest.raises(softevo.RobotFileError, match="garbage.json"):
+        softevo.Robot.from_json("{not json", "garbage.json")
+
+
+def test_controller_parameters_round_trip():
+    robot = block_robot()
+    p = robot.controller_parameters
+    assert p.dtype == np.float64 and p.ndim == 1
+    assert p[-1] == 3.0  # the oscillator frequency comes last
+    changed = robot.with_controller_parameters(p * 0.5)
+    assert np.array_equal(changed.controller_parameters, p * 0.5)
+    assert np.array_equal(robot.controller_parameters, p)  # the original is unchanged
+    with pytest.raises(ValueError, match="values"):
+        robot.with_controller_parameters(p[:-1])
+    with pytest.raises(ValueError, match="1-D"):
+        robot.with_controller_parameters(p.reshape(1, -1))
+
+
+def test_develop_rebuilds_a_champion_body_from_its_cppn():
+    robot = champion("gait-open-01")
+    assert robot.has_genome
+    developed = softevo.develop(robot)
+    assert np.array_equal(developed.cells, robot.cells)
+    assert developed.controller_parameters.tolist() == robot.controller_parameters.tolist()
+
+
+def test_develop_needs_a_genome():
+    with pytest.raises(ValueError, match="genome"):
+        softevo.develop(block_robot())
+    with pytest.raises(TypeError):
+        softevo.develop("robot.json")
+    with pytest.raises(ValueError, match="config"):
+        softevo.develop(b"\x00")
+
+
+def test_develop_an_archived_genome(tiny_run):
+    run = softevo.open_run(tiny_run)
+    generation, best = run.best()
+    robot = run.genome(best)
+    assert robot.has_genome
+    again = softevo.develop(robot, run.config)
+    assert np.array_equal(again.cells, robot.cells)

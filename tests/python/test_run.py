@@ -1,0 +1,97 @@
+"""softevo.open_run: the C++ archive reader from Python: config, info, the flat individuals
+table (pandas or numpy), stats, genomes as robots (re-evaluated to their archived bits),
+lineages, and bad archives as exceptions."""
+
+import builtins
+
+import numpy as np
+import pytest
+
+import softevo
+import softevo._run
+
+
+def test_config_and_info(tiny_run):
+    run = softevo.open_run(tiny_run)
+    assert run.info["format"] == "softevo.run/1"
+    assert run.info["state"] == "complete"
+    assert run.config.hash == run.info["config_hash"]
+    assert run.config.task == "gait"
+    assert run.generations == [0, 1]
+    assert len(run.fitness_digest()) == 16
+
+
+def test_individuals_as_a_dataframe(tiny_run):
+    pandas = pytest.importorskip("pandas")
+    table = softevo.open_run(tiny_run).individuals()
+    assert isinstance(table, pandas.DataFrame)
+    assert len(table) == 12
+    for column in ("generation", "id", "parent1", "parent2", "species", "status", "fitness",
+                   "voxels", "chambers", "distance"):
+        assert column in table.columns
+    assert set(table["generation"]) == {0, 1}
+    assert set(table["status"]) <= {"ok", "killed: flipped", "killed: exploded", "invalid body"}
+    ok = table[table["status"] == "ok"]
+    assert np.array_equal(ok["fitness"].to_numpy(), ok["distance"].to_numpy())
+
+
+def test_individuals_without_pandas_is_a_structured_array(tiny_run, monkeypatch):
+    real_import = builtins.__import__
+
+    def no_pandas(name, *args, **kwargs):
+        if name == "pandas":
+            raise ImportError("no pandas here")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_pandas)
+    table = softevo.open_run(tiny_run).individuals()
+    assert isinstance(table, np.ndarray) and table.dtype.names[:3] == ("generation", "id", "parent1")
+    assert len(table) == 12 and table["status"][0] in ("ok", "invalid body", "killed: flipped")
+    stats = softevo.open_run(tiny_run).stats()
+    assert isinstance(stats, np.ndarray) and len(stats) == 2
+
+
+def test_stats_match_the_table(tiny_run):
+    pytest.importorskip("pandas")
+    run = softevo.open_run(tiny_run)
+    stats, table = run.stats(), run.individuals()
+    for g in (0, 1):
+        assert stats["best"][g] == table[table["generation"] == g]["fitness"].max()
+
+
+def test_genome_re_evaluates_to_the_archived_bits(tiny_run):
+    run = softevo.open_run(tiny_run)
+    generation, best = run.best()
+    robot = run.genome(best)
+    table = run.individuals()
+    row = table[(table["generation"] == generation) & (table["id"] == best)]
+    assert robot.voxels == int(row["voxels"].iloc[0])
+    assert softevo.evaluate(robot, config=run.config).fitness == float(row["fitness"].iloc[0])
+
+
+def test_lineage_follows_the_first_parent(tiny_run):
+    run = softevo.open_run(tiny_run)
+    table = run.individuals()
+    children = table[(table["generation"] == 1) & (table["parent1"] >= 0)]
+    child = int(children["id"].iloc[0])
+    line = run.lineage(child)
+    assert line[0]["id"] == child and line[0]["generation"] == 1
+    assert line[1]["id"] == line[0]["parent1"] and line[1]["generation"] == 0
+    assert line[-1]["parent1"] == -1
+
+
+def test_bad_archives_and_ids(tiny_run, tmp_path):
+    with pytest.raises(FileNotFoundError):
+        softevo.open_run(tmp_path / "none.h5")
+    text = tmp_path / "text.h5"
+    text.write_text("not hdf5")
+    with pytest.raises(softevo.ArchiveError, match="text.h5"):
+        softevo.open_run(text)
+    assert isinstance(softevo.ArchiveError("x"), OSError)
+    run = softevo.open_run(tiny_run)
+    with pytest.raises(KeyError, match="999999"):
+        run.genome(999999)
+    with pytest.raises(KeyError, match="generation 7"):
+        run.genome(1, generation=7)
+    with pytest.raises(KeyError):
+        run.lineage(999999)
