@@ -26,6 +26,8 @@ PACKAGES=(
   libcli11-dev libtomlplusplus-dev nlohmann-json3-dev  # command lines, config, JSON
   libpng-dev                         # headless rendering to PNG
   python3 python3-h5py python3-numpy python3-scipy python3-matplotlib  # analysis/ figures
+  python3-dev pybind11-dev python3-pybind11  # the softevo Python package (python/, pybind11)
+  python3-pytest python3-pandas      # its tests; run.individuals() as a pandas DataFrame
 )
 
 # Open MPI refuses to run as root without these; harmless for other users.
@@ -52,6 +54,24 @@ install_dependencies() {
 
 REQUIRE_ALL=(-DSOFTEVO_REQUIRE_TESTS=ON -DSOFTEVO_REQUIRE_PNG=ON -DSOFTEVO_REQUIRE_MPI=ON
   -DSOFTEVO_REQUIRE_HDF5=ON)
+# The Python package is built for Debian's /usr/bin/python3 (cmake/SoftevoDependencies.cmake).
+PYTHON=/usr/bin/python3
+
+# install_python_package: a .pth file in the user's site-packages of $PYTHON pointing at
+# build/python, so that `python3 -c "import softevo"` works in a fresh shell (the package stays
+# the build's: a rebuild updates it, nothing is copied).
+install_python_package() {
+  if [ ! -d "$ROOT/build/python/softevo" ]; then
+    echo "== the softevo Python package was not built (pybind11-dev or python3-dev missing)"
+    return 0
+  fi
+  local site
+  site=$("$PYTHON" -c 'import site; print(site.getusersitepackages())')
+  mkdir -p "$site"
+  echo "$ROOT/build/python" >"$site/softevo-build.pth"
+  (cd / && "$PYTHON" -c "import softevo") &&
+    echo "== $PYTHON imports softevo from $ROOT/build/python (via $site/softevo-build.pth)"
+}
 
 # configure_timed DIR [cmake options...]: fresh configure, prints its time and what it builds.
 configure_timed() {
@@ -85,6 +105,7 @@ case "${1:-}" in
   quickstart)
     install_dependencies
     build "$ROOT/build" -DCMAKE_BUILD_TYPE=Release
+    install_python_package
     cd "$ROOT"
     mkdir -p runs
     # A new archive per call, so no earlier result is ever replaced.
@@ -100,13 +121,16 @@ case "${1:-}" in
   test)
     install_dependencies
     # Every optional part required: a missing package fails the configure, never skips tests.
-    build "$ROOT/build" -DCMAKE_BUILD_TYPE=Release -DSOFTEVO_WERROR=ON "${REQUIRE_ALL[@]}"
+    build "$ROOT/build" -DCMAKE_BUILD_TYPE=Release -DSOFTEVO_WERROR=ON "${REQUIRE_ALL[@]}" \
+      -DSOFTEVO_REQUIRE_PYTHON=ON
     ctest --test-dir "$ROOT/build" --output-on-failure -j"$JOBS" -LE long
     ;;
   sanitize)
     install_dependencies
+    # Without the Python package: an instrumented extension cannot be loaded by an
+    # uninstrumented interpreter (the sanitizer runtime must come first).
     build "$ROOT/build-sanitize" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSOFTEVO_SANITIZE=ON \
-      -DSOFTEVO_WERROR=ON "${REQUIRE_ALL[@]}"
+      -DSOFTEVO_WERROR=ON "${REQUIRE_ALL[@]}" -DCMAKE_DISABLE_FIND_PACKAGE_Python=ON
     # Open MPI's own allocations are reported as leaks; they are not ours. The launcher fault
     # tests (SoftevoMpiFaults) time signals against mpirun's one-second grace, which an
     # instrumented build does not keep: the test mode runs them.
