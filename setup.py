@@ -16,6 +16,7 @@ from setuptools import Extension, setup
 from setuptools.command.build_ext import build_ext
 
 ROOT = pathlib.Path(__file__).resolve().parent
+(ROOT / "build-pip").mkdir(exist_ok=True)
 
 
 class CMakeBuild(build_ext):
@@ -41,4 +42,8 @@ class CMakeBuild(build_ext):
                 self.copy_file(str(f), str(target / f.name))
 
 
-setup(ext_modules=[Extension("softevo._softevo", sources=[])], cmdclass={"build_ext": CMakeBuild})
+# setuptools' own build folders and metadata go under build-pip/ too (its default, build/, is
+# the CMake build of the README).
+setup(ext_modules=[Extension("softevo._softevo", sources=[])], cmdclass={"build_ext": CMakeBuild},
+      options={"build": {"build_base": "build-pip/setuptools"},
+               "egg_info": {"egg_base": "build-pip"}})

@@ -24,6 +24,12 @@ require("lineage.py", group=None)
 import softevo  # noqa: E402
 
 
+def lineage(run, generation: int, individual: int) -> list[dict]:
+    """The line of ancestors of `individual` of `generation`, newest first (softevo.Run.lineage;
+    `run` is a softevo.Run or an analysis/softevo_archive.py Run)."""
+    return getattr(run, "run", run).lineage(individual, generation=generation)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("archive")
@@ -43,7 +49,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"lineage: {args.archive} has no generation {g}", file=sys.stderr)
             return 2
         ind = run.best(g)[1] if args.id is None else args.id
-        line = run.lineage(ind, generation=g)
+        line = lineage(run, g, ind)
         experiment = run.info["experiment"] or run.config.experiment
     except (OSError, ValueError, KeyError) as e:
         print(f"lineage: {e}", file=sys.stderr)

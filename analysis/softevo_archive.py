@@ -15,6 +15,11 @@ EXPERIMENTS = ("gait-open", "gait-closed", "dir-open", "dir-closed")
 ArchiveError = softevo.ArchiveError
 
 
+def experiment_from_config(config_text: str) -> str:
+    """"gait-open" etc. from a config text (task.kind, task.control; other keys default)."""
+    return softevo.parse_config(config_text, "<config>").experiment
+
+
 def status_name(code: int) -> str:
     """The name of an archived status code."""
     return softevo.status_name(int(code))
@@ -39,7 +44,9 @@ class Run:
         self.path = pathlib.Path(path)
         try:
             self.run = softevo.open_run(self.path)
-            self.experiment = self.run.info["experiment"] or self.run.config.experiment
+            self.experiment = self.run.info["experiment"]
+            if self.experiment not in EXPERIMENTS:
+                self.experiment = self.run.config.experiment
         except (OSError, ValueError) as e:
             raise ArchiveError(f"{self.path}: {e}") from e
         if self.experiment not in EXPERIMENTS:
@@ -51,6 +58,12 @@ class Run:
         self._columns = {k: np.asarray(table[k]) for k in
                          ("generation", "id", "status_code", "fitness", "voxels", "chambers")}
         self.generation_numbers = self.run.generations
+
+    def __enter__(self) -> "Run":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass  # the package's reader holds nothing that needs closing early
 
     def generation(self, number: int) -> Generation:
         rows = self._columns["generation"] == number

@@ -677,7 +677,9 @@ RunInfo Archive::info() const {
     r.start_time = f.read_string_attribute("start_time", kStringBytes);
     r.end_time = f.read_string_attribute("end_time", kStringBytes);
     r.config_hash = f.read_string_attribute("config_hash", kStringBytes);
-    r.experiment = f.read_string_attribute("experiment", kStringBytes);
+    // Optional: the analysis scripts take an archive's experiment from its config without it.
+    r.experiment =
+        f.has_attribute("experiment") ? f.read_string_attribute("experiment", kStringBytes) : "";
     r.state = f.read_string_attribute("state", kStringBytes);
     r.generations_done = f.read_attribute<std::int64_t>("generations_done");
     if (r.generations_done < 0 || r.generations_done > ArchiveLimits::generations)

@@ -25,7 +25,8 @@ PACKAGES=(
   libgtest-dev                       # tests
   libcli11-dev libtomlplusplus-dev nlohmann-json3-dev  # command lines, config, JSON
   libpng-dev                         # headless rendering to PNG
-  python3 python3-h5py python3-numpy python3-scipy python3-matplotlib  # analysis/ figures
+  python3 python3-numpy python3-scipy python3-matplotlib  # analysis/ figures
+  python3-h5py                       # the analysis test writes synthetic archives with it
   python3-dev pybind11-dev python3-pybind11  # the softevo Python package (python/, pybind11)
   python3-pytest python3-pandas      # its tests; run.individuals() as a pandas DataFrame
 )

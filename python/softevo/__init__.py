@@ -14,7 +14,8 @@ The numbers are the C++ numbers, bit for bit: every function calls the same code
     run = softevo.open_run("runs/quickstart.h5")         # a run archive
     table = run.individuals()                            # pandas DataFrame (numpy without pandas)
 
-Robots: load_robot, Robot.save, develop.  Configs: load_config, default_config, Config.
+Robots: load_robot, Robot.save, develop.  Configs: load_config, default_config, parse_config,
+Config.
 Evaluation: evaluate, evaluate_many, EvalResult.  Stepping: Simulation, Controller,
 softevo.env.SoftRobotEnv.  Archives: open_run.  Errors: RobotFileError and ConfigError
 (ValueError), ArchiveError and OutputFileError (OSError).
@@ -45,7 +46,8 @@ from ._run import Run, open_run  # noqa: F401
 __all__ = [
     "ArchiveError", "Config", "ConfigError", "Controller", "EvalResult", "OutputFileError",
     "Robot", "RobotFileError", "Run", "Simulation", "TASKS", "default_config", "develop",
-    "evaluate", "evaluate_many", "load_config", "load_robot", "open_run", "status_name",
+    "evaluate", "evaluate_many", "load_config", "load_robot", "open_run", "parse_config",
+    "status_name",
 ]
 
 TASKS = ("gait", "directed", "rotate")
@@ -115,6 +117,13 @@ def default_config(task: str = "gait",
         raise ValueError(f"task {task!r} is not one of {', '.join(TASKS)}")
     return _softevo._parse_config("", "<built-in defaults>",
                                   _override_list(overrides) + [f"task.kind={task}"])
+
+
+def parse_config(text: str, source: str = "<text>",
+                 overrides: Mapping[str, object] | Iterable[str] | None = None) -> Config:
+    """A config from TOML text (keys not given take their thesis defaults), checked as strictly
+    as load_config(); ConfigError messages name `source`."""
+    return _softevo._parse_config(text, source, _override_list(overrides))
 
 
 def develop(genome_or_robot: Robot | bytes, config: Config | None = None) -> Robot:

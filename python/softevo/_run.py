@@ -12,13 +12,19 @@ _FIXED_COLUMNS = ("generation", "id", "parent1", "parent2", "species", "status_c
                   "fitness", "voxels", "chambers", "wall_seconds", "worker_rank")
 
 
-def _table(columns: dict[str, np.ndarray], names: list[str]):
-    """A pandas DataFrame of the columns in this order when pandas imports, else a numpy
-    structured array."""
+def _pandas():
+    """The pandas module, or None when it does not import."""
     try:
         import pandas
     except ImportError:
-        pandas = None
+        return None
+    return pandas
+
+
+def _table(columns: dict[str, np.ndarray], names: list[str]):
+    """A pandas DataFrame of the columns in this order when pandas imports, else a numpy
+    structured array."""
+    pandas = _pandas()
     if pandas is not None:
         return pandas.DataFrame({n: columns[n] for n in names})
     n = len(columns[names[0]]) if names else 0
@@ -87,7 +93,7 @@ class Run:
                 continue
             columns[name] = values
             order.append(name)
-        if not _has_pandas():
+        if _pandas() is None:  # a structured array needs fixed-width strings
             columns["status"] = columns["status"].astype("U20")
         return _table(columns, order)
 
@@ -167,14 +173,6 @@ class Run:
     def fitness_digest(self) -> str:
         """The archive's fitness digest (16 hex digits, as `softevo info --json`)."""
         return self._archive.fitness_digest()
-
-
-def _has_pandas() -> bool:
-    try:
-        import pandas  # noqa: F401
-    except ImportError:
-        return False
-    return True
 
 
 def open_run(path: str | os.PathLike) -> Run:

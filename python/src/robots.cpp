@@ -106,10 +106,14 @@ RobotFile develop_genome(const py::bytes& encoded, const Config& config) {
 }  // namespace
 
 void bind_errors(py::module_& m) {
-  py::register_exception<RobotFileError>(m, "RobotFileError", PyExc_ValueError);
-  py::register_exception<ConfigError>(m, "ConfigError", PyExc_ValueError);
-  py::register_exception<io::ArchiveError>(m, "ArchiveError", PyExc_OSError);
-  py::register_exception<OutputFileError>(m, "OutputFileError", PyExc_OSError);
+  py::register_exception<RobotFileError>(m, "RobotFileError", PyExc_ValueError).attr("__doc__") =
+      "A robot file that is not valid softevo.robot/1 (names file and key).";
+  py::register_exception<ConfigError>(m, "ConfigError", PyExc_ValueError).attr("__doc__") =
+      "A config that is not valid (names file, line, key and the allowed values).";
+  py::register_exception<io::ArchiveError>(m, "ArchiveError", PyExc_OSError).attr("__doc__") =
+      "A missing, foreign or malformed run archive (names the file and the object).";
+  py::register_exception<OutputFileError>(m, "OutputFileError", PyExc_OSError).attr("__doc__") =
+      "An output file that may not be written (symlink, special file, existing file).";
 }
 
 void bind_robots(py::module_& m) {

@@ -1,13 +1,11 @@
-"""analysis/ on the softevo package: figures.py and lineage.py read a real run archive through
-softevo.open_run, and say clearly what is missing (no traceback) under a Python without their
-requirements (pyproject.toml)."""
+"""analysis/ on the softevo package: lineage.py prints the package's lineage of a real run, and
+the scripts say clearly what is missing (no traceback) under a Python without their
+requirements (pyproject.toml). The figures themselves: tests/tools/test_analysis.py."""
 
 import os
-import shutil
 import subprocess
 import sys
 
-import pytest
 
 import softevo
 from conftest import SOURCE_DIR
@@ -18,23 +16,6 @@ ANALYSIS = SOURCE_DIR / "analysis"
 def run_script(*args: str, code: str | None = None) -> subprocess.CompletedProcess:
     command = [sys.executable, "-c", code, *args] if code else [sys.executable, *args]
     return subprocess.run(command, capture_output=True, text=True, env=dict(os.environ), timeout=120)
-
-
-def test_figures_of_a_run_folder(tiny_run, tmp_path):
-    pytest.importorskip("matplotlib")
-    pytest.importorskip("scipy")
-    runs = tmp_path / "runs"
-    runs.mkdir()
-    shutil.copy(tiny_run, runs / "gait-open-01.h5")
-    (runs / "not-a-run.h5").write_text("text")
-    done = run_script(str(ANALYSIS / "figures.py"), str(runs), "-o", str(tmp_path / "fig"))
-    assert done.returncode == 0, done.stderr
-    assert "gait-open x1" in done.stdout
-    assert "skipped" in done.stderr and "not-a-run.h5" in done.stderr
-    champions = (tmp_path / "fig" / "champions.csv").read_text()
-    generation, best = softevo.open_run(tiny_run).best()
-    assert f",{generation},{best}," in champions
-    assert (tmp_path / "fig" / "fitness_gait.png").stat().st_size > 0
 
 
 def test_lineage_prints_the_package_lineage(tiny_run):

@@ -99,3 +99,25 @@ def test_develop_an_archived_genome(tiny_run):
     assert robot.has_genome
     again = softevo.develop(robot, run.config)
     assert np.array_equal(again.cells, robot.cells)
+
+
+def test_every_public_name_and_method_has_a_docstring():
+    import inspect
+    import softevo.env
+
+    undocumented = []
+    for module in (softevo, softevo.env):
+        names = getattr(module, "__all__", None) or [n for n in vars(module) if not n.startswith("_")]
+        for name in names:
+            obj = getattr(module, name)
+            if not (inspect.isclass(obj) or callable(obj)) or isinstance(obj, type(softevo)):
+                continue
+            if not (obj.__doc__ or "").strip():
+                undocumented.append(f"{module.__name__}.{name}")
+            if inspect.isclass(obj) and not issubclass(obj, BaseException):
+                for attr, member in vars(obj).items():
+                    if attr.startswith("_") or not (callable(member) or isinstance(member, property)):
+                        continue
+                    if not (getattr(member, "__doc__", "") or "").strip():
+                        undocumented.append(f"{module.__name__}.{name}.{attr}")
+    assert undocumented == []
