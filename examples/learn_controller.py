@@ -7,11 +7,13 @@ an evolution strategy written in numpy.
 
 The body stays the robot's; the controller's parameters (the 9 vectors of docs/model.md §4.4,
 softevo.Robot.controller_parameters) start from random values and are improved by a
-(mu/mu_w, lambda) evolution strategy with rank weights: every iteration samples `population`
-Gaussian perturbations of the mean, evaluates them in parallel threads (softevo.evaluate_many
-releases the GIL) and moves the mean to the weighted mean of the best half. Genes stay in the
-genome's range (+-5; frequency 1..5 Hz, as the run's). Prints one line per iteration (mean,
-best of the iteration, best so far) and the time taken. Default robot: the body of the
+(1+lambda) evolution strategy with the 1/5 success rule: every iteration samples `population`
+Gaussian perturbations of the parent, evaluates them in parallel threads (softevo.evaluate_many
+releases the GIL), keeps the best if it beats the parent (the evaluation is deterministic, so
+the parent's fitness never falls) and widens or narrows the step size with the share of
+offspring that beat the parent. Genes stay in the genome's range (+-5; frequency 1..5 Hz, as
+the run's). Prints one line per iteration (mean and best of the offspring, the parent's
+fitness, the step size) and the time taken. Default robot: the body of the
 gait-open-01 champion from ../shared/reference (give --robot FILE without it).
 """
 
@@ -41,30 +43,31 @@ def clip(theta: np.ndarray) -> np.ndarray:
 
 def learn(robot: softevo.Robot, iterations: int, population: int, sigma: float, seconds: float,
           seed: int, workers: int | None, log=print) -> list[tuple[int, float, float, float]]:
-    """Runs the strategy; returns one (iteration, mean, best, best so far) row per iteration."""
+    """Runs the strategy; returns one (iteration, mean, best, parent) row per iteration."""
     rng = np.random.default_rng(seed)
     n = robot.controller_parameters.size
-    mean = clip(rng.normal(0.0, 1.0, n))
-    mean[-1] = rng.uniform(*FREQ_RANGE)
-    mu = max(1, population // 2)
-    weights = np.log(mu + 0.5) - np.log(np.arange(1, mu + 1))
-    weights /= weights.sum()
-    scale = np.full(n, sigma)
-    scale[-1] = sigma * 0.25  # the frequency lives on a narrower range
-    best_so_far = -np.inf
+    parent = clip(rng.normal(0.0, 1.0, n))
+    parent[-1] = rng.uniform(*FREQ_RANGE)
+    parent_fitness = softevo.evaluate(robot.with_controller_parameters(parent), seconds=seconds).fitness
+    scale = np.full(n, 1.0)
+    scale[-1] = 0.25  # the frequency lives on a narrower range than the weights
     curve = []
     for it in range(iterations):
         noise = rng.standard_normal((population, n))
-        candidates = np.array([clip(mean + scale * e) for e in noise])
+        candidates = np.array([clip(parent + sigma * scale * e) for e in noise])
         robots = [robot.with_controller_parameters(c) for c in candidates]
         fitness = np.array([r.fitness for r in
                             softevo.evaluate_many(robots, seconds=seconds, workers=workers)])
-        order = np.argsort(-fitness, kind="stable")[:mu]
-        mean = clip(weights @ candidates[order])
-        best_so_far = max(best_so_far, float(fitness[order[0]]))
-        row = (it, float(fitness.mean()), float(fitness[order[0]]), best_so_far)
+        best = int(np.argmax(fitness))
+        # 1/5 success rule: widen the search while offspring beat the parent, narrow it after.
+        success = float(np.mean(fitness > parent_fitness))
+        sigma *= np.exp((success - 0.2) / 0.8)
+        if fitness[best] > parent_fitness:  # elitist: the evaluation is deterministic
+            parent, parent_fitness = candidates[best], float(fitness[best])
+        row = (it, float(fitness.mean()), float(fitness[best]), parent_fitness)
         curve.append(row)
-        log(f"iteration {it:3d}  mean {row[1]:9.4f}  best {row[2]:9.4f}  best so far {row[3]:9.4f}")
+        log(f"iteration {it:3d}  mean {row[1]:9.4f}  best {row[2]:9.4f}  parent {row[3]:9.4f}"
+            f"  sigma {sigma:.3f}")
     return curve
 
 
@@ -73,7 +76,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--robot", type=pathlib.Path, default=None, help="robot file (the body)")
     ap.add_argument("--iterations", type=int, default=30)
     ap.add_argument("--population", type=int, default=16)
-    ap.add_argument("--sigma", type=float, default=0.5)
+    ap.add_argument("--sigma", type=float, default=0.5, help="initial step size")
     ap.add_argument("--seconds", type=float, default=3.0, help="simulated seconds per evaluation")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--workers", type=int, default=None)
@@ -90,7 +93,7 @@ def main(argv: list[str] | None = None) -> int:
                   args.workers)
     wall = time.perf_counter() - start
     print(f"{args.iterations} iterations x {args.population} evaluations of {args.seconds} s in "
-          f"{wall:.1f} s; best {curve[-1][3]:.4f} (first iteration {curve[0][2]:.4f})")
+          f"{wall:.1f} s; fitness {curve[-1][3]:.4f} (first iteration {curve[0][3]:.4f})")
     return 0
 
 

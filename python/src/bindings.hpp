@@ -5,13 +5,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
-#include <optional>
-#include <string>
 #include <vector>
-
-#include "common/config.hpp"
-#include "common/robot.hpp"
-#include "worker/evaluate.hpp"
 
 namespace softevo::python {
 
@@ -23,14 +17,6 @@ void bind_robots(pybind11::module_& m);
 void bind_evaluation(pybind11::module_& m);
 // The run archive reader (io::Archive).
 void bind_archive(pybind11::module_& m);
-
-// What evaluate() and Simulation() share: how a robot is evaluated on its own, exactly as
-// `softevo eval` does it (worker::robot_eval_config). `config` None = the built-in defaults.
-worker::RobotEvalSettings eval_settings(const RobotFile& robot, const std::optional<Config>& config,
-                                        const std::optional<std::string>& task,
-                                        const std::optional<double>& seconds,
-                                        const std::optional<std::string>& integrator,
-                                        const std::optional<double>& direction);
 
 // A 1-D numpy array holding a copy of `values`.
 template <typename T>

@@ -70,12 +70,39 @@ Ablation parse_ablation(const py::object& ablate) {
   return a;
 }
 
+// How evaluate() and Simulation() resolve their config: as `softevo eval` does
+// (worker::robot_eval_config); `config` None = the built-in defaults.
+worker::RobotEvalSettings eval_settings(const std::optional<Config>& config,
+                                        const std::optional<std::string>& task,
+                                        const std::optional<double>& seconds,
+                                        const std::optional<std::string>& integrator,
+                                        const std::optional<double>& direction) {
+  worker::RobotEvalSettings s;
+  if (config) s.config_text = canonical_text(*config);
+  if (task) s.task = *task;
+  if (seconds) {
+    if (!(*seconds > 0.0) || !std::isfinite(*seconds))
+      throw py::value_error("seconds: must be a positive number, got " + std::to_string(*seconds));
+    s.seconds = *seconds;
+  }
+  if (integrator) {
+    if (*integrator != "pneuvox" && *integrator != "symplectic")
+      throw py::value_error("integrator: '" + *integrator + "' is not one of pneuvox, symplectic");
+    s.integrator = *integrator;
+  }
+  if (direction) {
+    if (!std::isfinite(*direction)) throw py::value_error("direction: must be finite");
+    s.direction = *direction;
+  }
+  return s;
+}
+
 Result evaluate_robot(const RobotFile& robot, const std::optional<Config>& config,
                       const std::optional<std::string>& task, const std::optional<double>& seconds,
                       const std::optional<std::string>& integrator, const py::object& ablate,
                       const std::optional<double>& direction) {
   const Config resolved = worker::robot_eval_config(
-      robot.controller, eval_settings(robot, config, task, seconds, integrator, direction));
+      robot.controller, eval_settings(config, task, seconds, integrator, direction));
   const std::unique_ptr<tasks::Task> t = tasks::make_task(resolved);
   worker::EvaluateOptions opts;  // as `softevo eval`: the config's deadline, the best SIMD width
   opts.deadline = worker::deadline_after(resolved.run.eval_timeout_seconds);
@@ -110,7 +137,7 @@ class PySimulation {
                const std::optional<std::string>& integrator, const std::optional<double>& direction,
                int unit, bool observe_voxels)
       : config_(worker::robot_eval_config(
-            robot.controller, eval_settings(robot, config, task, seconds, integrator, direction))),
+            robot.controller, eval_settings(config, task, seconds, integrator, direction))),
         task_(tasks::make_task(config_)),
         body_(robot.body),
         unit_(unit),
@@ -278,32 +305,6 @@ class PyController {
 };
 
 }  // namespace
-
-worker::RobotEvalSettings eval_settings(const RobotFile& robot, const std::optional<Config>& config,
-                                        const std::optional<std::string>& task,
-                                        const std::optional<double>& seconds,
-                                        const std::optional<std::string>& integrator,
-                                        const std::optional<double>& direction) {
-  static_cast<void>(robot);
-  worker::RobotEvalSettings s;
-  if (config) s.config_text = canonical_text(*config);
-  if (task) s.task = *task;
-  if (seconds) {
-    if (!(*seconds > 0.0) || !std::isfinite(*seconds))
-      throw py::value_error("seconds: must be a positive number, got " + std::to_string(*seconds));
-    s.seconds = *seconds;
-  }
-  if (integrator) {
-    if (*integrator != "pneuvox" && *integrator != "symplectic")
-      throw py::value_error("integrator: '" + *integrator + "' is not one of pneuvox, symplectic");
-    s.integrator = *integrator;
-  }
-  if (direction) {
-    if (!std::isfinite(*direction)) throw py::value_error("direction: must be finite");
-    s.direction = *direction;
-  }
-  return s;
-}
 
 void bind_evaluation(py::module_& m) {
   py::class_<Result>(m, "EvalResult", "The result of an evaluation (all work units of the task).")
