@@ -133,6 +133,46 @@ TEST(Config, MissingFileIsAClearError) {
   }
 }
 
+// On Linux a directory opens as a stream that reads as empty: it used to be a config of all
+// defaults, and a full-size run started.
+TEST(Config, DirectoryIsNotAConfigFile) {
+  const fs::path dir = fs::temp_directory_path() / "softevo_test_config_dir";
+  fs::create_directories(dir);
+  try {
+    load_config(dir.string());
+    ADD_FAILURE() << "a directory was read as a config";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), dir.string() + ": is a directory, not a config file");
+  }
+  fs::remove_all(dir);
+}
+
+// TOML refuses a number beyond a double or an int64 as a syntax error; --set used to take the
+// text for a bare string ("got a string"). The error names the key and says out of range.
+TEST(Config, OverrideNumberBeyondRangeNamesTheKey) {
+  auto error_of = [](const std::string& override_text) {
+    try {
+      parse_config("", "c.toml", {override_text});
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error_of("task.eval_seconds=1e999"),
+            "--set task.eval_seconds=1e999: task.eval_seconds = 1e999 is out of range (not "
+            "representable as a 64-bit number); allowed: number in (0.0, 3600.0] s");
+  EXPECT_EQ(error_of("run.seed=99999999999999999999"),
+            "--set run.seed=99999999999999999999: run.seed = 99999999999999999999 is out of "
+            "range (not representable as a 64-bit number); allowed: integer in [0, "
+            "9000000000000000]");
+  EXPECT_NE(error_of("task.eval_seconds=nan").find("task.eval_seconds = nan is out of range"),
+            std::string::npos);
+  // A bare word that starts with a digit is still a string.
+  EXPECT_EQ(parse_config("", "c.toml", {"controller.crossover_method=1pointpl"})
+                .controller.crossover_method,
+            "1pointpl");
+}
+
 TEST(Config, BrokenConfigsGiveTheirExactError) {
   const fs::path dir = source_dir() / "tests/data/bad_configs";
   int checked = 0;
