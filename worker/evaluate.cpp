@@ -13,6 +13,7 @@
 #include "physics/pneumatics.hpp"
 #include "physics/state.hpp"
 #include "physics/step.hpp"
+#include "physics/work_limits.hpp"
 #include "worker/controller.hpp"
 
 namespace softevo::worker {
@@ -48,12 +49,26 @@ EvalResult simulate(const Config& config, const tasks::Task& task, const BodyPla
   physics::BuildOptions build_options;
   build_options.simd = opts.simd;
   const physics::Model model = physics::build_model(plan, config.physics, build_options);
-  const physics::PneumaticsModel pm = physics::build_pneumatics(plan, model, config.pneumatics);
   result.voxels = model.voxel_count;
-  result.chambers = pm.chamber_count;
-  if (model.voxel_count == 0 || pm.chamber_count == 0) {
+  result.chambers = plan.chamber_count();
+  // Before the pneumatics: a model without voxels has no time step, and its error would hide
+  // the real cause.
+  if (model.voxel_count == 0) {
     result.status = EvalStatus::invalid_body;
-    result.message = "body has no voxels or no chamber (not actuatable)";
+    result.message = result.chambers > 0
+                         ? "body has only chamber cells, no structural voxel (material 1..10)"
+                         : "body has no cells (every cell is empty)";
+    return result;
+  }
+  // §5 step 8, within the limits of physics/work_limits.hpp (else status failed, before any
+  // step).
+  const physics::EvaluationWork work =
+      physics::evaluation_work(model.dt_f, tc.control_rate, tc.eval_seconds);
+  const physics::PneumaticsModel pm = physics::build_pneumatics(plan, model, config.pneumatics);
+  result.chambers = pm.chamber_count;
+  if (pm.chamber_count == 0) {
+    result.status = EvalStatus::invalid_body;
+    result.message = "body has no chamber (not actuatable)";
     return result;
   }
   physics::State state = physics::initial_state(model);
@@ -79,10 +94,8 @@ EvalResult simulate(const Config& config, const tasks::Task& task, const BodyPla
   const auto fed_task_inputs =
       static_cast<std::size_t>(std::min(task.controller_inputs(), controller.task_inputs()));
 
-  // §5 step 8: stepsPerFrame = (int)(1.0f / 60.0f / dt) in float arithmetic.
-  const float frame_seconds_f = 1.0f / static_cast<float>(tc.control_rate);
-  const int steps_per_frame = static_cast<int>(frame_seconds_f / model.dt_f);
-  const int frames = static_cast<int>(std::lround(tc.control_rate * tc.eval_seconds));
+  const int steps_per_frame = work.steps_per_frame;
+  const int frames = work.frames;
   // First sensor reading (§3.7): config value for every chamber, in bar.
   const float initial_sensor_bar =
       static_cast<float>(config.pneumatics.initial_sensor_pressure / physics::kPascalPerBar);
