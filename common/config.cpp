@@ -672,6 +672,15 @@ Config load_config(const std::string& path, const std::vector<std::string>& over
   return parse_config(text.str(), path, overrides);
 }
 
+Config apply_overrides(const Config& base, const std::vector<std::string>& overrides) {
+  // The canonical text parses back to an identical Config, so only the overrides change.
+  return parse_config(canonical_text(base), "<resolved config>", overrides);
+}
+
+std::string toml_number(double v) {
+  return format_double(v);
+}
+
 std::string canonical_text(const Config& config) {
   Config copy = config;  // schema() binds to a mutable Config; printing never changes it
   const auto defs = schema(copy);

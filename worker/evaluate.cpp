@@ -176,7 +176,9 @@ EvalResult simulate(const Config& config, const tasks::Task& task, const BodyPla
     // 6. Deadline and abandon request.
     if (opts.deadline && Clock::now() > *opts.deadline) {
       result.status = EvalStatus::timeout;
-      result.message = "evaluation exceeded its wall-clock deadline (run.eval_timeout_seconds)";
+      result.message =
+          "evaluation exceeded its wall-clock deadline (run.eval_timeout_seconds, softevo eval "
+          "--timeout)";
       break;
     }
     if (opts.abandon && opts.abandon()) {

@@ -3,6 +3,8 @@
 // on its first line ("# expect: ...").
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -122,6 +124,22 @@ TEST(Config, EveryShippedConfigParses) {
     ++count;
   }
   EXPECT_GT(count, 0);
+}
+
+// Command options applied to a resolved config (render --seconds) change only their keys: every
+// other value keeps its bits, the pressures converted from bar included.
+TEST(Config, ApplyOverridesChangesOnlyTheOverriddenKeys) {
+  for (const auto& entry : fs::directory_iterator(source_dir() / "configs")) {
+    if (entry.path().extension() != ".toml") continue;
+    const Config c = load_config(entry.path().string());
+    Config expected = c;
+    expected.task.eval_seconds = 2.5;
+    const Config o = apply_overrides(c, {"task.eval_seconds=" + toml_number(2.5)});
+    EXPECT_EQ(canonical_text(o), canonical_text(expected)) << entry.path();
+    EXPECT_EQ(std::memcmp(&o.pneumatics, &c.pneumatics, sizeof c.pneumatics), 0) << entry.path();
+  }
+  EXPECT_THROW(apply_overrides(Config{}, {"task.eval_seconds=" + toml_number(std::nan(""))}),
+               ConfigError);
 }
 
 TEST(Config, MissingFileIsAClearError) {
