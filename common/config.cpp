@@ -4,12 +4,16 @@
 #include "common/config.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
+#include <regex>
 #include <sstream>
 #include <variant>
 
@@ -373,6 +377,31 @@ std::string string_of(const toml::node& node, const KeyDef& def, const Location&
   return v;
 }
 
+// True for text that is a number too large (or too small) for a double or an int64, such as
+// 1e999 or 99999999999999999999: TOML refuses it as a syntax error, which hides the real cause.
+bool is_unrepresentable_number(const std::string& text) {
+  if (text.empty()) return false;
+  std::string digits;
+  for (std::size_t i = text[0] == '+' || text[0] == '-' ? 1 : 0; i < text.size(); ++i)
+    if (text[i] != '_') digits += text[i];
+  if (!digits.empty() && digits.find_first_not_of("0123456789") == std::string::npos) {
+    std::int64_t v = 0;
+    return std::from_chars(digits.data(), digits.data() + digits.size(), v).ec ==
+           std::errc::result_out_of_range;
+  }
+  errno = 0;
+  char* end = nullptr;
+  std::strtod(text.c_str(), &end);
+  return errno == ERANGE && end == text.c_str() + text.size();
+}
+
+[[noreturn]] void fail_unrepresentable(const KeyDef& def, const Location& at,
+                                       const std::string& text) {
+  fail(at, std::string(def.section) + "." + def.key + " = " + text +
+               " is out of range (not representable as a 64-bit number); allowed: " +
+               allowed_text(def));
+}
+
 void assign(const KeyDef& def, const toml::node& node, const Location& at) {
   const std::string name = std::string(def.section) + "." + def.key;
   std::visit(
@@ -475,6 +504,11 @@ void check_consistency(const Config& c, const std::string& source) {
   if (c.neat.response_min_value > c.neat.response_max_value) {
     fail(at, "neat.response_min_value must be <= neat.response_max_value");
   }
+  if (c.neat.elitism > c.neat.pop_size) {
+    fail(at, "neat.elitism = " + std::to_string(c.neat.elitism) +
+                 " must be <= neat.pop_size = " + std::to_string(c.neat.pop_size) +
+                 " (the elites of a single species would outnumber the population)");
+  }
   if (c.neat.activation_default != "random" &&
       std::find(c.neat.activation_options.begin(), c.neat.activation_options.end(),
                 c.neat.activation_default) == c.neat.activation_options.end()) {
@@ -534,6 +568,7 @@ void apply_override(Config& config, const std::string& text, SetKeys& set_keys) 
   try {
     parsed = toml::parse("v = " + value);
   } catch (const toml::parse_error&) {
+    if (is_unrepresentable_number(value)) fail_unrepresentable(def, at, value);
     parsed = toml::table{};
     parsed.insert("v", value);
   }
@@ -551,6 +586,24 @@ void check_task_keys(Config& config, const SetKeys& set_keys) {
       fail(it->second, full_name(def) +
                            " applies to task.kind = " + quote(to_string(*def.only_for_task)) +
                            " only (task.kind is " + quote(to_string(config.task.kind)) + ")");
+  }
+}
+
+// A TOML syntax error on `at.line` that is a number out of range ("eval_seconds = 1e999" under
+// [task]) is reported as such, naming the key; any other syntax error is left to the caller.
+void fail_if_unrepresentable_on_line(Config& config, const std::string& toml_text,
+                                     const Location& at) {
+  static const std::regex header(R"(^\s*\[\s*([A-Za-z0-9_-]+)\s*\]\s*(#.*)?$)");
+  static const std::regex assignment(R"(^\s*([A-Za-z0-9_-]+)\s*=\s*([^\s#,\]]+))");
+  std::istringstream lines(toml_text);
+  std::string text, section;
+  for (std::int64_t number = 1; std::getline(lines, text) && number <= at.line; ++number) {
+    std::smatch m;
+    if (std::regex_search(text, m, header)) section = m[1].str();
+    if (number < at.line || !std::regex_search(text, m, assignment)) continue;
+    const auto defs = schema(config);
+    const KeyDef* def = find_def(defs, section, m[1].str());
+    if (def && is_unrepresentable_number(m[2].str())) fail_unrepresentable(*def, at, m[2].str());
   }
 }
 
@@ -592,7 +645,9 @@ Config parse_config(const std::string& toml_text, const std::string& source_name
   try {
     root = toml::parse(toml_text, source_name);
   } catch (const toml::parse_error& e) {
-    throw ConfigError(source_name + ":" + std::to_string(e.source().begin.line) +
+    const auto line = static_cast<std::int64_t>(e.source().begin.line);
+    fail_if_unrepresentable_on_line(config, toml_text, {source_name, line});
+    throw ConfigError(source_name + ":" + std::to_string(line) +
                       ": TOML syntax error: " + std::string(e.description()));
   }
   SetKeys set_keys;
@@ -604,12 +659,26 @@ Config parse_config(const std::string& toml_text, const std::string& source_name
 }
 
 Config load_config(const std::string& path, const std::vector<std::string>& overrides) {
+  // A directory opens as a stream that reads as empty on Linux: it would silently be a config
+  // of all defaults, that is a full-size run.
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw ConfigError(path + ": is a directory, not a config file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError(path + ": cannot open config file");
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw ConfigError(path + ": read error");
   return parse_config(text.str(), path, overrides);
+}
+
+Config apply_overrides(const Config& base, const std::vector<std::string>& overrides) {
+  // The canonical text parses back to an identical Config, so only the overrides change.
+  return parse_config(canonical_text(base), "<resolved config>", overrides);
+}
+
+std::string toml_number(double v) {
+  return format_double(v);
 }
 
 std::string canonical_text(const Config& config) {

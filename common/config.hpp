@@ -21,7 +21,8 @@ namespace softevo {
 struct RunConfig {
   std::int64_t seed = 1;           // run seed; every evaluation seed derives from it
   std::int64_t generations = 500;  // generations to evaluate
-  // Wall-clock limit of one evaluation [s]; 0 = no limit. A timeout is a status, not a crash.
+  // Wall-clock limit of one evaluation [s]; 0 = no wall-clock limit (the step limits of
+  // physics/work_limits.hpp still bound every evaluation). A timeout is a status, not a crash.
   double eval_timeout_seconds = 600.0;
   // What a worker-side failure (exception, non-finite state, timeout) scores: "killed" scores it
   // like a killed robot (fitness 0) and the run goes on; "abort" ends the run with an error.
@@ -167,6 +168,12 @@ Config load_config(const std::string& path, const std::vector<std::string>& over
 // Same from TOML text; `source_name` is used in error messages.
 Config parse_config(const std::string& toml_text, const std::string& source_name,
                     const std::vector<std::string>& overrides = {});
+
+// `base` with overrides applied and checked like those of parse_config (a value set by a command
+// option, e.g. `render --seconds`, gets the config's range check). Throws ConfigError.
+Config apply_overrides(const Config& base, const std::vector<std::string>& overrides);
+// `v` as a TOML value for an override: shortest round trip; nan and inf as TOML spells them.
+std::string toml_number(double v);
 
 // Every key in schema order, one per line, shortest round-trip numbers, pressures in bar.
 // Parsing this text gives back an identical Config.

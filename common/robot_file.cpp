@@ -14,6 +14,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -134,6 +135,55 @@ class Reader {
 
  private:
   std::string source_;
+};
+
+// The dotted key path ("controller.weights_in[3]") of the value the parser reads next, followed
+// through its callback events, so that an error the parser raises mid-value can name the key.
+class KeyPath {
+ public:
+  void follow(Json::parse_event_t event, const Json& parsed) {
+    switch (event) {
+      case Json::parse_event_t::object_start:
+      case Json::parse_event_t::array_start:
+        begin_value();
+        parts_.push_back({event == Json::parse_event_t::array_start, -1, ""});
+        break;
+      case Json::parse_event_t::object_end:
+      case Json::parse_event_t::array_end:
+        if (!parts_.empty()) parts_.pop_back();
+        break;
+      case Json::parse_event_t::key:
+        if (!parts_.empty()) parts_.back().key = parsed.get<std::string>();
+        break;
+      case Json::parse_event_t::value:
+        begin_value();
+        break;
+    }
+  }
+  // The key of the value being read (an array element: its index; the next one, mid-value).
+  std::string text() const {
+    std::string out;
+    for (std::size_t i = 0; i < parts_.size(); ++i) {
+      const Part& p = parts_[i];
+      if (p.array) {
+        out += "[" + std::to_string(p.index + (i + 1 == parts_.size() ? 1 : 0)) + "]";
+      } else if (!p.key.empty()) {
+        out += (out.empty() ? "" : ".") + p.key;
+      }
+    }
+    return out;
+  }
+
+ private:
+  struct Part {
+    bool array = false;
+    long long index = -1;  // array: index of the last element begun
+    std::string key;       // object: the last key read
+  };
+  void begin_value() {
+    if (!parts_.empty() && parts_.back().array) ++parts_.back().index;
+  }
+  std::vector<Part> parts_;
 };
 
 // The 8 weight vectors of §4.4 with their lengths for (n_in, hidden, outputs). `freq` is
@@ -360,16 +410,24 @@ RobotFile parse_robot_json(const std::string& json_text, const std::string& sour
   const Reader r(source_name);
   Json root;
   bool too_deep = false;
-  const Json::parser_callback_t refuse_deep_nesting = [&too_deep](int depth, Json::parse_event_t,
-                                                                  Json&) {
-    // Returning false discards the value, so the parser neither recurses nor allocates further.
-    if (depth > kMaxJsonDepth) too_deep = true;
-    return !too_deep;
-  };
+  KeyPath path;
+  const Json::parser_callback_t refuse_deep_nesting =
+      [&too_deep, &path](int depth, Json::parse_event_t event, Json& parsed) {
+        path.follow(event, parsed);
+        // Returning false discards the value, so the parser neither recurses nor allocates further.
+        if (depth > kMaxJsonDepth) too_deep = true;
+        return !too_deep;
+      };
   try {
     root = Json::parse(json_text, refuse_deep_nesting);
   } catch (const Json::parse_error& e) {
     r.fail_top(std::string("not valid JSON: ") + e.what());
+  } catch (const Json::out_of_range& e) {
+    // A number beyond the range of a double (1e999): the parser's message names neither the
+    // file nor the key.
+    const std::string problem = std::string("number out of range (beyond a double): ") + e.what();
+    if (path.text().empty()) r.fail_top(problem);
+    r.fail(path.text(), problem);
   }
   if (too_deep)
     r.fail_top("JSON nested deeper than " + std::to_string(kMaxJsonDepth) +

@@ -48,14 +48,13 @@ void Trace::check(const std::string& where) const {
   expect_size(voxel_material.size(), voxels, "voxel_material", where);
 }
 
-void write_trace(const std::string& path, const Trace& t) {
+void write_trace(const std::string& path, const Trace& t, Overwrite overwrite) {
   t.check(path);
   const auto frames = static_cast<hsize_t>(t.frames);
   const auto voxels = static_cast<hsize_t>(t.voxels);
   const auto chambers = static_cast<hsize_t>(t.chambers);
-  // Like every output file of a command (docs/output-files.md); a trace replaces an earlier
-  // one of the same name, as `eval --trace` always did.
-  AtomicOutput out(path, Overwrite::replace);
+  // Like every output file of a command (docs/output-files.md).
+  AtomicOutput out(path, overwrite);
   h5::File file = h5::File::create(out.temp_path(), nullptr, path);
   file.write_dataset<double>("positions", {frames, voxels, 3}, t.positions);
   file.write_dataset<double>("orientations", {frames, voxels, 4}, t.orientations);

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "common/safe_write.hpp"
+
 namespace softevo::io {
 
 inline constexpr const char* kTraceFormat = "softevo.trace/1";
@@ -49,10 +51,11 @@ struct Trace {
 };
 
 // Writes `trace` to `path` atomically (common/safe_write.hpp: temporary file, fsync, rename;
-// an existing regular file is replaced, a symlink or special file refused); every dataset and
-// attribute of docs/trace.md. Throws std::runtime_error naming the file, the object and the
-// reason.
-void write_trace(const std::string& path, const Trace& trace);
+// a symlink or special file is refused, an existing regular file replaced only with
+// Overwrite::replace); every dataset and attribute of docs/trace.md. Throws std::runtime_error
+// naming the file, the object and the reason.
+void write_trace(const std::string& path, const Trace& trace,
+                 Overwrite overwrite = Overwrite::refuse);
 
 // Reads a trace. Only /positions, /orientations, /voxel_cells and /voxel_material are required,
 // so that traces written by other tools can be drawn: a missing /time is f / frame_rate, a

@@ -15,6 +15,7 @@
 #include "master/run_state.hpp"
 #include "master/signals.hpp"
 #include "physics/revision.hpp"
+#include "physics/work_limits.hpp"
 #include "tasks/task.hpp"
 
 namespace softevo::master {
@@ -125,6 +126,17 @@ bool LocalExecutor::evaluate(GenerationScheduler& scheduler,
 }
 
 PreparedRun prepare_run(const Config& config, const RunOptions& options, int ranks) {
+  if (options.resume && options.overwrite)
+    throw StartupError(options.out_path +
+                       ": --resume (continue this archive) and --overwrite (replace it) "
+                       "contradict each other; give one of them");
+  // Every evaluation of the run stays within the work limits: refused here, not as a run of
+  // failed evaluations (or, before the limits, of days per evaluation).
+  try {
+    physics::check_run_work(config);
+  } catch (const physics::WorkLimitError& e) {
+    throw ConfigError(e.what());
+  }
   PreparedRun run;
   run.config = config;
   run.config_text = canonical_text(config);

@@ -31,18 +31,19 @@ Motion simulate_motion(Config config, const BodyPlan& plan, const ControllerSpec
   Motion motion;
   motion.body = render::body_from_plan(plan, static_cast<int>(config.physics.material_count));
   motion.name = name;
-  if (request.seconds) {
-    if (!(*request.seconds > 0.0)) throw std::invalid_argument("--seconds must be positive");
-    config.task.eval_seconds = *request.seconds;
-  }
+  // Values of command options go through the config's range checks (--seconds nan or 1e10
+  // would otherwise run 10 s or fail deep inside the simulation).
+  std::vector<std::string> overrides;
+  if (request.seconds) overrides.push_back("task.eval_seconds=" + toml_number(*request.seconds));
   if (controller.directed) {
     // One direction only (any direction can be shown; the fitness then belongs to it alone).
     const double deg = request.direction_deg
                            ? *request.direction_deg
                            : (config.task.directions.empty() ? 0.0 : config.task.directions[0]);
-    config.task.directions = {deg};
+    overrides.push_back("task.directions=[" + toml_number(deg) + "]");
     motion.direction_deg = deg;
   }
+  if (!overrides.empty()) config = apply_overrides(config, overrides);
   const std::unique_ptr<tasks::Task> task = tasks::make_task(config);
   worker::EvaluateOptions options;
   options.on_frame = [&motion](const worker::TraceFrame& frame) {

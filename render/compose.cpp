@@ -3,9 +3,11 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <stdexcept>
 
 namespace softevo::render {
@@ -19,6 +21,17 @@ std::string time_label(double t) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "t=%.2fs", t);
   return buffer;
+}
+
+// ffmpeg's container name of a video file name: .mp4, .mkv, .webm, .avi.
+std::string video_muxer(const std::string& output) {
+  std::string ext = std::filesystem::path(output).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".mkv") return "matroska";
+  if (ext == ".webm") return "webm";
+  if (ext == ".avi") return "avi";
+  if (ext == ".mp4") return "mp4";
+  throw std::runtime_error("render " + output + ": a video must end in .mp4, .mkv, .webm or .avi");
 }
 
 std::string shell_quote(const std::string& s) {
@@ -150,11 +163,15 @@ std::optional<std::string> find_on_path(const std::string& program) {
 
 VideoWritten write_video(const Clip& clip, View view, const VideoOptions& options,
                          const SceneOptions& scene, const std::string& ffmpeg,
-                         const std::string& output) {
+                         const std::string& output, Overwrite overwrite) {
   if (clip.poses.size() < 2) {
     throw std::runtime_error("render " + output + ": a video needs motion (" +
                              "the input has a single pose)");
   }
+  if (!(options.fps > 0.0) || !std::isfinite(options.fps))
+    throw std::runtime_error("render " + output + ": the frame rate must be a finite number > 0");
+  // The temporary's name has no extension, so the container is named explicitly.
+  const std::string muxer = video_muxer(output);
   VideoWritten written;
   written.width = (options.width > 0 ? options.width : 960) & ~1;  // yuv420p needs even sizes
   written.height = (options.height > 0 ? options.height : 540) & ~1;
@@ -167,10 +184,12 @@ VideoWritten write_video(const Clip& clip, View view, const VideoOptions& option
   const Eigen::Vector3d start_centre = cam.center;
   const Eigen::Vector3d start_centroid = centroid(first);
 
-  const std::string command =
-      shell_quote(ffmpeg) + " -y -loglevel error -f rawvideo -pix_fmt rgb24 -s " +
-      std::to_string(written.width) + "x" + std::to_string(written.height) + " -r " +
-      std::to_string(options.fps) + " -i - -pix_fmt yuv420p " + shell_quote(output);
+  AtomicOutput file(output, overwrite);  // ffmpeg writes the temporary; -y: it exists, empty
+  const std::string command = shell_quote(ffmpeg) +
+                              " -y -loglevel error -f rawvideo -pix_fmt rgb24 -s " +
+                              std::to_string(written.width) + "x" + std::to_string(written.height) +
+                              " -r " + std::to_string(options.fps) + " -i - -pix_fmt yuv420p -f " +
+                              muxer + " " + shell_quote(file.temp_path());
   FILE* pipe = ::popen(command.c_str(), "w");
   if (pipe == nullptr) throw std::runtime_error("render: cannot start ffmpeg: " + command);
   const double end = clip.poses.back().time;
@@ -192,6 +211,7 @@ VideoWritten write_video(const Clip& clip, View view, const VideoOptions& option
     throw std::runtime_error("render " + output + ": ffmpeg failed (exit status " +
                              std::to_string(status) + ")");
   }
+  file.commit();
   return written;
 }
 

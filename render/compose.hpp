@@ -61,10 +61,12 @@ struct VideoWritten {
   int height = 0;
 };
 // Encodes the clip at `fps` through `ffmpeg` (a path) into `output`: the camera keeps its scale
-// and follows the centroid over the floor. Throws std::runtime_error when the clip has a single
-// pose or ffmpeg fails.
+// and follows the centroid over the floor. ffmpeg writes a temporary file beside `output` that
+// replaces it at the end (common/safe_write.hpp: an existing regular file only with
+// Overwrite::replace). Throws std::runtime_error when the clip has a single pose, the frame
+// rate is not a finite number > 0 or ffmpeg fails.
 VideoWritten write_video(const Clip& clip, View view, const VideoOptions& options,
                          const SceneOptions& scene, const std::string& ffmpeg,
-                         const std::string& output);
+                         const std::string& output, Overwrite overwrite = Overwrite::refuse);
 
 }  // namespace softevo::render

@@ -325,7 +325,7 @@ void require_png_support([[maybe_unused]] const std::string& path) {
 }
 
 #ifdef SOFTEVO_HAVE_PNG
-void write_png(const Image& image, const std::string& path) {
+void write_png(const Image& image, const std::string& path, Overwrite overwrite) {
   if (image.width <= 0 || image.height <= 0 ||
       image.rgb.size() != static_cast<std::size_t>(image.width) * image.height * 3) {
     throw std::invalid_argument("write_png " + path + ": image has no pixels");
@@ -337,7 +337,7 @@ void write_png(const Image& image, const std::string& path) {
   out.height = static_cast<png_uint_32>(image.height);
   out.format = PNG_FORMAT_RGB;
   // Atomic, and never through a symlink or over a special file (docs/output-files.md).
-  AtomicOutput file(path, Overwrite::replace);
+  AtomicOutput file(path, overwrite);
   if (png_image_write_to_file(&out, file.temp_path().c_str(), 0, image.rgb.data(), 0, nullptr) ==
       0) {
     const std::string reason = out.message;
@@ -364,7 +364,7 @@ Image read_png(const std::string& path) {
   return image;
 }
 #else
-void write_png(const Image&, const std::string& path) {
+void write_png(const Image&, const std::string& path, Overwrite) {
   require_png_support(path);
 }
 

@@ -20,6 +20,7 @@
 #include <Eigen/Geometry>
 
 #include "common/body_plan.hpp"
+#include "common/safe_write.hpp"
 
 namespace softevo::render {
 
@@ -35,8 +36,10 @@ struct Image {
   void set(int x, int y, std::array<std::uint8_t, 3> c);
 };
 
-// libpng; throws std::runtime_error naming the path and the reason.
-void write_png(const Image& image, const std::string& path);
+// libpng, atomically (common/safe_write.hpp: an existing regular file is replaced only with
+// Overwrite::replace); throws std::runtime_error naming the path and the reason.
+void write_png(const Image& image, const std::string& path,
+               Overwrite overwrite = Overwrite::refuse);
 Image read_png(const std::string& path);
 // libpng is optional (SOFTEVO_ENABLE_PNG): throws std::runtime_error naming `path` when this
 // build has no PNG support, so a render fails before it simulates.

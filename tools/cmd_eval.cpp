@@ -1,6 +1,6 @@
 // `softevo eval ROBOT.json [--task gait|directed|rotate] [--integrator pneuvox|symplectic]
 //  [--seconds S] [--ablate oscillator|sensors] [--json] [--trace FILE.h5] [--config FILE]
-//  [--set section.key=value ...]`
+//  [--set section.key=value ...] [--timeout S] [--force]`
 //
 // Evaluates one robot file (docs/model.md §10) and prints fitness, the task's named components
 // per work unit, status, simulated time, steps, voxel and chamber counts and wall/CPU time.
@@ -11,9 +11,17 @@
 // with full double precision (%.17g). --direction D evaluates the target direction D alone
 // (task.directions = [D]).
 //
+// --seconds, --direction and --timeout set task.eval_seconds, task.directions and
+// run.eval_timeout_seconds and get their range checks (a bad value is a config error naming the
+// key). The work is bounded twice: by the step limits of physics/work_limits.hpp (status failed)
+// and by the wall-clock deadline --timeout (default run.eval_timeout_seconds, 600 s; 0 = none;
+// status timeout), which covers every unit of the command.
+//
 // --trace FILE.h5 records one frame per control frame (60 Hz) plus the state after the last
 // frame: format softevo.trace/1, docs/trace.md (io/trace.hpp). The trace records the first work
-// unit of the task (directed: the first direction, or the one of --direction).
+// unit of the task (directed: the first direction, or the one of --direction). It is held in
+// memory until the end, so a trace beyond kMaxTraceBytes is refused up front; an existing FILE
+// is replaced only with --force (docs/output-files.md).
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -28,6 +36,7 @@
 #include "common/eval_types.hpp"
 #include "common/printable.hpp"
 #include "common/robot.hpp"
+#include "common/safe_write.hpp"
 #include "io/trace.hpp"
 #include "physics/model.hpp"
 #include "tasks/task.hpp"
@@ -41,16 +50,33 @@ struct EvalArgs {
   std::string robot;
   std::string task;
   std::string integrator;
-  double seconds = 0.0;
+  std::string seconds;  // TOML value text of task.eval_seconds ("" = the config's)
   std::vector<std::string> ablate;
   bool json = false;
   std::string trace;
   std::string config_file;
   std::vector<std::string> overrides;
-  double direction = 0.0;
-  bool direction_set = false;
+  std::string direction;  // TOML value text of the one target direction ("" = the config's)
+  std::string timeout;    // TOML value text of run.eval_timeout_seconds ("" = the config's)
+  bool force = false;     // replace an existing --trace file
   std::string simd = "best";
 };
+
+// Frames are held in memory until the end: a trace of 3600 s of a 1000-voxel robot would need
+// about 12 GB. Beyond this it is refused before the evaluation starts.
+constexpr double kMaxTraceBytes = 4.0 * 1024 * 1024 * 1024;
+
+// Bytes of the recorded frames (positions, orientations, pressures, valves, time) of `frames`
+// frames of a body.
+double trace_bytes(std::int64_t frames, const BodyPlan& body) {
+  std::int64_t voxels = 0;
+  for (int cell : body.cells) voxels += BodyPlan::is_structural(cell) ? 1 : 0;
+  const std::int64_t chambers = body.chamber_count();
+  const double per_frame = static_cast<double>(voxels) * (3 + 4) * sizeof(double) +
+                           static_cast<double>(chambers) * (sizeof(double) + 2 * sizeof(float)) +
+                           sizeof(double);
+  return static_cast<double>(frames + 1) * per_frame;
+}
 
 // Frames buffered in memory, written once at the end (a 10 s trace of an 800-voxel robot is
 // about 35 MB of doubles).
@@ -66,7 +92,8 @@ struct TraceBuffer {
 };
 
 void write_trace(const std::string& path, const TraceBuffer& t, const RobotFile& robot,
-                 const EvalResult& result, double control_rate, const double* direction_deg) {
+                 const EvalResult& result, double control_rate, const double* direction_deg,
+                 Overwrite overwrite) {
   io::Trace trace;
   trace.frames = t.frames;
   trace.voxels = static_cast<std::int64_t>(t.voxel_material.size());
@@ -86,7 +113,7 @@ void write_trace(const std::string& path, const TraceBuffer& t, const RobotFile&
   if (direction_deg) trace.direction_deg = *direction_deg;
   trace.fitness = result.fitness;
   trace.status = to_string(result.status);
-  io::write_trace(path, trace);
+  io::write_trace(path, trace, overwrite);
 }
 
 // JSON has no NaN or infinity: null.
@@ -104,14 +131,28 @@ double component(const std::vector<tasks::ComponentName>& names, const UnitFitne
 
 int run_eval(const EvalArgs& a) {
   const RobotFile robot = read_robot_file(a.robot);
+  // --seconds, --direction and --timeout go in as text, so that the config's range checks see
+  // what was typed (nan, 1e999); the task stays the last override (robot_eval_config).
   worker::RobotEvalSettings settings;
   settings.config_path = a.config_file;
   settings.overrides = a.overrides;
+  if (!a.seconds.empty()) settings.overrides.push_back("task.eval_seconds=" + a.seconds);
+  if (!a.direction.empty()) settings.overrides.push_back("task.directions=[" + a.direction + "]");
+  if (!a.timeout.empty()) settings.overrides.push_back("run.eval_timeout_seconds=" + a.timeout);
   settings.task = a.task;
   settings.integrator = a.integrator;
-  settings.seconds = a.seconds;
-  if (a.direction_set) settings.direction = a.direction;
   const Config config = worker::robot_eval_config(robot.controller, settings);
+  const Overwrite overwrite = a.force ? Overwrite::replace : Overwrite::refuse;
+  if (!a.trace.empty()) {
+    check_output_target(a.trace, overwrite);  // before minutes of simulation, not after
+    const auto frames = std::llround(config.task.control_rate * config.task.eval_seconds);
+    const double bytes = trace_bytes(frames, robot.body);
+    if (bytes > kMaxTraceBytes)
+      throw std::invalid_argument(
+          "--trace " + a.trace + ": " + std::to_string(frames) + " frames of this robot need " +
+          std::to_string(bytes / (1024.0 * 1024 * 1024)) + " GiB in memory, more than the " +
+          "limit of 4 GiB; shorten task.eval_seconds (--seconds)");
+  }
   const std::unique_ptr<tasks::Task> task = tasks::make_task(config);
   const std::vector<tasks::ComponentName> names = task->component_names();
 
@@ -178,7 +219,7 @@ int run_eval(const EvalArgs& a) {
   const double trace_direction = has_direction ? config.task.directions.front() : 0.0;
   if (!a.trace.empty() && trace.model != nullptr)
     write_trace(a.trace, trace, robot, result, config.task.control_rate,
-                has_direction ? &trace_direction : nullptr);
+                has_direction ? &trace_direction : nullptr, overwrite);
 
   const std::string ablation = opts.ablate_oscillator && opts.ablate_sensors ? "oscillator+sensors"
                                : opts.ablate_oscillator                      ? "oscillator"
@@ -266,12 +307,16 @@ void register_eval(CLI::App& app, int& exit_code) {
       ->check(CLI::IsMember(task_names));
   cmd->add_option("--integrator", a->integrator, "physics integrator")
       ->check(CLI::IsMember({"pneuvox", "symplectic"}));
-  cmd->add_option("--seconds", a->seconds, "simulated seconds (default task.eval_seconds = 10)")
-      ->check(CLI::PositiveNumber);
+  cmd->add_option("--seconds", a->seconds,
+                  "simulated seconds: sets task.eval_seconds (default 10, at most 3600)");
   cmd->add_option("--ablate", a->ablate, "feed zeros to the oscillator or the pressure sensors")
       ->check(CLI::IsMember({"oscillator", "sensors"}));
-  auto* dir = cmd->add_option("--direction", a->direction,
-                              "directed task: evaluate only this target direction [deg]");
+  cmd->add_option("--direction", a->direction,
+                  "directed task: evaluate only this target direction [deg] (task.directions)");
+  cmd->add_option("--timeout", a->timeout,
+                  "wall-clock limit of the evaluation [s], status timeout beyond it: sets "
+                  "run.eval_timeout_seconds (default 600; 0 = no limit)");
+  cmd->add_flag("--force", a->force, "replace an existing --trace file");
   cmd->add_flag("--json", a->json, "print one JSON object");
   cmd->add_option("--trace", a->trace, "record voxel poses, pressures and valves (HDF5)");
   cmd->add_option("--config", a->config_file, "TOML config (default: built-in thesis values)");
@@ -280,11 +325,7 @@ void register_eval(CLI::App& app, int& exit_code) {
                   "SIMD width of the physics: best (default), sse2, avx2 or avx512 (the fitness "
                   "is bit-identical at every width; only the speed differs)")
       ->check(CLI::IsMember(physics::simd_names()));
-  cmd->callback([&exit_code, a, dir] {
-    EvalArgs args = *a;
-    args.direction_set = dir->count() > 0;
-    exit_code = run_eval(args);
-  });
+  cmd->callback([&exit_code, a] { exit_code = run_eval(*a); });
 }
 
 }  // namespace softevo::cli

@@ -3,7 +3,9 @@
 // Inputs: a robot file (rest pose, or re-simulated when motion is asked for), a trace written by
 // `softevo eval --trace`, or a run archive (genome developed and re-simulated exactly as the
 // run evaluated it). Outputs: PNG (single frame, time-lapse strip or overlay) or MP4 through
-// ffmpeg.
+// ffmpeg, both written atomically; an existing output is replaced only with --force
+// (docs/output-files.md). Every number option is checked for range (NaN included) before
+// anything is simulated; --seconds and --direction go through the config's checks.
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -14,6 +16,7 @@
 
 #include "common/config.hpp"
 #include "common/robot.hpp"
+#include "common/safe_write.hpp"
 #include "motion/robot_source.hpp"
 #include "render/compose.hpp"
 #include "render/render.hpp"
@@ -56,6 +59,7 @@ struct RenderArgs {
   std::vector<std::string> overrides;
   std::string robot_file;    // traces: body for the chamber cells
   bool static_pose = false;  // robot/archive: draw the rest pose, never simulate
+  bool force = false;        // replace an existing output file
 };
 
 std::string lower(std::string s) {
@@ -72,6 +76,8 @@ int run_render(const RenderArgs& args) {
                                 " must end in .png (image) or .mp4 (video)");
   }
   if (!video) render::require_png_support(args.output);
+  const Overwrite overwrite = args.force ? Overwrite::replace : Overwrite::refuse;
+  check_output_target(args.output, overwrite);  // before the simulation, not after
   if (args.timelapse < 0 || args.timelapse > 64) {
     throw std::invalid_argument("render: --timelapse must be between 0 and 64");
   }
@@ -126,7 +132,7 @@ int run_render(const RenderArgs& args) {
       return kExitNoEncoder;
     }
     const render::VideoWritten v = render::write_video(
-        clip, view, {args.fps, args.width, args.height}, scene, *ffmpeg, args.output);
+        clip, view, {args.fps, args.width, args.height}, scene, *ffmpeg, args.output, overwrite);
     std::printf("wrote %s (%d frames at %.0f fps, %dx%d)\n", args.output.c_str(), v.frames,
                 args.fps, v.width, v.height);
     return kExitOk;
@@ -135,7 +141,7 @@ int run_render(const RenderArgs& args) {
       args.timelapse == 0
           ? render::render_still(clip, view, args.at, args.width, args.height, scene)
           : render::render_timelapse(clip, view, timelapse, args.width, args.height, scene);
-  render::write_png(image, args.output);
+  render::write_png(image, args.output, overwrite);
   std::printf("wrote %s (%dx%d)%s\n", args.output.c_str(), image.width, image.height,
               motion.summary.empty() ? "" : ("; " + motion.summary).c_str());
   return kExitOk;
@@ -155,22 +161,31 @@ void register_render(CLI::App& app, int& exit_code) {
   cmd->add_option("--timelapse", args->timelapse,
                   "N snapshots over --span seconds from --start (thesis figures 4.3 and 4.4)");
   cmd->add_option("--span", args->span,
-                  "seconds covered by the time-lapse (default 0.5 s side/iso, whole run top)");
+                  "seconds covered by the time-lapse (default 0.5 s side/iso, whole run top)")
+      ->check(finite_in(0.0, 3600.0));
   cmd->add_option("--start", args->start,
-                  "time of the first snapshot [s] (default 5 s side/iso, 0 top)");
+                  "time of the first snapshot [s] (default 5 s side/iso, 0 top)")
+      ->check(finite_in(0.0, 3600.0));
   cmd->add_option("--layout", args->layout,
                   "strip (panels side by side) | overlay (one scene, earlier poses fainter); "
                   "default strip for side/iso, overlay for top");
-  cmd->add_option("--at", args->at, "time of a single image [s] (default 0 = start pose)");
+  cmd->add_option("--at", args->at, "time of a single image [s] (default 0 = start pose)")
+      ->check(finite_in(0.0, 3600.0));
   cmd->add_option("--direction", args->direction,
                   "target direction [deg, counter-clockwise]: directed task simulated towards "
-                  "it, red target line in top/iso views");
-  cmd->add_option("--width", args->width, "image width [pixel] (strip: per panel)");
-  cmd->add_option("--height", args->height, "image height [pixel]");
-  cmd->add_option("--supersample", args->supersample, "anti-aliasing samples per axis (1-4)");
-  cmd->add_option("--fps", args->fps, "video frame rate (default 30)");
+                  "it, red target line in top/iso views")
+      ->check(finite_in(-180.0, 180.0));
+  // Images are held in memory: 8192 x 8192 at supersample 4 is 2.4 GB of pixels.
+  cmd->add_option("--width", args->width, "image width [pixel] (strip: per panel)")
+      ->check(CLI::Range(0, 8192));
+  cmd->add_option("--height", args->height, "image height [pixel]")->check(CLI::Range(0, 8192));
+  cmd->add_option("--supersample", args->supersample, "anti-aliasing samples per axis (1-4)")
+      ->check(CLI::Range(1, 4));
+  cmd->add_option("--fps", args->fps, "video frame rate (default 30)")
+      ->check(finite_in(0.01, 1000.0));
   cmd->add_option("--seconds", args->seconds,
-                  "simulated seconds when re-simulating (default task.eval_seconds)");
+                  "simulated seconds when re-simulating: task.eval_seconds (default 10, at most "
+                  "3600)");
   cmd->add_option("--generation", args->generation, "archive: generation (default the last)");
   auto* id_opt = cmd->add_option("--id", args->id, "archive: individual id");
   cmd->add_flag("--best", args->best, "archive: the generation's best individual (default)")
@@ -181,6 +196,7 @@ void register_render(CLI::App& app, int& exit_code) {
   cmd->add_option("--robot", args->robot_file,
                   "trace: robot file giving the chamber cells when the trace has none");
   cmd->add_flag("--static", args->static_pose, "draw the start pose, never simulate");
+  cmd->add_flag("--force", args->force, "replace an existing output file");
   cmd->callback([&exit_code, args] { exit_code = run_render(*args); });
 }
 

@@ -4,7 +4,10 @@
 #pragma once
 
 #include <bit>
+#include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
@@ -19,6 +22,22 @@ inline constexpr int kExitUsage = 2;     // bad arguments, unreadable or malform
 // fitness: NaN equals a NaN of the same bits, +0 differs from -0).
 inline bool same_bits(double a, double b) {
   return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
+}
+
+// A number option that must be finite and within [lo, hi]: CLI11's Range lets NaN through (it
+// fails no comparison), and `render --fps nan` then wrote "-2147483647 frames".
+inline CLI::Validator finite_in(double lo, double hi) {
+  const std::string allowed =
+      "a finite number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  return CLI::Validator(
+      [lo, hi, allowed](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || !std::isfinite(v) || v < lo || v > hi)
+          return text + " is not " + allowed;
+        return "";
+      },
+      "FINITE in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
 }
 
 void register_version(CLI::App& app, int& exit_code);

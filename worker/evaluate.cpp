@@ -68,8 +68,10 @@ EvalResult simulate(const Config& config, const tasks::Task& task, const BodyPla
     if (sim.step(commands) != EvalStatus::ok) break;
     // 6. Deadline and abandon request.
     if (opts.deadline && Clock::now() > *opts.deadline)
-      sim.stop(EvalStatus::timeout,
-               "evaluation exceeded its wall-clock deadline (run.eval_timeout_seconds)");
+      sim.stop(
+          EvalStatus::timeout,
+          "evaluation exceeded its wall-clock deadline (run.eval_timeout_seconds, softevo eval "
+          "--timeout)");
     else if (opts.abandon && opts.abandon())
       sim.stop(EvalStatus::timeout, "evaluation abandoned: the run is stopping");
   }
@@ -129,7 +131,17 @@ EvalResult evaluate_all_units(const Config& config, const tasks::Task& task, con
 }
 
 Config robot_eval_config(const ControllerSpec& controller, const RobotEvalSettings& settings) {
+  // Seconds and direction as overrides, so that they pass the config's range checks (a NaN or
+  // 1e308 is refused, naming the key); %.17g gives the double back exactly.
   std::vector<std::string> overrides = settings.overrides;
+  auto exact = [](double v) {
+    char text[40];
+    std::snprintf(text, sizeof text, "%.17g", v);
+    return std::string(text);
+  };
+  if (settings.seconds) overrides.push_back("task.eval_seconds=" + exact(*settings.seconds));
+  if (settings.direction)
+    overrides.push_back("task.directions=[" + exact(*settings.direction) + "]");
   if (!settings.task.empty()) overrides.push_back("task.kind=" + settings.task);
   const bool built_in = settings.config_path.empty() && !settings.config_text;
   if (settings.task.empty() && built_in)
@@ -139,13 +151,8 @@ Config robot_eval_config(const ControllerSpec& controller, const RobotEvalSettin
                   : settings.config_text
                       ? parse_config(*settings.config_text, settings.source_name, overrides)
                       : parse_config("", "<built-in defaults>", overrides);
-  if (built_in) {
-    config.task.control = controller.closed_loop ? "closed" : "open";
-    config.run.eval_timeout_seconds = 0.0;  // interactive: no wall-clock limit
-  }
+  if (built_in) config.task.control = controller.closed_loop ? "closed" : "open";
   if (!settings.integrator.empty()) config.physics.integrator = settings.integrator;
-  if (settings.seconds > 0.0) config.task.eval_seconds = settings.seconds;
-  if (settings.direction) config.task.directions = {*settings.direction};
   return config;
 }
 

@@ -130,8 +130,7 @@ EvalResult evaluate(const Config& config, const tasks::Task& task, std::uint64_t
 // both give the same bits for the same inputs).
 struct RobotEvalSettings {
   // The config: a TOML file, else TOML text (named `source_name` in error messages), else the
-  // built-in thesis defaults with task.control taken from the robot's controller and no
-  // wall-clock limit.
+  // built-in thesis defaults with task.control taken from the robot's controller.
   std::string config_path;
   std::optional<std::string> config_text;
   std::string source_name = "<config>";
@@ -141,7 +140,7 @@ struct RobotEvalSettings {
   // key of that task is accepted.
   std::string task;
   std::string integrator;           // "" = the config's physics.integrator
-  double seconds = 0.0;             // > 0 replaces task.eval_seconds
+  std::optional<double> seconds;    // replaces task.eval_seconds [s] (range-checked)
   std::optional<double> direction;  // replaces task.directions by [direction] [deg]
 };
 // The resolved config; throws ConfigError.

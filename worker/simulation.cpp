@@ -6,6 +6,7 @@
 #include <string>
 
 #include "physics/observables.hpp"
+#include "physics/work_limits.hpp"
 
 namespace softevo::worker {
 namespace {
@@ -22,6 +23,14 @@ int checked_unit(const Config& config, const tasks::Task& task, int unit) {
   return unit;
 }
 
+// The pneumatics of a body with structural voxels; a model without voxels has no time step, and
+// the pneumatics' complaint about it would hide the real cause (reported by the constructor).
+physics::PneumaticsModel pneumatics_of(const BodyPlan& body, const physics::Model& model,
+                                       const PneumaticsConfig& config) {
+  if (model.voxel_count == 0) return {};
+  return physics::build_pneumatics(body, model, config);
+}
+
 physics::BuildOptions build_options_for(physics::Simd simd) {
   physics::BuildOptions options;
   options.simd = simd;
@@ -36,10 +45,17 @@ Simulation::Simulation(const Config& config, const tasks::Task& task, const Body
       task_(task),
       unit_(checked_unit(config, task, unit)),
       model_(physics::build_model(body, config.physics, build_options_for(simd))),
-      pneumatics_model_(physics::build_pneumatics(body, model_, config.pneumatics)) {
-  if (model_.voxel_count == 0 || pneumatics_model_.chamber_count == 0) {
+      pneumatics_model_(pneumatics_of(body, model_, config.pneumatics)) {
+  if (model_.voxel_count == 0) {
     status_ = EvalStatus::invalid_body;
-    message_ = "body has no voxels or no chamber (not actuatable)";
+    message_ = body.chamber_count() > 0
+                   ? "body has only chamber cells, no structural voxel (material 1..10)"
+                   : "body has no cells (every cell is empty)";
+    return;
+  }
+  if (pneumatics_model_.chamber_count == 0) {
+    status_ = EvalStatus::invalid_body;
+    message_ = "body has no chamber (not actuatable)";
     return;
   }
   state_ = physics::initial_state(model_);
@@ -50,10 +66,11 @@ Simulation::Simulation(const Config& config, const tasks::Task& task, const Body
   score_ = task.start_unit(unit, model_);
 
   const TaskConfig& tc = config.task;
-  // §5 step 8: stepsPerFrame = (int)(1.0f / 60.0f / dt) in float arithmetic.
-  const float frame_seconds_f = 1.0f / static_cast<float>(tc.control_rate);
-  steps_per_frame_ = static_cast<int>(frame_seconds_f / model_.dt_f);
-  frames_ = static_cast<int>(std::lround(tc.control_rate * tc.eval_seconds));
+  // §5 step 8, within the limits of physics/work_limits.hpp (WorkLimitError before any step).
+  const physics::EvaluationWork work =
+      physics::evaluation_work(model_.dt_f, tc.control_rate, tc.eval_seconds);
+  steps_per_frame_ = work.steps_per_frame;
+  frames_ = work.frames;
   // First sensor reading (§3.7): config value for every chamber, in bar.
   initial_sensor_bar_ =
       static_cast<float>(config.pneumatics.initial_sensor_pressure / physics::kPascalPerBar);

@@ -3,6 +3,8 @@
 // on its first line ("# expect: ...").
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -124,6 +126,22 @@ TEST(Config, EveryShippedConfigParses) {
   EXPECT_GT(count, 0);
 }
 
+// Command options applied to a resolved config (render --seconds) change only their keys: every
+// other value keeps its bits, the pressures converted from bar included.
+TEST(Config, ApplyOverridesChangesOnlyTheOverriddenKeys) {
+  for (const auto& entry : fs::directory_iterator(source_dir() / "configs")) {
+    if (entry.path().extension() != ".toml") continue;
+    const Config c = load_config(entry.path().string());
+    Config expected = c;
+    expected.task.eval_seconds = 2.5;
+    const Config o = apply_overrides(c, {"task.eval_seconds=" + toml_number(2.5)});
+    EXPECT_EQ(canonical_text(o), canonical_text(expected)) << entry.path();
+    EXPECT_EQ(std::memcmp(&o.pneumatics, &c.pneumatics, sizeof c.pneumatics), 0) << entry.path();
+  }
+  EXPECT_THROW(apply_overrides(Config{}, {"task.eval_seconds=" + toml_number(std::nan(""))}),
+               ConfigError);
+}
+
 TEST(Config, MissingFileIsAClearError) {
   try {
     load_config("/nonexistent/x.toml");
@@ -131,6 +149,46 @@ TEST(Config, MissingFileIsAClearError) {
   } catch (const ConfigError& e) {
     EXPECT_EQ(std::string(e.what()), "/nonexistent/x.toml: cannot open config file");
   }
+}
+
+// On Linux a directory opens as a stream that reads as empty: it used to be a config of all
+// defaults, and a full-size run started.
+TEST(Config, DirectoryIsNotAConfigFile) {
+  const fs::path dir = fs::temp_directory_path() / "softevo_test_config_dir";
+  fs::create_directories(dir);
+  try {
+    load_config(dir.string());
+    ADD_FAILURE() << "a directory was read as a config";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), dir.string() + ": is a directory, not a config file");
+  }
+  fs::remove_all(dir);
+}
+
+// TOML refuses a number beyond a double or an int64 as a syntax error; --set used to take the
+// text for a bare string ("got a string"). The error names the key and says out of range.
+TEST(Config, OverrideNumberBeyondRangeNamesTheKey) {
+  auto error_of = [](const std::string& override_text) {
+    try {
+      parse_config("", "c.toml", {override_text});
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error_of("task.eval_seconds=1e999"),
+            "--set task.eval_seconds=1e999: task.eval_seconds = 1e999 is out of range (not "
+            "representable as a 64-bit number); allowed: number in (0.0, 3600.0] s");
+  EXPECT_EQ(error_of("run.seed=99999999999999999999"),
+            "--set run.seed=99999999999999999999: run.seed = 99999999999999999999 is out of "
+            "range (not representable as a 64-bit number); allowed: integer in [0, "
+            "9000000000000000]");
+  EXPECT_NE(error_of("task.eval_seconds=nan").find("task.eval_seconds = nan is out of range"),
+            std::string::npos);
+  // A bare word that starts with a digit is still a string.
+  EXPECT_EQ(parse_config("", "c.toml", {"controller.crossover_method=1pointpl"})
+                .controller.crossover_method,
+            "1pointpl");
 }
 
 TEST(Config, BrokenConfigsGiveTheirExactError) {

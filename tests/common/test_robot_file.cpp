@@ -191,6 +191,38 @@ TEST(RobotFile, NotJsonAndMissingFileAreErrors) {
   EXPECT_THROW(softevo::read_robot_file("/nonexistent/robot.json"), RobotFileError);
 }
 
+// A number beyond a double (1e999) used to escape as the parser's bare "number overflow
+// parsing '1e999'", naming neither the file nor the key.
+TEST(RobotFile, NumberOverflowNamesTheFileAndTheKey) {
+  const std::string text = minimal_robot().dump();
+  auto error_with = [&text](const std::string& from, const std::string& to) {
+    std::string t = text;
+    const auto at = t.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    t.replace(at, from.size(), to);
+    try {
+      softevo::parse_robot_json(t, "big.json");
+    } catch (const RobotFileError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const struct {
+    const char *from, *to, *key;
+  } cases[] = {
+      {"\"voxel_size\":0.01", "\"voxel_size\":1e999", "voxel_size"},
+      {"\"frequency\":3.2", "\"frequency\":-1e400", "controller.frequency"},
+      {"\"bias_hidden\":[0.1,0.1", "\"bias_hidden\":[0.1,1e999", "controller.bias_hidden[1]"},
+      {"\"cells\":[10", "\"cells\":[1e999", "cells[0]"},
+  };
+  for (const auto& c : cases) {
+    const std::string expect =
+        std::string("big.json: key '") + c.key + "': number out of range (beyond a double)";
+    const std::string error = error_with(c.from, c.to);
+    EXPECT_EQ(error.rfind(expect, 0), 0u) << error;
+  }
+}
+
 TEST(RobotFile, DeepNestingIsRefusedNotACrash) {
   // 65k levels inside `reference` once crashed the re-serialisation (a recursive dump()).
   for (const int levels : {65536, 70}) {

@@ -470,6 +470,14 @@ TEST(SoftevoMpi, StartupErrorsFailFastAndTouchNothing) {
       {{"--config", cfg, "--out", out, "--resume", "--seed", "8"}, "config hash"},
       {{"--config", cfg, "--out", dir.file("no/such/dir/run.h5")}, "does not exist"},
       {{"--config", cfg, "--out", dir.path}, "directory"},
+      // Issue 21 item 6: each of these used to start (a directory read as a config of all
+      // defaults started a full-size run; a 1e-6 m voxel ran about a million steps per frame).
+      {{"--config", dir.path, "--out", dir.file("new.h5")}, "is a directory, not a config file"},
+      {{"--config", cfg, "--out", out, "--resume", "--overwrite"}, "contradict each other"},
+      {{"--config", cfg, "--out", dir.file("new.h5"), "--set", "physics.voxel_size=1e-6"},
+       "more than the limit of 100000"},
+      {{"--config", cfg, "--out", dir.file("new.h5"), "--set", "neat.elitism=100"},
+       "neat.elitism = 100 must be <= neat.pop_size = 6"},
   };
   for (const Case& c : cases) {
     if (world_rank() == 0) testing::internal::CaptureStderr();
@@ -483,6 +491,7 @@ TEST(SoftevoMpi, StartupErrorsFailFastAndTouchNothing) {
       EXPECT_NE(err.find(c.expect), std::string::npos) << "stderr: " << err;
       EXPECT_LT(seconds, 30.0) << "start-up errors must not wait for anything";
       EXPECT_TRUE(file_bytes(out) == before) << "existing archive touched by: " << c.expect;
+      EXPECT_FALSE(fs::exists(dir.file("new.h5"))) << "archive started by: " << c.expect;
       EXPECT_TRUE(file_bytes(other_revision) == other_before)
           << "existing archive touched by: " << c.expect;
     } else {

@@ -80,7 +80,7 @@ TEST(RenderPng, RoundTripKeepsSizeAndPixels) {
   img.set(3, 2, {200, 100, 50});
   const std::string path =
       (std::filesystem::temp_directory_path() / "softevo_test_render_roundtrip.png").string();
-  write_png(img, path);
+  write_png(img, path, softevo::Overwrite::replace);  // a file left by an aborted run
   const Image back = read_png(path);
   std::filesystem::remove(path);
   EXPECT_EQ(back.width, 7);

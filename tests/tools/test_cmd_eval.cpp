@@ -4,6 +4,7 @@
 // error naming the file and the key.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -147,6 +148,84 @@ TEST_F(CmdEval, MalformedRobotFileNamesFileAndKey) {
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find(bad.string()), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("lattice"), std::string::npos) << r.output;
+}
+
+// Issue 21 item 6: option values get the config's range checks, naming the key (before: nan
+// silently ran 10 s, 1e308 reported "ok" after 0 steps, 1e10 failed with "vector::reserve",
+// 1e999 "got a string").
+TEST_F(CmdEval, OutOfRangeSecondsAndDirectionAreConfigErrorsNamingTheKey) {
+  const std::string eval = binary("softevo") + " eval '" + robot_.string() + "' --task directed";
+  for (const char* seconds : {"nan", "1e308", "1e10", "-1", "0"}) {
+    const auto r = run_command(eval + " --seconds " + seconds);
+    EXPECT_EQ(r.code, 2) << seconds << ": " << r.output;
+    EXPECT_NE(r.output.find("task.eval_seconds = "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("is out of range"), std::string::npos) << r.output;
+  }
+  const auto huge = run_command(eval + " --set task.eval_seconds=1e999");
+  EXPECT_EQ(huge.code, 2) << huge.output;
+  EXPECT_NE(huge.output.find("task.eval_seconds = 1e999 is out of range"), std::string::npos)
+      << huge.output;
+  const auto direction = run_command(eval + " --seconds 0.1 --direction nan");
+  EXPECT_EQ(direction.code, 2) << direction.output;
+  EXPECT_NE(direction.output.find("task.directions[0] = nan is out of range"), std::string::npos)
+      << direction.output;
+}
+
+// The work of one evaluation is bounded: the step limits (a 1e-6 m voxel needs about a million
+// steps per control frame) and the wall-clock deadline --timeout, each a status.
+TEST_F(CmdEval, WorkIsBoundedByTheStepLimitsAndTimeout) {
+  nlohmann::json robot;
+  std::ifstream(robot_) >> robot;
+  robot["voxel_size"] = 1e-6;
+  const fs::path tiny = dir_ / "tiny.json";
+  std::ofstream(tiny) << robot.dump();
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto r = run_command(binary("softevo") + " eval '" + tiny.string() + "' --json");
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 30.0);
+  ASSERT_EQ(r.code, 2) << r.output;  // status failed
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["status"], "failed");
+  EXPECT_EQ(j["steps"], 0);
+  EXPECT_NE(j["message"].get<std::string>().find("more than the limit of 100000"),
+            std::string::npos)
+      << r.output;
+  const auto slow = run_command(binary("softevo") + " eval '" + robot_.string() +
+                                "' --seconds 20 --timeout 1e-6 --json");
+  ASSERT_EQ(slow.code, 0) << slow.output;
+  const nlohmann::json js = nlohmann::json::parse(slow.output);
+  EXPECT_EQ(js["status"], "timeout");
+  EXPECT_LT(js["sim_seconds"].get<double>(), 1.0);
+}
+
+TEST_F(CmdEval, EmptyBodyNamesTheCause) {
+  nlohmann::json robot;
+  std::ifstream(robot_) >> robot;
+  for (auto& cell : robot["cells"]) cell = cell.get<int>() >= 11 ? cell.get<int>() : 0;
+  const fs::path chambers_only = dir_ / "chambers.json";
+  std::ofstream(chambers_only) << robot.dump();
+  const auto r = run_command(binary("softevo") + " eval '" + chambers_only.string() + "' --json");
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["status"], "invalid body") << r.output;
+  EXPECT_EQ(j["message"], "body has only chamber cells, no structural voxel (material 1..10)");
+}
+
+// docs/output-files.md rule 3: an existing trace is replaced only with --force, and the check
+// comes before the simulation.
+TEST_F(CmdEval, ExistingTraceIsReplacedOnlyWithForce) {
+  const fs::path trace = dir_ / "trace.h5";
+  std::ofstream(trace) << "precious";
+  const std::string eval = binary("softevo") + " eval '" + robot_.string() +
+                           "' --seconds 0.1 --trace '" + trace.string() + "'";
+  const auto refused = run_command(eval);
+  EXPECT_EQ(refused.code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("refusing to overwrite an existing file (pass --force"),
+            std::string::npos)
+      << refused.output;
+  EXPECT_EQ(refused.output.find("fitness"), std::string::npos) << "simulated before refusing";
+  EXPECT_EQ(fs::file_size(trace), 8u);
+  const auto forced = run_command(eval + " --force");
+  EXPECT_EQ(forced.code, 0) << forced.output;
+  EXPECT_GT(fs::file_size(trace), 8u);
 }
 
 }  // namespace

@@ -73,6 +73,18 @@ class CmdRender : public ::testing::Test {
     write_robot_file(robot, path);
     return path;
   }
+  // A directory holding a stand-in ffmpeg that stores its raw input as its output file (its
+  // last argument): frames x W x H x 3 bytes.
+  fs::path fake_ffmpeg_dir() {
+    const fs::path bin = dir_ / "bin";
+    fs::create_directories(bin);
+    {
+      std::ofstream script(bin / "ffmpeg");
+      script << "#!/bin/sh\nfor last; do :; done\ncat > \"$last\"\n";
+    }
+    fs::permissions(bin / "ffmpeg", fs::perms::owner_all);
+    return bin;
+  }
   // Trace of the same body shape without chamber: 3 frames moving 1 cm per frame along x.
   std::string write_trace() {
     const std::string path = (dir_ / "trace.h5").string();
@@ -184,15 +196,8 @@ TEST_F(CmdRender, VideoWithoutFfmpegIsAClearFailure) {
 }
 
 TEST_F(CmdRender, VideoFramesArePipedToFfmpeg) {
-  // A stand-in ffmpeg that stores its raw input as the output file: frames x W x H x 3 bytes.
   const std::string robot = write_robot();
-  const fs::path bin = dir_ / "bin";
-  fs::create_directories(bin);
-  {
-    std::ofstream script(bin / "ffmpeg");
-    script << "#!/bin/sh\nfor last; do :; done\ncat > \"$last\"\n";
-  }
-  fs::permissions(bin / "ffmpeg", fs::perms::owner_all);
+  const fs::path bin = fake_ffmpeg_dir();
   const std::string out = (dir_ / "movie.mp4").string();
   ASSERT_EQ(run("PATH=" + bin.string() + ":/usr/bin:/bin " + softevo_binary() + " render " + robot +
                 " -o " + out + " --seconds 0.2 --fps 10 --width 64 --height 48"),
@@ -204,6 +209,48 @@ TEST_F(CmdRender, VideoFramesArePipedToFfmpeg) {
   EXPECT_EQ(size % frame, 0u);
   EXPECT_GE(size / frame, 2u);
   EXPECT_LE(size / frame, 3u);
+}
+
+// Issue 21 item 6: --fps nan passed CLI11's checks and wrote "-2147483647 frames" (exit 0).
+TEST_F(CmdRender, NumberOptionsOutOfRangeAreRefusedBeforeAnything) {
+  const std::string robot = write_robot();
+  const std::string render = softevo_binary() + " render " + robot + " -o " +
+                             (dir_ / "out.mp4").string() + " --seconds 0.2";
+  for (const char* bad : {"--fps nan", "--fps 0", "--fps inf", "--at nan", "--span -1",
+                          "--direction 1e9", "--width 100000", "--seconds nan", "--seconds 1e10"}) {
+    const auto r = test::run_command(render + " " + bad);
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.output;
+    const std::string option = std::string(bad).substr(0, std::string(bad).find(' '));
+    const bool named = r.output.find(option) != std::string::npos ||
+                       r.output.find("task.eval_seconds") != std::string::npos;
+    EXPECT_TRUE(named) << bad << ": " << r.output;
+    EXPECT_FALSE(fs::exists(dir_ / "out.mp4")) << bad;
+  }
+}
+
+// docs/output-files.md rule 3: an existing picture or video is replaced only with --force; a
+// video is encoded into a temporary that replaces the target at the end.
+TEST_F(CmdRender, ExistingOutputIsReplacedOnlyWithForce) {
+  const std::string robot = write_robot();
+  const fs::path bin = fake_ffmpeg_dir();
+  for (const char* name : {"old.png", "old.mp4"}) {
+    const fs::path out = dir_ / name;
+    std::ofstream(out) << "precious";
+    const std::string render = "PATH=" + bin.string() + ":/usr/bin:/bin " + softevo_binary() +
+                               " render " + robot + " -o " + out.string() +
+                               " --seconds 0.1 --width 64 --height 48";
+    const auto refused = test::run_command(render);
+    EXPECT_EQ(refused.code, 2) << refused.output;
+    EXPECT_NE(refused.output.find("refusing to overwrite an existing file (pass --force"),
+              std::string::npos)
+        << refused.output;
+    EXPECT_EQ(fs::file_size(out), 8u) << name;
+    const auto forced = test::run_command(render + " --force");
+    EXPECT_EQ(forced.code, 0) << forced.output;
+    EXPECT_GT(fs::file_size(out), 8u) << name;
+  }
+  for (const auto& e : fs::directory_iterator(dir_))
+    EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
 }
 
 TEST_F(CmdRender, ResimulatedTimelapseShowsTheRobotInEveryPanel) {

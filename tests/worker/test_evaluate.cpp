@@ -5,6 +5,7 @@
 // with messages, never exceptions; only a config-hash mismatch throws.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -175,6 +176,52 @@ TEST(Evaluate, BodyWithoutChamberIsInvalid) {
   const EvalResult r = evaluate_robot(short_config(0.1), plan, controller(false, false), 0);
   EXPECT_EQ(r.status, EvalStatus::invalid_body);
   EXPECT_EQ(r.fitness, 0.0);
+}
+
+// A model without voxels has no time step: the pneumatics used to refuse it with "model dt must
+// be > 0", hiding the real cause.
+TEST(Evaluate, EmptyAndChamberOnlyBodiesNameTheCause) {
+  BodyPlan empty = two_chamber_block();
+  std::fill(empty.cells.begin(), empty.cells.end(), 0);
+  const EvalResult e = evaluate_robot(short_config(0.1), empty, controller(false, false), 0);
+  EXPECT_EQ(e.status, EvalStatus::invalid_body);
+  EXPECT_EQ(e.message, "body has no cells (every cell is empty)");
+  BodyPlan chambers_only = two_chamber_block();
+  for (int& c : chambers_only.cells) c = c >= 11 ? c : 0;
+  const EvalResult c =
+      evaluate_robot(short_config(0.1), chambers_only, controller(false, false), 0);
+  EXPECT_EQ(c.status, EvalStatus::invalid_body);
+  EXPECT_EQ(c.message, "body has only chamber cells, no structural voxel (material 1..10)");
+}
+
+// physics/work_limits.hpp: an evaluation beyond the step limits, or one that would simulate
+// nothing, is status failed before its first step. Before the limits, a voxel of 5e-6 m ran
+// about 200,000 steps per control frame, and one of 1e-12 m (beyond int range) or of 10 m (a
+// time step longer than a frame) reported status ok after 0 steps.
+TEST(Evaluate, WorkBeyondTheLimitsIsAFailedStatusBeforeAnyStep) {
+  BodyPlan small;  // two voxels of material 10 around a one-cell chamber
+  small.lattice = {3, 1, 1};
+  for (int k = 1; k <= 10; ++k) small.materials.push_back({1.0e4 * k, 1000.0});
+  small.cells = {10, 11, 10};
+  auto run = [&](double voxel_size, double seconds) {
+    BodyPlan plan = small;
+    plan.voxel_size = voxel_size;
+    return evaluate_robot(short_config(seconds), plan, controller(false, false), 0);
+  };
+  for (const double voxel_size : {5.0e-6, 1.0e-12}) {
+    const EvalResult r = run(voxel_size, 1.0 / 60.0);
+    EXPECT_EQ(r.status, EvalStatus::failed) << voxel_size;
+    EXPECT_EQ(r.steps, 0) << voxel_size;
+    EXPECT_NE(r.message.find("more than the limit of 100000"), std::string::npos) << r.message;
+  }
+  const EvalResult huge = run(10.0, 1.0);
+  EXPECT_EQ(huge.status, EvalStatus::failed);
+  EXPECT_NE(huge.message.find("shorter than one physics step"), std::string::npos) << huge.message;
+  const EvalResult no_frame = run(0.01, 0.001);
+  EXPECT_EQ(no_frame.status, EvalStatus::failed);
+  EXPECT_NE(no_frame.message.find("no frame would be simulated"), std::string::npos)
+      << no_frame.message;
+  EXPECT_EQ(run(0.01, 1.0 / 60.0).status, EvalStatus::ok);  // the thesis scale: 104 steps
 }
 
 TEST(Evaluate, BadControllerIsAFailureNotACrash) {
