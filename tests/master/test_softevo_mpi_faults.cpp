@@ -207,7 +207,7 @@ TEST_F(SoftevoMpiFaults, AKilledWorkerRankIsNamedAndTheArchiveResumesToTheSameDi
 }
 
 TEST_F(SoftevoMpiFaults, SigtermDuringLongEvaluationsCheckpointsTellsAndResumes) {
-  const std::vector<std::string> common = {"--config", write_config(tiny_config(6.0, 2)),
+  const std::vector<std::string> common = {"--config", write_config(tiny_config(30.0, 2)),
                                            "--generations", "2"};
   const std::optional<Snapshot> expected = reference(common);
   ASSERT_TRUE(expected.has_value());
@@ -217,7 +217,8 @@ TEST_F(SoftevoMpiFaults, SigtermDuringLongEvaluationsCheckpointsTellsAndResumes)
   const pid_t mpirun = start_mpirun(3, args, log);
   ASSERT_GT(mpirun, 0);
   ASSERT_TRUE(first_generation_archived(out)) << file_bytes(log);
-  // Generation 1's two evaluations have just been handed out: each takes seconds.
+  // Generation 1's two evaluations have just been handed out: each takes seconds (30 s of
+  // simulated time; 6 s took only a few hundred ms on an idle machine, too short to be caught).
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   const std::vector<long> ranks = rank_processes(mpirun);
   EXPECT_EQ(ranks.size(), 3u);
