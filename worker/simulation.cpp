@@ -25,10 +25,13 @@ int checked_unit(const Config& config, const tasks::Task& task, int unit) {
 
 // The pneumatics of a body with structural voxels; a model without voxels has no time step, and
 // the pneumatics' complaint about it would hide the real cause (reported by the constructor).
+// The work limits are checked first too (WorkLimitError): a time step far too large or small
+// for a frame is the cause that the pneumatics' own complaint (its valve filter) would hide.
 physics::PneumaticsModel pneumatics_of(const BodyPlan& body, const physics::Model& model,
-                                       const PneumaticsConfig& config) {
+                                       const Config& config) {
   if (model.voxel_count == 0) return {};
-  return physics::build_pneumatics(body, model, config);
+  physics::evaluation_work(model.dt_f, config.task.control_rate, config.task.eval_seconds);
+  return physics::build_pneumatics(body, model, config.pneumatics);
 }
 
 physics::BuildOptions build_options_for(physics::Simd simd) {
@@ -45,7 +48,7 @@ Simulation::Simulation(const Config& config, const tasks::Task& task, const Body
       task_(task),
       unit_(checked_unit(config, task, unit)),
       model_(physics::build_model(body, config.physics, build_options_for(simd))),
-      pneumatics_model_(pneumatics_of(body, model_, config.pneumatics)) {
+      pneumatics_model_(pneumatics_of(body, model_, config)) {
   if (model_.voxel_count == 0) {
     status_ = EvalStatus::invalid_body;
     message_ = body.chamber_count() > 0
