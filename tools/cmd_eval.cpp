@@ -20,12 +20,13 @@
 // --trace FILE.h5 records one frame per control frame (60 Hz) plus the state after the last
 // frame: format softevo.trace/1, docs/trace.md (io/trace.hpp). The trace records the first work
 // unit of the task (directed: the first direction, or the one of --direction). It is held in
-// memory until the end, so a trace beyond kMaxTraceBytes is refused up front; an existing FILE
-// is replaced only with --force (docs/output-files.md).
+// memory until the end, so a trace beyond motion::kMaxTraceBytes is refused up front; an existing
+// FILE is replaced only with --force (docs/output-files.md).
 #include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -37,7 +38,7 @@
 #include "common/printable.hpp"
 #include "common/robot.hpp"
 #include "common/safe_write.hpp"
-#include "io/trace.hpp"
+#include "motion/trace_recorder.hpp"
 #include "physics/model.hpp"
 #include "tasks/task.hpp"
 #include "tools/commands.hpp"
@@ -61,60 +62,6 @@ struct EvalArgs {
   bool force = false;     // replace an existing --trace file
   std::string simd = "best";
 };
-
-// Frames are held in memory until the end: a trace of 3600 s of a 1000-voxel robot would need
-// about 12 GB. Beyond this it is refused before the evaluation starts.
-constexpr double kMaxTraceBytes = 4.0 * 1024 * 1024 * 1024;
-
-// Bytes of the recorded frames (positions, orientations, pressures, valves, time) of `frames`
-// frames of a body.
-double trace_bytes(std::int64_t frames, const BodyPlan& body) {
-  std::int64_t voxels = 0;
-  for (int cell : body.cells) voxels += BodyPlan::is_structural(cell) ? 1 : 0;
-  const std::int64_t chambers = body.chamber_count();
-  const double per_frame = static_cast<double>(voxels) * (3 + 4) * sizeof(double) +
-                           static_cast<double>(chambers) * (sizeof(double) + 2 * sizeof(float)) +
-                           sizeof(double);
-  return static_cast<double>(frames + 1) * per_frame;
-}
-
-// Frames buffered in memory, written once at the end (a 10 s trace of an 800-voxel robot is
-// about 35 MB of doubles).
-struct TraceBuffer {
-  const physics::Model* model = nullptr;
-  int chambers = 0;
-  int steps_per_frame = 0;
-  std::vector<double> positions, orientations, pressures, time;
-  std::vector<float> valves;
-  std::vector<int> voxel_cells, voxel_material;
-  double dt = 0.0, voxel_size = 0.0;
-  int frames = 0;
-};
-
-void write_trace(const std::string& path, const TraceBuffer& t, const RobotFile& robot,
-                 const EvalResult& result, double control_rate, const double* direction_deg,
-                 Overwrite overwrite) {
-  io::Trace trace;
-  trace.frames = t.frames;
-  trace.voxels = static_cast<std::int64_t>(t.voxel_material.size());
-  trace.chambers = t.chambers;
-  trace.positions = t.positions;
-  trace.orientations = t.orientations;
-  trace.pressures = t.pressures;
-  trace.valve_commands = t.valves;
-  trace.time = t.time;
-  trace.voxel_cells.assign(t.voxel_cells.begin(), t.voxel_cells.end());
-  trace.voxel_material.assign(t.voxel_material.begin(), t.voxel_material.end());
-  trace.robot_json = robot_to_json(robot);
-  trace.dt = t.dt;
-  trace.voxel_size = t.voxel_size;
-  trace.frame_rate = control_rate;
-  trace.steps_per_frame = t.steps_per_frame;
-  if (direction_deg) trace.direction_deg = *direction_deg;
-  trace.fitness = result.fitness;
-  trace.status = to_string(result.status);
-  io::write_trace(path, trace, overwrite);
-}
 
 // JSON has no NaN or infinity: null.
 nlohmann::ordered_json json_number(double v) {
@@ -145,13 +92,7 @@ int run_eval(const EvalArgs& a) {
   const Overwrite overwrite = a.force ? Overwrite::replace : Overwrite::refuse;
   if (!a.trace.empty()) {
     check_output_target(a.trace, overwrite);  // before minutes of simulation, not after
-    const auto frames = std::llround(config.task.control_rate * config.task.eval_seconds);
-    const double bytes = trace_bytes(frames, robot.body);
-    if (bytes > kMaxTraceBytes)
-      throw std::invalid_argument(
-          "--trace " + a.trace + ": " + std::to_string(frames) + " frames of this robot need " +
-          std::to_string(bytes / (1024.0 * 1024 * 1024)) + " GiB in memory, more than the " +
-          "limit of 4 GiB; shorten task.eval_seconds (--seconds)");
+    motion::check_trace_memory(a.trace, config, robot.body);
   }
   const std::unique_ptr<tasks::Task> task = tasks::make_task(config);
   const std::vector<tasks::ComponentName> names = task->component_names();
@@ -167,38 +108,8 @@ int run_eval(const EvalArgs& a) {
     if (what == "sensors") opts.ablate_sensors = true;
   }
 
-  TraceBuffer trace;
-  if (!a.trace.empty()) {
-    opts.on_start = [&trace](const worker::TraceHeader& h) {
-      trace.model = h.model;
-      trace.chambers = h.chambers;
-      trace.steps_per_frame = h.steps_per_frame;
-      trace.dt = h.model->dt;
-      trace.voxel_size = h.model->voxel_size;
-      trace.voxel_cells.clear();
-      trace.voxel_material.clear();
-      for (int v = 0; v < h.model->voxel_count; ++v) {
-        for (int i = 0; i < 3; ++i) trace.voxel_cells.push_back(h.model->voxel_cell[v][i]);
-        trace.voxel_material.push_back(h.model->voxel_material[v]);
-      }
-      trace.positions.clear();
-      trace.orientations.clear();
-      trace.pressures.clear();
-      trace.valves.clear();
-      trace.time.clear();
-      trace.frames = 0;
-    };
-    opts.on_frame = [&trace](const worker::TraceFrame& f) {
-      for (const auto& p : f.positions)
-        trace.positions.insert(trace.positions.end(), {p.x(), p.y(), p.z()});
-      for (const auto& q : f.orientations)
-        trace.orientations.insert(trace.orientations.end(), {q.w, q.x, q.y, q.z});
-      trace.pressures.insert(trace.pressures.end(), f.pressures.begin(), f.pressures.end());
-      trace.valves.insert(trace.valves.end(), f.valve_commands.begin(), f.valve_commands.end());
-      trace.time.push_back(f.time);
-      ++trace.frames;
-    };
-  }
+  motion::TraceRecorder trace;
+  if (!a.trace.empty()) trace.attach(opts);
 
   std::timespec cpu0{}, cpu1{};
   ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &cpu0);
@@ -216,10 +127,11 @@ int run_eval(const EvalArgs& a) {
   // first configured one, the direction of the traced unit.
   bool has_direction = false;
   for (const tasks::ComponentName& n : names) has_direction |= n.name == "direction_deg";
-  const double trace_direction = has_direction ? config.task.directions.front() : 0.0;
-  if (!a.trace.empty() && trace.model != nullptr)
-    write_trace(a.trace, trace, robot, result, config.task.control_rate,
-                has_direction ? &trace_direction : nullptr, overwrite);
+  if (!a.trace.empty() && trace.started())
+    trace.write(
+        a.trace, robot, result, config.task.control_rate,
+        has_direction ? std::optional<double>(config.task.directions.front()) : std::nullopt,
+        overwrite);
 
   const std::string ablation = opts.ablate_oscillator && opts.ablate_sensors ? "oscillator+sensors"
                                : opts.ablate_oscillator                      ? "oscillator"
@@ -288,7 +200,7 @@ int run_eval(const EvalArgs& a) {
     std::printf("time         %.3f s wall, %.3f s CPU (physics SIMD width %s)\n",
                 result.wall_seconds, cpu_seconds, physics::to_string(simd_used));
     if (!a.trace.empty())
-      std::printf("trace        %s (%d frames)\n", a.trace.c_str(), trace.frames);
+      std::printf("trace        %s (%d frames)\n", a.trace.c_str(), trace.frames());
   }
   return result.status == EvalStatus::failed ? kExitUsage : kExitOk;
 }
