@@ -44,8 +44,7 @@ physics::BuildOptions build_options_for(physics::Simd simd) {
 
 Simulation::Simulation(const Config& config, const tasks::Task& task, const BodyPlan& body,
                        int unit, physics::Simd simd)
-    : config_(config),
-      task_(task),
+    : task_(task),
       unit_(checked_unit(config, task, unit)),
       model_(physics::build_model(body, config.physics, build_options_for(simd))),
       pneumatics_model_(pneumatics_of(body, model_, config)) {

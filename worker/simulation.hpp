@@ -34,7 +34,7 @@ class Simulation {
   // Builds the model and pneumatics of `body` for work unit `unit` of `task`. Throws
   // std::invalid_argument for a unit outside the task, a bad control rate or evaluation length,
   // or a body the physics cannot build. A body without voxels or chambers is not an error: the
-  // simulation starts with status invalid_body and never runs. `config` and `task` must outlive
+  // simulation starts with status invalid_body and never runs. `task` must outlive
   // the simulation.
   Simulation(const Config& config, const tasks::Task& task, const BodyPlan& body, int unit,
              physics::Simd simd = physics::Simd::best);
@@ -83,7 +83,6 @@ class Simulation {
   EvalResult finish();
 
  private:
-  const Config& config_;
   const tasks::Task& task_;
   int unit_ = 0;
   physics::Model model_;

@@ -101,7 +101,8 @@ int main(int argc, char** argv) {
   std::string dir;
   std::set<std::int64_t> report = {0, 1, 10, 100, 250, 499};
   double max_growth = 0.0;
-  for (int i = 1; i < argc; ++i) {
+  // Every option takes one value: the loop steps over option and value.
+  for (int i = 1; i < argc; i += 2) {
     const std::string a = argv[i];
     const char* v = i + 1 < argc ? argv[i + 1] : nullptr;
     if (a == "--generations" && v) {
@@ -118,7 +119,6 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "bench_archive_writes: unknown or incomplete argument %s\n", a.c_str());
       return 2;
     }
-    ++i;
   }
   if (generations < 11 || population < 1) {
     std::fprintf(stderr, "bench_archive_writes: need --generations >= 11, --population >= 1\n");
