@@ -415,6 +415,12 @@ Pose rest_pose(const Body& body) {
   return pose;
 }
 
+void place_chamber_cells(const Body& body, const Pose& pose, std::vector<Eigen::Vector3d>& position,
+                         std::vector<Eigen::Quaterniond>& orientation) {
+  const CellIndex cells(body);
+  place_chambers(body, cells, pose, position, orientation);
+}
+
 Eigen::Vector3d centroid(const Pose& pose) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   for (const auto& p : pose.position) sum += p;

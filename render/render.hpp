@@ -71,6 +71,11 @@ struct Pose {
 Pose rest_pose(const Body& body);
 // Mean voxel position [m] (the centroid of §5, but absolute rather than a displacement).
 Eigen::Vector3d centroid(const Pose& pose);
+// Where the chamber cells of `body` are drawn in `pose` (they have no voxel in the simulation):
+// between their wall voxels, as the renderer places them. Used by the browser viewer, which
+// draws the same picture. One position and orientation per chamber cell.
+void place_chamber_cells(const Body& body, const Pose& pose, std::vector<Eigen::Vector3d>& position,
+                         std::vector<Eigen::Quaterniond>& orientation);
 
 enum class View { side, top, iso };
 // "side" | "top" | "iso"; throws std::invalid_argument otherwise.
