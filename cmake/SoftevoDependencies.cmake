@@ -22,6 +22,8 @@ option(SOFTEVO_REQUIRE_MPI "fail at configure time unless MPI is found" OFF)
 option(SOFTEVO_REQUIRE_HDF5 "fail at configure time unless HDF5 (C) is found" OFF)
 option(SOFTEVO_REQUIRE_PYTHON
        "fail at configure time unless Python 3 (headers) and pybind11 are found" OFF)
+option(SOFTEVO_REQUIRE_VIEW
+       "fail at configure time unless Boost.Beast and zlib (`softevo view`) are found" OFF)
 
 include(FetchContent)
 
@@ -178,6 +180,18 @@ else()
 endif()
 set(SOFTEVO_BUILD_CLI ${SOFTEVO_ENABLE_HDF5})
 
+# `softevo view` (view/): Boost.Beast (header-only, in Boost's headers) for HTTP and WebSocket,
+# zlib for the exported page's frames; part of the CLI, so it needs HDF5 too.
+find_package(Boost 1.70 QUIET)
+find_package(ZLIB QUIET)
+if(Boost_FOUND AND ZLIB_FOUND AND SOFTEVO_BUILD_CLI AND EXISTS "${Boost_INCLUDE_DIRS}/boost/beast.hpp")
+  set(softevo_view_found ON)
+else()
+  set(softevo_view_found OFF)
+endif()
+softevo_optional(NAME VIEW FOUND softevo_view_found
+                 HOW "install libboost-dev and zlib1g-dev (Debian); the viewer also needs HDF5")
+
 function(softevo_print_summary)
   set(built "common physics evo worker render")
   if(SOFTEVO_ENABLE_MPI)
@@ -200,6 +214,9 @@ function(softevo_print_summary)
       string(APPEND built "(render .mp4 only)")
     endif()
   endif()
+  if(SOFTEVO_ENABLE_VIEW)
+    string(APPEND built " view")
+  endif()
   if(SOFTEVO_ENABLE_PYTHON)
     string(APPEND built " python")
   endif()
@@ -211,6 +228,7 @@ function(softevo_print_summary)
   message(STATUS "  libpng        ${SOFTEVO_ENABLE_PNG}")
   message(STATUS "  MPI           ${SOFTEVO_ENABLE_MPI}")
   message(STATUS "  HDF5 C        ${SOFTEVO_ENABLE_HDF5}")
+  message(STATUS "  viewer        ${SOFTEVO_ENABLE_VIEW} (Boost.Beast, zlib)")
   if(SOFTEVO_ENABLE_PYTHON)
     message(STATUS "  Python        ${Python_EXECUTABLE} ${Python_VERSION}, pybind11 ${pybind11_VERSION}")
   else()

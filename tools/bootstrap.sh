@@ -29,6 +29,7 @@ PACKAGES=(
   python3-h5py                       # the analysis test writes synthetic archives with it
   python3-dev pybind11-dev python3-pybind11  # the softevo Python package (python/, pybind11)
   python3-pytest python3-pandas      # its tests; run.individuals() as a pandas DataFrame
+  libboost-dev zlib1g-dev            # softevo view: Boost.Beast (HTTP, WebSocket), zlib (--export-html)
 )
 
 # Open MPI refuses to run as root without these; harmless for other users.
@@ -54,7 +55,24 @@ install_dependencies() {
 }
 
 REQUIRE_ALL=(-DSOFTEVO_REQUIRE_TESTS=ON -DSOFTEVO_REQUIRE_PNG=ON -DSOFTEVO_REQUIRE_MPI=ON
-  -DSOFTEVO_REQUIRE_HDF5=ON)
+  -DSOFTEVO_REQUIRE_HDF5=ON -DSOFTEVO_REQUIRE_VIEW=ON)
+
+# The page of `softevo view` (view/web): three.js (and, for the browser test, puppeteer-core)
+# from the npm registry at the versions of view/web/package-lock.json. Node.js and npm come from
+# Debian unless the machine has them already (a NodeSource nodejs includes npm, and Debian's npm
+# package would conflict with it). npm ci runs again only when the lock file changed.
+install_viewer_packages() {
+  if ! command -v npm >/dev/null 2>&1; then
+    as_root apt-get update
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends \
+      -o DPkg::Lock::Timeout=600 nodejs npm
+  fi
+  local web="$ROOT/view/web"
+  if cmp -s "$web/package-lock.json" "$web/node_modules/.softevo-lock"; then return 0; fi
+  echo "== npm ci in view/web (three.js for the page, puppeteer-core for its test)"
+  (cd "$web" && npm ci --no-audit --no-fund)
+  cp "$web/package-lock.json" "$web/node_modules/.softevo-lock"
+}
 # The Python package is built for Debian's /usr/bin/python3 (cmake/SoftevoDependencies.cmake).
 PYTHON=/usr/bin/python3
 
@@ -105,6 +123,7 @@ build() {
 case "${1:-}" in
   quickstart)
     install_dependencies
+    install_viewer_packages
     build "$ROOT/build" -DCMAKE_BUILD_TYPE=Release
     install_python_package
     cd "$ROOT"
@@ -120,7 +139,10 @@ case "${1:-}" in
     echo "== next: build/bin/softevo replay $run --best --verify"
     ;;
   test)
+    PACKAGES+=(chromium)  # the viewer's real-browser test (ctest label browser)
     install_dependencies
+    install_viewer_packages
+    export SOFTEVO_REQUIRE_BROWSER_TEST=1  # chromium and npm ci are here: the test may not skip
     # Every optional part required: a missing package fails the configure, never skips tests.
     build "$ROOT/build" -DCMAKE_BUILD_TYPE=Release -DSOFTEVO_WERROR=ON "${REQUIRE_ALL[@]}" \
       -DSOFTEVO_REQUIRE_PYTHON=ON
@@ -137,9 +159,10 @@ case "${1:-}" in
       -DSOFTEVO_WERROR=ON "${REQUIRE_ALL[@]}" -DCMAKE_DISABLE_FIND_PACKAGE_Python=ON
     # Open MPI's own allocations are reported as leaks; they are not ours. The launcher fault
     # tests (SoftevoMpiFaults) time signals against mpirun's one-second grace, which an
-    # instrumented build does not keep: the test mode runs them.
+    # instrumented build does not keep: the test mode runs them. The viewer's browser test
+    # measures the live simulation against real time, which an instrumented build cannot keep.
     ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1 \
-      ctest --test-dir "$ROOT/build-sanitize" --output-on-failure -j"$JOBS" -LE "long|no_sanitize" \
+      ctest --test-dir "$ROOT/build-sanitize" --output-on-failure -j"$JOBS" -LE "long|no_sanitize|browser" \
       -E '^SoftevoMpiFaults\.'
     ;;
   clang)

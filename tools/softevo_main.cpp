@@ -21,6 +21,9 @@ int main(int argc, char** argv) {
   softevo::cli::register_info(app, exit_code);
   softevo::cli::register_export(app, exit_code);
   softevo::cli::register_repair(app, exit_code);
+#ifdef SOFTEVO_HAVE_VIEW
+  softevo::cli::register_view(app, exit_code);
+#endif
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

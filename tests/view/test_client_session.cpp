@@ -1,0 +1,128 @@
+// What one page controls (view/client_session.hpp): the hello and first frame; a malformed
+// message is answered with an error and changes nothing; playback, pause, step, seek, speed,
+// reset; steering and saving refused when they make no sense; a save writes into the save
+// directory and tells the page only the file names.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include <nlohmann/json.hpp>
+
+#include "tests/io/tmp_dir.hpp"
+#include "tests/view/view_test_robot.hpp"
+#include "view/client_session.hpp"
+
+using namespace softevo;
+using nlohmann::json;
+
+namespace {
+
+int frames_in(const std::vector<view::Outgoing>& out) {
+  int n = 0;
+  for (const auto& m : out) n += m.binary ? 1 : 0;
+  return n;
+}
+
+std::vector<json> texts(const std::vector<view::Outgoing>& out) {
+  std::vector<json> j;
+  for (const auto& m : out)
+    if (!m.binary) j.push_back(json::parse(m.bytes));
+  return j;
+}
+
+std::string first_error(const std::vector<view::Outgoing>& out) {
+  for (const auto& j : texts(out))
+    if (j["type"] == "error") return j["message"];
+  return "";
+}
+
+}  // namespace
+
+TEST(ViewClientSession, StartsWithTheHelloAndTheFirstFrame) {
+  const view::ViewInput in = test::block_input(TaskKind::directed, 0.2);
+  view::ClientSession c(in, {});
+  const auto out = c.start();
+  const json hello = texts(out).at(0);
+  EXPECT_EQ(hello["type"], "hello");
+  EXPECT_EQ(hello["voxels"], in.body.voxel_cells.size());
+  EXPECT_EQ(hello["chamber_cells"], in.body.chamber_cells.size());
+  EXPECT_EQ(hello["directed"], true);
+  EXPECT_EQ(hello["planned_records"], 13);
+  EXPECT_EQ(hello["component_names"].size(), 5u);
+  EXPECT_EQ(frames_in(out), 1);
+}
+
+TEST(ViewClientSession, MalformedMessagesAreAnsweredAndChangeNothing) {
+  const view::ViewInput in = test::block_input(TaskKind::gait, 0.2);
+  view::ClientSession c(in, {});
+  c.start();
+  for (const std::string& bad :
+       std::vector<std::string>{"", "{", "[]", R"({"type":"evil"})",
+                                R"({"type":"speed","value":9})", std::string(5000, 'x')}) {
+    const auto out = c.handle(bad, true);
+    ASSERT_EQ(out.size(), 1u) << bad.substr(0, 20);
+    EXPECT_FALSE(first_error(out).empty());
+  }
+  EXPECT_FALSE(first_error(c.handle("\x01\x02", false)).empty());
+  EXPECT_TRUE(c.playing());
+  EXPECT_EQ(c.speed(), 1.0);
+  EXPECT_EQ(c.shown(), 0);
+  // Still serving: a step shows the next frame.
+  EXPECT_EQ(frames_in(c.handle(R"({"type":"step"})", true)), 1);
+  EXPECT_EQ(c.shown(), 1);
+}
+
+TEST(ViewClientSession, PlaysPausesSeeksAndResets) {
+  const view::ViewInput in = test::block_input(TaskKind::gait, 0.5);
+  view::ClientSession c(in, {});
+  c.start();
+  c.handle(R"({"type":"speed","value":2})", true);
+  EXPECT_EQ(frames_in(c.tick(0.05)), 1);  // 0.1 s simulated at 2x
+  EXPECT_EQ(c.shown(), 6);
+  c.handle(R"({"type":"pause"})", true);
+  EXPECT_EQ(frames_in(c.tick(0.5)), 0);
+  EXPECT_EQ(c.shown(), 6);
+  c.handle(R"({"type":"seek","frame":2})", true);
+  EXPECT_EQ(c.shown(), 2);
+  c.handle(R"({"type":"seek","frame":100000})", true);  // beyond the end: simulated, clamped
+  EXPECT_EQ(c.shown(), 30);
+  EXPECT_TRUE(c.session().finished());
+  c.handle(R"({"type":"reset"})", true);
+  EXPECT_EQ(c.shown(), 0);
+  EXPECT_EQ(c.session().records(), 1);
+}
+
+TEST(ViewClientSession, RefusesSteeringAGaitRobotAndSavingEarly) {
+  const view::ViewInput in = test::block_input(TaskKind::gait, 0.2);
+  view::ClientSession c(in, {});
+  c.start();
+  EXPECT_NE(first_error(c.handle(R"({"type":"steer","deg":40})", true)).find("directed"),
+            std::string::npos);
+  EXPECT_NE(first_error(c.handle(R"({"type":"save"})", true)).find("ended"), std::string::npos);
+}
+
+TEST(ViewClientSession, SavesIntoTheSaveDirectoryAndTellsOnlyTheNames) {
+  const test::TmpDir dir;
+  const view::ViewInput in = test::block_input(TaskKind::directed, 0.2);
+  view::ClientOptions options;
+  options.save_dir = dir.path;
+  view::ClientSession c(in, options);
+  c.start();
+  c.handle(R"({"type":"steer","deg":40})", true);
+  const auto ended = c.handle(R"({"type":"seek","frame":1000})", true);
+  bool noted = false;
+  for (const auto& j : texts(ended)) noted = noted || j["type"] == "ended";
+  EXPECT_TRUE(noted);
+  const auto out = c.handle(R"({"type":"save"})", true);
+  json saved;
+  for (const auto& j : texts(out))
+    if (j["type"] == "saved") saved = j;
+  ASSERT_FALSE(saved.is_null()) << first_error(out);
+  EXPECT_EQ(saved["trace"], "block-view-1.h5");
+  EXPECT_EQ(saved["steering"], "block-view-1.steering.json");
+  EXPECT_TRUE(std::filesystem::exists(dir.file("block-view-1.h5")));
+  EXPECT_TRUE(std::filesystem::exists(dir.file("block-view-1.steering.json")));
+  // A second save does not replace the first.
+  c.handle(R"({"type":"save"})", true);
+  EXPECT_TRUE(std::filesystem::exists(dir.file("block-view-2.h5")));
+}

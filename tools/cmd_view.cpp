@@ -1,0 +1,174 @@
+// `softevo view`: watch and steer a robot in the browser (view/server.hpp), or write the
+// session as one self-contained HTML file (view/export_html.hpp), or re-simulate a steering log
+// headless and save the trace it gives (a steered session replayed).
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "common/safe_write.hpp"
+#include "tools/commands.hpp"
+#include "view/client_session.hpp"
+#include "view/export_html.hpp"
+#include "view/server.hpp"
+#include "view/session.hpp"
+
+extern char** environ;
+
+namespace softevo::cli {
+
+namespace {
+
+struct ViewArgs {
+  std::string input;
+  view::ViewRequest request;
+  bool best = false;
+  int port = 8765;
+  std::string bind = "127.0.0.1";
+  bool open = false;
+  int max_clients = 4;
+  std::string save_dir = ".";
+  std::string web_dir = SOFTEVO_VIEW_WEB_DIR;
+  std::string export_html;
+  double fps = 30.0;
+  std::string steering;    // steering log to replay headless
+  std::string save_trace;  // where that replay's trace goes
+  bool force = false;
+};
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot be read");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The desktop's browser, when there is one (a cluster node has none: the URL is printed anyway).
+void open_browser(const std::string& url) {
+  pid_t pid = 0;
+  const char* argv[] = {"xdg-open", url.c_str(), nullptr};
+  if (posix_spawnp(&pid, "xdg-open", nullptr, nullptr, const_cast<char* const*>(argv), environ) !=
+      0) {
+    std::fprintf(stderr, "softevo view: --open: xdg-open not found; open %s yourself\n",
+                 url.c_str());
+  }
+}
+
+int run_view(const ViewArgs& args) {
+  const Overwrite overwrite = args.force ? Overwrite::replace : Overwrite::refuse;
+  if (!args.steering.empty() != !args.save_trace.empty())
+    throw std::invalid_argument("view: --steering and --save-trace go together");
+  if (!args.export_html.empty()) check_output_target(args.export_html, overwrite);
+  if (!args.save_trace.empty()) {
+    check_output_target(args.save_trace, overwrite);
+    check_output_target(view::steering_log_path(args.save_trace), overwrite);
+  }
+  const view::ViewInput input = view::load_view_input(args.input, args.request);
+
+  if (!args.save_trace.empty()) {
+    view::Session session(input, view::parse_steering_log(read_text(args.steering), args.steering));
+    while (session.advance()) {
+    }
+    session.save(args.save_trace, overwrite);
+    std::printf("wrote %s and %s (%d records, status %s, fitness %.17g)\n", args.save_trace.c_str(),
+                view::steering_log_path(args.save_trace).c_str(), session.records(),
+                to_string(session.status()), session.result()->fitness);
+    return kExitOk;
+  }
+
+  view::ClientOptions client;
+  client.save_dir = args.save_dir;
+  if (!args.export_html.empty()) {
+    view::ClientSession session(input, client);
+    const std::string page = view::export_html(session, args.web_dir, args.fps);
+    write_file_atomically(args.export_html, page, overwrite);
+    std::printf("wrote %s (%.2f MB, %d records shown at %.0f fps)\n", args.export_html.c_str(),
+                static_cast<double>(page.size()) / 1e6, session.session().records(), args.fps);
+    return kExitOk;
+  }
+
+  view::ServerOptions options;
+  options.bind = args.bind;
+  options.port = args.port;
+  options.max_clients = args.max_clients;
+  options.web_dir = args.web_dir;
+  options.client = client;
+  view::Server server(input, options);
+  std::printf("softevo view: %s (%s %s) at %s\n", input.name.c_str(), view::to_string(input.kind),
+              args.input.c_str(), server.url().c_str());
+  if (args.bind == "127.0.0.1")
+    std::printf("  from another machine: ssh -L %d:127.0.0.1:%d THIS_HOST, then open %s\n",
+                server.port(), server.port(), server.url().c_str());
+  std::printf("  Ctrl-C stops the server\n");
+  std::fflush(stdout);
+  if (args.open) open_browser(server.url());
+  server.run();
+  return kExitOk;
+}
+
+}  // namespace
+
+void register_view(CLI::App& app, int& exit_code) {
+  auto* cmd = app.add_subcommand(
+      "view",
+      "watch a robot in the browser (live simulation, steering, plots, replays) through a local "
+      "HTTP + WebSocket server, or --export-html one self-contained page");
+  auto args = std::make_shared<ViewArgs>();
+  cmd->add_option("INPUT", args->input, "ROBOT.json, RUN.h5 or TRACE.h5")->required();
+  cmd->add_option("--generation", args->request.generation,
+                  "archive: generation (default the last)");
+  auto* id_opt = cmd->add_option("--id", args->request.id, "archive: individual id");
+  cmd->add_flag("--best", args->best, "archive: the generation's best individual (default)")
+      ->excludes(id_opt);
+  cmd->add_option("--config", args->request.config_file,
+                  "robot file: config to simulate with (default: thesis defaults)");
+  cmd->add_option("--set", args->request.overrides,
+                  "robot file: config override section.key=value");
+  cmd->add_option("--task", args->request.task,
+                  "robot file: task (gait | directed | rotate; default: the one the controller's "
+                  "inputs fit)");
+  cmd->add_option("--seconds", args->request.seconds,
+                  "simulated seconds (task.eval_seconds, default 10)");
+  cmd->add_option("--direction", args->request.direction_deg,
+                  "directed task: initial target direction [deg, counter-clockwise]")
+      ->check(finite_in(-180.0, 180.0));
+  cmd->add_option("--robot", args->request.robot_file,
+                  "trace: robot file giving the chamber cells when the trace has none");
+  cmd->add_option("--port", args->port, "TCP port (default 8765; 0 = any free port)")
+      ->check(CLI::Range(0, 65535));
+  cmd->add_option("--bind", args->bind,
+                  "address to listen on (default 127.0.0.1: this machine only; use an SSH port "
+                  "forward from elsewhere)");
+  cmd->add_flag("--open", args->open, "open the page in the desktop's browser (xdg-open)");
+  cmd->add_option("--max-clients", args->max_clients, "pages connected at once (default 4)")
+      ->check(CLI::Range(1, 64));
+  cmd->add_option("--save-dir", args->save_dir,
+                  "where the page's Save writes the trace and steering log (default: here)");
+  cmd->add_option("--web-dir", args->web_dir,
+                  "the page's folder (default: view/web of the source)");
+  cmd->add_option("--export-html", args->export_html,
+                  "write one self-contained HTML replay (three.js, page and frames embedded)");
+  cmd->add_option("--fps", args->fps, "--export-html: frames per simulated second (default 30)")
+      ->check(finite_in(1.0, 240.0));
+  cmd->add_option("--steering", args->steering,
+                  "re-simulate with this steering log (X.steering.json) headless; needs "
+                  "--save-trace");
+  cmd->add_option("--save-trace", args->save_trace,
+                  "with --steering: write the replayed trace here (and its steering log beside)");
+  cmd->add_flag("--force", args->force, "replace existing output files");
+  cmd->callback([&exit_code, args] {
+    if (args->request.seconds &&
+        !(*args->request.seconds >= 0.0 && *args->request.seconds <= 3600.0))
+      throw std::invalid_argument("view: --seconds must be within [0, 3600]");
+    exit_code = run_view(*args);
+  });
+}
+
+}  // namespace softevo::cli

@@ -1,0 +1,68 @@
+// What one connected page controls: its own Session (so two pages never disturb each other),
+// the play state, the speed and the record shown. Network-free, so that the session logic is
+// tested without a socket; view/server.cpp only moves its messages.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "view/protocol.hpp"
+#include "view/session.hpp"
+
+namespace softevo::view {
+
+// A message for the page: JSON text or a binary frame.
+struct Outgoing {
+  bool binary = false;
+  std::string bytes;
+};
+
+struct ClientOptions {
+  std::string save_dir = ".";  // where "save" writes (the page never names a path)
+  // Live simulation per tick at most this long [s] of wall clock, so that a slow robot cannot
+  // stall the server's other work.
+  double max_simulation_seconds_per_tick = 0.05;
+};
+
+class ClientSession {
+ public:
+  ClientSession(const ViewInput& input, ClientOptions options);
+
+  // The hello (what is shown: body, names, units, counts) and the first frame.
+  std::vector<Outgoing> start();
+  // One message from the page; a bad message gives one error reply and changes nothing.
+  std::vector<Outgoing> handle(std::string_view text, bool is_text);
+  // Wall-clock time passed [s]: advances playback (simulating as needed) and returns the frame
+  // to show, if it changed, and the "ended" note when the simulation ends.
+  std::vector<Outgoing> tick(double wall_seconds);
+
+  // What the page is told first: the body, names, units and counts (JSON).
+  std::string hello() const;
+  // Simulates the rest of the session and returns the end note the page would get (JSON).
+  std::string run_to_end();
+
+  const Session& session() const { return *session_; }
+  bool playing() const { return playing_; }
+  double speed() const { return speed_; }
+  int shown() const { return shown_; }
+
+ private:
+  std::vector<Outgoing> act(const ClientMessage& m);
+  void show(int record, std::vector<Outgoing>& out);
+  void note_end(std::vector<Outgoing>& out);
+  std::string ended_json() const;
+  std::string state_json() const;
+
+  const ViewInput& input_;
+  ClientOptions options_;
+  std::unique_ptr<Session> session_;
+  bool playing_ = true;
+  double speed_ = 1.0;
+  double play_time_ = 0.0;  // simulated time the playback has reached [s]
+  int shown_ = -1;
+  bool end_noted_ = false;
+  int saves_ = 0;
+};
+
+}  // namespace softevo::view

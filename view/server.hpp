@@ -1,0 +1,59 @@
+// The HTTP + WebSocket server of `softevo view` (Boost.Beast on Boost.Asio, one thread).
+//
+// HTTP serves a fixed table of files read into memory at start: the page (view/web) and three.js
+// from view/web/node_modules; no path from a request ever reaches the file system. The WebSocket
+// at /ws gives each page its own ClientSession, ticked 60 times a second. Limits: at most
+// `max_clients` pages at once (more get HTTP 503), a page from another origin is refused (403;
+// a web site the user visits must not drive the local server), client messages larger than
+// kMaxWireMessageBytes close the socket (code 1009), smaller bad ones are answered with an error
+// by ClientSession. A page that goes away releases its session at once.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "view/client_session.hpp"
+#include "view/session.hpp"
+
+namespace softevo::view {
+
+inline constexpr std::size_t kMaxWireMessageBytes = 64 * 1024;
+
+struct ServerOptions {
+  std::string bind = "127.0.0.1";
+  int port = 8765;  // 0 = any free port
+  int max_clients = 4;
+  std::string web_dir;  // view/web with node_modules
+  ClientOptions client;
+};
+
+// The files the page needs, by URL path -> (content type, bytes). Throws std::runtime_error
+// naming the missing file and how to get it (npm ci in view/web).
+struct WebFile {
+  std::string content_type;
+  std::string bytes;
+};
+std::vector<std::pair<std::string, WebFile>> load_web_files(const std::string& web_dir);
+
+class Server {
+ public:
+  // Binds at once (throws std::runtime_error naming the address when it cannot).
+  Server(const ViewInput& input, ServerOptions options);
+  ~Server();
+  int port() const;  // the bound port
+  std::string url() const;
+  // Serves until stop() or SIGINT / SIGTERM.
+  void run();
+  void stop();
+  // Pages connected now (for tests and the status line).
+  int clients() const;
+
+  struct Impl;  // the connections of server.cpp reach it (public only for them)
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace softevo::view

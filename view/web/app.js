@@ -1,0 +1,478 @@
+// The page of `softevo view` (docs/viewer.md): draws the frames of a session, either streamed
+// by the server over the WebSocket /ws (live simulation, steering, scrubbing) or embedded in an
+// --export-html file (replayed here, no network). Everything physical comes from softevo; this
+// page only draws and sends the user's commands.
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { StripChart } from 'softevo/plots.js';
+
+THREE.Object3D.DEFAULT_UP.set(0, 0, 1);  // softevo's z is up
+
+const $ = (id) => document.getElementById(id);
+// What tests and scripts read: counts and the last frame.
+const probe = { frames: 0, renders: 0, fps: 0, bytes: 0, hello: null, ended: null, errors: [],
+  saved: null, last: null, mode: '' };
+window.softevo = probe;
+
+// ---------------------------------------------------------------- scene
+const sceneEl = $('scene');
+const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+renderer.setPixelRatio(window.devicePixelRatio || 1);
+sceneEl.appendChild(renderer.domElement);
+const scene = new THREE.Scene();
+scene.background = new THREE.Color(0xffffff);
+const camera = new THREE.PerspectiveCamera(35, 1, 0.002, 200);
+const controls = new OrbitControls(camera, renderer.domElement);
+controls.enableDamping = false;
+scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8a80, 2.2));
+const sun = new THREE.DirectionalLight(0xffffff, 1.4);
+sun.position.set(-1, -2, 3);
+scene.add(sun);
+
+let hello = null;
+let voxelMesh = null, chamberMesh = null, floorGroup = null, targetLine = null, pathLine = null;
+let start = new THREE.Vector3();  // centroid of the first frame [m]
+let floorZ = -0.005;
+let lastCentroid = null;
+let pathCount = 0, pathLast = -1;  // centroid path points drawn, last record among them
+const matrix = new THREE.Matrix4(), quat = new THREE.Quaternion(), pos = new THREE.Vector3();
+const scaleVec = new THREE.Vector3(1, 1, 1);
+let charts = null;
+let lastFrame = null;  // the frame shown
+let duration = 10;
+
+function resize() {
+  const w = sceneEl.clientWidth, h = sceneEl.clientHeight;
+  renderer.setSize(w, h, false);
+  camera.aspect = w / Math.max(h, 1);
+  camera.updateProjectionMatrix();
+}
+window.addEventListener('resize', resize);
+
+// A text label on the floor (scale bar).
+function label(text, size) {
+  const c = document.createElement('canvas');
+  c.width = 256; c.height = 64;
+  const g = c.getContext('2d');
+  g.fillStyle = '#333';
+  g.font = '40px sans-serif';
+  g.fillText(text, 4, 46);
+  const tex = new THREE.CanvasTexture(c);
+  const m = new THREE.Mesh(new THREE.PlaneGeometry(size * 4, size),
+    new THREE.MeshBasicMaterial({ map: tex, transparent: true, depthWrite: false }));
+  return m;
+}
+
+function buildFloor(center) {
+  if (floorGroup) scene.remove(floorGroup);
+  floorGroup = new THREE.Group();
+  const s = hello.voxel_size;
+  const extent = 2.0;  // [m] half width
+  const plane = new THREE.Mesh(new THREE.PlaneGeometry(2 * extent, 2 * extent),
+    new THREE.MeshBasicMaterial({ color: 0xd6d6d1 }));
+  plane.position.set(center.x, center.y, floorZ - 0.0002);
+  plane.name = 'floor';
+  floorGroup.add(plane);
+  for (const [step, colour] of [[10 * s, 0xbdbdb6], [100 * s, 0x8d8d86]]) {
+    const divisions = Math.round(2 * extent / step);
+    const grid = new THREE.GridHelper(2 * extent, divisions, colour, colour);
+    grid.rotation.x = Math.PI / 2;
+    grid.position.set(center.x, center.y, floorZ + (step > 20 * s ? 0.0001 : 0));
+    floorGroup.add(grid);
+  }
+  // Scale bar: 10 cm (10 voxel lengths of 1 cm) in black, with its label.
+  const bar = 0.1;
+  const y0 = center.y - 0.12;
+  const barGeo = new THREE.BufferGeometry().setFromPoints([
+    new THREE.Vector3(center.x - 0.05, y0, floorZ + 0.0003), new THREE.Vector3(center.x - 0.05 + bar, y0, floorZ + 0.0003)]);
+  floorGroup.add(new THREE.Line(barGeo, new THREE.LineBasicMaterial({ color: 0x000000 })));
+  const text = label('10 cm (grid 10 / 100 voxels)', 0.012);
+  text.position.set(center.x - 0.05 + 0.024, y0 - 0.008, floorZ + 0.0003);
+  floorGroup.add(text);
+  scene.add(floorGroup);
+}
+
+function setTarget(deg) {
+  if (!hello.directed) return;
+  if (!targetLine) {
+    const geo = new THREE.BufferGeometry().setFromPoints([new THREE.Vector3(), new THREE.Vector3(1, 0, 0)]);
+    targetLine = new THREE.Line(geo, new THREE.LineBasicMaterial({ color: 0xdd1414 }));
+    scene.add(targetLine);
+  }
+  const r = deg * Math.PI / 180, len = 1.5;
+  const p = targetLine.geometry.attributes.position;
+  p.setXYZ(0, start.x, start.y, floorZ + 0.0006);
+  p.setXYZ(1, start.x + len * Math.cos(r), start.y + len * Math.sin(r), floorZ + 0.0006);
+  p.needsUpdate = true;
+  if (deg !== dialDeg) {
+    $('target').textContent = deg.toFixed(0);
+    dialDeg = deg;
+    drawDial();
+  }
+}
+
+function setup(h) {
+  hello = h;
+  probe.hello = h;
+  duration = (h.planned_records - 1) / h.control_rate;
+  floorZ = -0.5 * h.voxel_size;
+  $('title').textContent = `${h.name} (${h.kind}, ${h.task}${h.live ? ', live' : ''})`;
+  const s = h.voxel_size * 1.04;  // deformed body: hide the cracks between rigid cubes
+  if (voxelMesh) scene.remove(voxelMesh);
+  if (chamberMesh) scene.remove(chamberMesh);
+  // Thesis colours: structural material semi-transparent, blue (hard) to red (soft); chambers
+  // dark, drawn first so that they show through.
+  voxelMesh = new THREE.InstancedMesh(new THREE.BoxGeometry(s, s, s),
+    new THREE.MeshLambertMaterial({ transparent: true, opacity: 0.22, depthWrite: false }), h.voxels);
+  h.voxel_colours.forEach((c, i) => voxelMesh.setColorAt(i, new THREE.Color(c[0] / 255, c[1] / 255, c[2] / 255)));
+  voxelMesh.renderOrder = 2;
+  // The instances move far from where they started: three.js's cached bounds would cull them.
+  voxelMesh.frustumCulled = false;
+  scene.add(voxelMesh);
+  if (h.chamber_cells > 0) {
+    chamberMesh = new THREE.InstancedMesh(new THREE.BoxGeometry(s * 0.97, s * 0.97, s * 0.97),
+      new THREE.MeshLambertMaterial({ transparent: true, opacity: 0.9 }), h.chamber_cells);
+    for (let j = 0; j < h.chamber_cells; j++) chamberMesh.setColorAt(j, new THREE.Color(0.2, 0.2, 0.22));
+    chamberMesh.renderOrder = 1;
+    chamberMesh.frustumCulled = false;
+    scene.add(chamberMesh);
+  }
+  const n = h.planned_records;
+  pathLine && scene.remove(pathLine);
+  const pathGeo = new THREE.BufferGeometry();
+  pathGeo.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * n), 3));
+  pathGeo.setDrawRange(0, 0);
+  pathCount = 0;
+  pathLast = -1;
+  pathLine = new THREE.Line(pathGeo, new THREE.LineBasicMaterial({ color: 0x1a1a1a }));
+  scene.add(pathLine);
+  const chambers = [...Array(h.chambers).keys()];
+  charts = {
+    pressure: new StripChart($('plot-pressure'), 'chamber pressure', chambers.map((q) => `c${q}`), 'kPa', n),
+    valves: new StripChart($('plot-valves'), 'valve commands (in/out)',
+      chambers.flatMap((q) => [`c${q}in`, `c${q}out`]), '0..1', n),
+    fitness: new StripChart($('plot-fitness'), 'fitness so far', ['fitness', ...h.component_names], 'task units', n),
+  };
+  $('scrub').max = String(n - 1);
+  $('steering').style.display = h.directed && h.live ? '' : 'none';
+  $('save').style.display = h.live && probe.mode === 'live' ? '' : 'none';
+  targetLine && scene.remove(targetLine);
+  targetLine = null;
+  lastCentroid = null;
+  renderFitness(null);
+}
+
+function centroidOf(positions, count) {
+  const c = new THREE.Vector3();
+  for (let i = 0; i < count; i++) c.x += positions[3 * i], c.y += positions[3 * i + 1], c.z += positions[3 * i + 2];
+  return c.multiplyScalar(1 / Math.max(count, 1));
+}
+
+function setView(name) {
+  const c = lastCentroid || start;
+  const d = 0.45;
+  const offsets = { side: [0, -d, 0.06], top: [0, -0.001, d], iso: [-0.6 * d, -0.6 * d, 0.45 * d] };
+  const o = offsets[name] || offsets.side;
+  controls.target.copy(c);
+  camera.position.set(c.x + o[0], c.y + o[1], c.z + o[2]);
+  controls.update();
+}
+document.querySelectorAll('[data-view]').forEach((b) => b.addEventListener('click', () => setView(b.dataset.view)));
+
+// Draws a frame: {index, time, items, positions (Float32Array), quats (Float32Array w,x,y,z),
+// pressures, valves, components, fitness, cx, cy, heading, target, last}.
+function showFrame(f) {
+  probe.frames++;
+  lastFrame = f;
+  probe.last = { index: f.index, time: f.time, fitness: f.fitness, cx: f.cx, cy: f.cy, heading: f.heading,
+    target: f.target, last: f.last };
+  const v = hello.voxels;
+  if (f.index === 0 || !lastCentroid) {
+    start = centroidOf(f.positions, v);
+    if (!floorGroup || f.index === 0) buildFloor(start);
+    if (!lastCentroid) { lastCentroid = start.clone(); setView('side'); }
+  }
+  for (let i = 0; i < f.items; i++) {
+    pos.set(f.positions[3 * i], f.positions[3 * i + 1], f.positions[3 * i + 2]);
+    quat.set(f.quats[4 * i + 1], f.quats[4 * i + 2], f.quats[4 * i + 3], f.quats[4 * i]).normalize();
+    matrix.compose(pos, quat, scaleVec);
+    if (i < v) voxelMesh.setMatrixAt(i, matrix);
+    else if (chamberMesh) chamberMesh.setMatrixAt(i - v, matrix);
+  }
+  voxelMesh.instanceMatrix.needsUpdate = true;
+  if (chamberMesh) {
+    // Darker the more inflated (1.0 -> 1.2 bar), as the still renderer does.
+    for (let j = 0; j < hello.chamber_cells; j++) {
+      const p = f.pressures[hello.chamber_index[j]];
+      const inflation = Number.isFinite(p) ? Math.min(Math.max((p - 1e5) / 0.2e5, 0), 1) : 0;
+      const g = 0.32 - 0.24 * inflation;
+      chamberMesh.setColorAt(j, new THREE.Color(g, g, g * 1.1));
+    }
+    chamberMesh.instanceMatrix.needsUpdate = true;
+    chamberMesh.instanceColor.needsUpdate = true;
+  }
+  const c = centroidOf(f.positions, v);
+  if (lastCentroid && $('follow').checked) {
+    const delta = c.clone().sub(lastCentroid);
+    camera.position.add(delta);
+    controls.target.add(delta);
+  }
+  lastCentroid = c;
+  // Centroid path on the floor: a point per new record (scrubbing back keeps what was walked).
+  if (f.index > pathLast) {
+    const p = pathLine.geometry.attributes.position;
+    if (pathCount < p.count) {
+      p.setXYZ(pathCount++, start.x + f.cx, start.y + f.cy, floorZ + 0.0005);
+      p.needsUpdate = true;
+      pathLine.geometry.setDrawRange(0, pathCount);
+      pathLine.geometry.computeBoundingSphere();
+    }
+    pathLast = f.index;
+  }
+  if (hello.directed) setTarget(f.target);
+  charts.pressure.set(f.index, f.time, Array.from(f.pressures, (x) => (x - 1e5) / 1000));
+  charts.valves.set(f.index, f.time, f.valves);
+  charts.fitness.set(f.index, f.time, [f.fitness, ...f.components]);
+  $('clock').textContent = `${f.time.toFixed(2)} s / ${duration.toFixed(2)} s`;
+  if (probe.mode === 'live') $('scrub').value = String(f.index);
+  renderFitness(f);
+}
+
+function renderFitness(f) {
+  if (!hello) return;
+  const rows = [];
+  const num = (x) => (x === undefined || x === null ? '' : Number(x).toPrecision(6));
+  rows.push(['fitness so far', f ? num(f.fitness) : '']);
+  hello.component_names.forEach((n, i) => rows.push([n, f ? num(f.components[i]) : '']));
+  if (probe.ended && probe.ended.fitness !== undefined) rows.push(['final fitness (softevo)', num(probe.ended.fitness)]);
+  if (hello.archived) {
+    rows.push([`archived fitness (gen ${hello.archived.generation} id ${hello.archived.id})`, num(hello.archived.fitness)]);
+    if (hello.archived.units > 1 && hello.archived.unit_fitness !== undefined)
+      rows.push(['archived fitness of unit 0 (shown)', num(hello.archived.unit_fitness)]);
+  }
+  if (hello.trace_fitness !== undefined) rows.push(['traced fitness', num(hello.trace_fitness)]);
+  $('fitness').innerHTML = '<table>' + rows.map((r) => `<tr><td>${r[0]}</td><td>${r[1]}</td></tr>`).join('') + '</table>';
+}
+
+function ended(e) {
+  probe.ended = e;
+  const killed = e.status !== 'ok';
+  const banner = $('banner');
+  banner.style.display = killed ? 'block' : 'none';
+  if (killed) banner.textContent = `${e.status.replace('_', ' ')} at ${Number(e.time).toFixed(2)} s${e.message ? ': ' + e.message : ''}`;
+  $('status').textContent = ` ${e.status}, fitness ${Number(e.fitness ?? 0).toPrecision(8)}`;
+  renderFitness(lastFrame);
+}
+
+// ---------------------------------------------------------------- steering dial
+const dial = $('dial');
+let dialDeg = 0;
+function drawDial() {
+  const dpr = window.devicePixelRatio || 1, w = dial.clientWidth || 110;
+  dial.width = w * dpr; dial.height = w * dpr;
+  const g = dial.getContext('2d');
+  g.setTransform(dpr, 0, 0, dpr, 0, 0);
+  const r = w / 2 - 4;
+  g.clearRect(0, 0, w, w);
+  g.strokeStyle = '#999';
+  g.beginPath(); g.arc(w / 2, w / 2, r, 0, 2 * Math.PI); g.stroke();
+  g.fillStyle = '#999'; g.font = '9px sans-serif';
+  g.fillText('+x', w - 16, w / 2 - 3);
+  const a = dialDeg * Math.PI / 180;
+  g.strokeStyle = '#dd1414'; g.lineWidth = 3;
+  g.beginPath(); g.moveTo(w / 2, w / 2); g.lineTo(w / 2 + r * Math.cos(a), w / 2 - r * Math.sin(a)); g.stroke();
+}
+function steerTo(deg) {
+  deg = Math.max(-180, Math.min(180, deg));
+  send({ type: 'steer', deg: Math.round(deg) });
+}
+function dialEvent(ev) {
+  const b = dial.getBoundingClientRect();
+  const x = ev.clientX - b.left - b.width / 2, y = b.top + b.height / 2 - ev.clientY;
+  steerTo(Math.atan2(y, x) * 180 / Math.PI);
+}
+dial.addEventListener('pointerdown', (ev) => { dial.setPointerCapture(ev.pointerId); dialEvent(ev); });
+dial.addEventListener('pointermove', (ev) => { if (ev.buttons) dialEvent(ev); });
+// Shift+drag on the floor: the direction from the start towards the pointer.
+const raycaster = new THREE.Raycaster();
+renderer.domElement.addEventListener('pointerdown', (ev) => { if (ev.shiftKey) controls.enabled = false; });
+renderer.domElement.addEventListener('pointerup', () => { controls.enabled = true; });
+renderer.domElement.addEventListener('pointermove', (ev) => {
+  if (!ev.shiftKey || !ev.buttons || !hello || !hello.directed) return;
+  const b = renderer.domElement.getBoundingClientRect();
+  raycaster.setFromCamera(new THREE.Vector2(((ev.clientX - b.left) / b.width) * 2 - 1, -((ev.clientY - b.top) / b.height) * 2 + 1), camera);
+  const hit = new THREE.Vector3();
+  if (raycaster.ray.intersectPlane(new THREE.Plane(new THREE.Vector3(0, 0, 1), -floorZ), hit))
+    steerTo(Math.atan2(hit.y - start.y, hit.x - start.x) * 180 / Math.PI);
+});
+
+// ---------------------------------------------------------------- sources
+let send = () => {};
+let playing = true;
+
+function decodeLiveFrame(buf) {
+  const dv = new DataView(buf);
+  if (dv.getUint32(0, true) !== 0x31465653) throw new Error('not a softevo frame');
+  const items = dv.getUint32(8, true), chambers = dv.getUint16(12, true), nc = dv.getUint16(14, true);
+  let o = 48;
+  const positions = new Float32Array(buf, o, 3 * items); o += 12 * items;
+  const q16 = new Int16Array(buf, o, 4 * items); o += 8 * items;
+  const quats = Float32Array.from(q16, (x) => x / 32767);
+  const pressures = new Float32Array(buf, o, chambers); o += 4 * chambers;
+  const valves = new Float32Array(buf, o, 2 * chambers); o += 8 * chambers;
+  const components = new Float32Array(buf, o, nc);
+  return { index: dv.getUint32(4, true), time: dv.getFloat64(16, true), items, positions, quats, pressures,
+    valves, components, fitness: dv.getFloat32(24, true), cx: dv.getFloat32(28, true), cy: dv.getFloat32(32, true),
+    heading: dv.getFloat32(36, true), target: dv.getFloat32(40, true), last: (dv.getUint32(44, true) & 1) === 1 };
+}
+
+function startLive() {
+  probe.mode = 'live';
+  const ws = new WebSocket(`ws://${location.host}/ws`);
+  ws.binaryType = 'arraybuffer';
+  probe.socket = ws;
+  send = (m) => { if (ws.readyState === 1) ws.send(JSON.stringify(m)); };
+  ws.onmessage = (ev) => {
+    if (typeof ev.data !== 'string') {
+      probe.bytes += ev.data.byteLength;
+      const f = decodeLiveFrame(ev.data);
+      showFrame(f);
+      return;
+    }
+    probe.bytes += ev.data.length;
+    const m = JSON.parse(ev.data);
+    if (m.type === 'hello') setup(m);
+    else if (m.type === 'ended') ended(m);
+    else if (m.type === 'error') { probe.errors.push(m.message); $('note').textContent = 'server: ' + m.message; }
+    else if (m.type === 'saved') { probe.saved = m; $('note').textContent = `saved ${m.trace} and ${m.steering} (in the server's --save-dir)`; }
+    else if (m.type === 'state') { playing = m.playing; $('play').textContent = playing ? 'Pause' : 'Play'; }
+  };
+  ws.onclose = () => { $('note').textContent = 'disconnected from softevo view'; };
+  $('play').onclick = () => send({ type: playing ? 'pause' : 'play' });
+  $('step').onclick = () => send({ type: 'step' });
+  $('reset').onclick = () => {
+    probe.ended = null; $('banner').style.display = 'none'; $('status').textContent = '';
+    if (charts) Object.values(charts).forEach((c) => c.clear());
+    pathLine && pathLine.geometry.setDrawRange(0, 0);
+    pathCount = 0;
+    pathLast = -1;
+    send({ type: 'reset' });
+  };
+  $('speed').onchange = () => send({ type: 'speed', value: Number($('speed').value) });
+  $('scrub').oninput = () => send({ type: 'seek', frame: Number($('scrub').value) });
+  $('save').onclick = () => send({ type: 'save' });
+}
+
+// Byte planes back to 4-byte values (see view/export_html.hpp).
+function planes(bytes, offset, n, Type) {
+  const out = new Uint8Array(4 * n);
+  for (let k = 0; k < 4; k++) for (let i = 0; i < n; i++) out[4 * i + k] = bytes[offset + k * n + i];
+  return new Type(out.buffer);
+}
+
+async function startEmbedded(el) {
+  probe.mode = 'export';
+  setup(JSON.parse($('softevo-hello').textContent));
+  const endNote = JSON.parse($('softevo-ended').textContent);
+  const raw = Uint8Array.from(atob(el.textContent.trim()), (c) => c.charCodeAt(0));
+  const inflated = new Uint8Array(await new Response(new Blob([raw]).stream().pipeThrough(new DecompressionStream('deflate'))).arrayBuffer());
+  const dv = new DataView(inflated.buffer);
+  if (dv.getUint32(0, true) !== 0x31585653) throw new Error('embedded frames: bad magic');
+  const F = dv.getUint32(4, true), N = dv.getUint32(8, true), C = dv.getUint16(12, true), K = dv.getUint16(14, true);
+  const quantum = dv.getFloat32(16, true);
+  let o = 20;
+  const time = planes(inflated, o, F, Float32Array); o += 4 * F;
+  const dpos = planes(inflated, o, F * N * 3, Int32Array); o += 12 * F * N;
+  const dori = new Uint8Array(inflated.buffer, o, F * N * 4); o += 4 * F * N;
+  const pressures = planes(inflated, o, F * C, Float32Array); o += 4 * F * C;
+  const valves = new Uint8Array(inflated.buffer, o, F * 2 * C); o += 2 * F * C;
+  const comps = planes(inflated, o, F * K, Float32Array); o += 4 * F * K;
+  const series = [];
+  for (let s = 0; s < 5; s++) { series.push(planes(inflated, o, F, Float32Array)); o += 4 * F; }
+  const frames = [];
+  const accP = new Int32Array(3 * N), accO = new Uint8Array(4 * N);
+  for (let f = 0; f < F; f++) {
+    const positions = new Float32Array(3 * N), quats = new Float32Array(4 * N);
+    for (let i = 0; i < 3 * N; i++) { accP[i] += dpos[f * 3 * N + i]; positions[i] = accP[i] * quantum; }
+    for (let i = 0; i < 4 * N; i++) { accO[i] = (accO[i] + dori[f * 4 * N + i]) & 255; quats[i] = ((accO[i] << 24) >> 24) / 127; }
+    frames.push({ index: Math.round(time[f] * hello.control_rate), time: time[f], items: N, positions, quats,
+      pressures: pressures.subarray(f * C, (f + 1) * C), valves: Float32Array.from(valves.subarray(f * 2 * C, (f + 1) * 2 * C), (u) => u / 255),
+      components: comps.subarray(f * K, (f + 1) * K), fitness: series[0][f], cx: series[1][f], cy: series[2][f],
+      heading: series[3][f], target: series[4][f], last: f === F - 1 });
+  }
+  probe.embeddedFrames = F;
+  let shown = -1, playTime = 0, speed = 1;
+  const show = (k) => {
+    k = Math.max(0, Math.min(F - 1, k));
+    if (k === shown) return;
+    if (k < shown) { charts && Object.values(charts).forEach((c) => { c.cursor = -1; c.dirty = true; }); }
+    shown = k;
+    showFrame(frames[k]);
+    if (k === F - 1) ended(endNote);
+  };
+  $('scrub').max = String(F - 1);
+  const seek = (k) => { show(k); playTime = frames[shown].time; };
+  $('play').onclick = () => { playing = !playing; if (playing && shown === F - 1) seek(0); $('play').textContent = playing ? 'Pause' : 'Play'; };
+  $('step').onclick = () => { playing = false; $('play').textContent = 'Play'; seek(shown + 1); };
+  $('reset').onclick = () => seek(0);
+  $('speed').onchange = () => { speed = Number($('speed').value); };
+  $('scrub').oninput = () => seek(Number($('scrub').value));
+  // The scrubber counts exported frames here, not records.
+  seek(0);
+  let t0 = performance.now();
+  const tick = (now) => {
+    const dt = Math.min((now - t0) / 1000, 1); t0 = now;
+    if (playing) {
+      playTime += dt * speed;
+      let k = Math.max(shown, 0);
+      while (k + 1 < F && frames[k + 1].time <= playTime) k++;
+      show(k);
+      $('scrub').value = String(shown);
+      if (shown === F - 1) { playing = false; $('play').textContent = 'Play'; }
+    }
+    requestAnimationFrame(tick);
+  };
+  requestAnimationFrame(tick);
+}
+
+// ---------------------------------------------------------------- WebM recording
+let recorder = null;
+$('record').onclick = () => {
+  if (recorder) { recorder.stop(); return; }
+  const chunks = [];
+  recorder = new MediaRecorder(renderer.domElement.captureStream(30), { mimeType: 'video/webm' });
+  recorder.ondataavailable = (e) => e.data.size && chunks.push(e.data);
+  recorder.onstop = () => {
+    const a = document.createElement('a');
+    a.href = URL.createObjectURL(new Blob(chunks, { type: 'video/webm' }));
+    a.download = `${hello ? hello.name.replace(/[^A-Za-z0-9_-]+/g, '_') : 'softevo'}.webm`;
+    a.click();
+    probe.recorded = chunks.reduce((n, c) => n + c.size, 0);
+    recorder = null;
+    $('record').textContent = 'Record WebM';
+  };
+  recorder.start(250);
+  $('record').textContent = 'Stop recording';
+};
+
+// ---------------------------------------------------------------- render loop
+let fpsCount = 0, fpsStart = performance.now(), plotsDrawn = 0;
+function animate(now) {
+  requestAnimationFrame(animate);
+  controls.update();
+  renderer.render(scene, camera);
+  probe.renders++;
+  fpsCount++;
+  if (now - fpsStart >= 1000) { probe.fps = (fpsCount * 1000) / (now - fpsStart); fpsCount = 0; fpsStart = now; }
+  // The plots at 5 Hz: hundreds of series points are not worth redrawing every frame.
+  if (charts && now - plotsDrawn > 200) {
+    plotsDrawn = now;
+    for (const c of Object.values(charts)) c.draw(duration);
+  }
+}
+resize();
+drawDial();
+requestAnimationFrame(animate);
+const embedded = $('softevo-frames');
+if (embedded) startEmbedded(embedded).catch((e) => { probe.errors.push(String(e)); $('note').textContent = String(e); });
+else startLive();
