@@ -2,8 +2,10 @@
 #include "view/client_session.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <filesystem>
+#include <set>
 
 #include <nlohmann/json.hpp>
 
@@ -51,6 +53,23 @@ std::string ClientSession::hello() const {
     colours.push_back({c[0], c[1], c[2]});
   }
   j["voxel_colours"] = colours;
+  // The outer skin (a face towards an empty cell; chambers count as filled): the page draws
+  // only these voxels, as the still renderer does, so that the chambers show through.
+  std::set<std::array<int, 3>> filled;
+  for (const auto& c : body.voxel_cells) filled.insert({c.x(), c.y(), c.z()});
+  for (const auto& c : body.chamber_cells) filled.insert({c.x(), c.y(), c.z()});
+  json skin = json::array();
+  for (const auto& c : body.voxel_cells) {
+    bool outside = false;
+    for (int axis = 0; axis < 3 && !outside; ++axis)
+      for (int step : {-1, 1}) {
+        std::array<int, 3> n = {c.x(), c.y(), c.z()};
+        n[static_cast<std::size_t>(axis)] += step;
+        outside = outside || !filled.count(n);
+      }
+    skin.push_back(outside ? 1 : 0);
+  }
+  j["voxel_skin"] = skin;
   j["chamber_index"] = body.chamber_index;
   j["planned_records"] = session_->planned_records();
   j["control_rate"] = session_->control_rate();

@@ -101,7 +101,9 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
     ++server_.clients;
     ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     ws_.read_message_max(kMaxWireMessageBytes);
-    ws_.async_accept(request, [self = shared_from_this()](beast::error_code ec) {
+    // Kept in the session: the request must outlive the asynchronous accept.
+    upgrade_ = std::move(request);
+    ws_.async_accept(upgrade_, [self = shared_from_this()](beast::error_code ec) {
       if (ec) return;
       try {
         self->client_ =
@@ -184,6 +186,7 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
   asio::steady_timer timer_;
   Server::Impl& server_;
   std::unique_ptr<ClientSession> client_;
+  http::request<http::string_body> upgrade_;
   beast::flat_buffer buffer_;
   std::deque<Outgoing> queue_;
   bool writing_ = false;

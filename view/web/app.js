@@ -36,7 +36,7 @@ let floorZ = -0.005;
 let lastCentroid = null;
 let pathCount = 0, pathLast = -1;  // centroid path points drawn, last record among them
 const matrix = new THREE.Matrix4(), quat = new THREE.Quaternion(), pos = new THREE.Vector3();
-const scaleVec = new THREE.Vector3(1, 1, 1);
+const scaleVec = new THREE.Vector3(1, 1, 1), hidden = new THREE.Vector3(0, 0, 0);
 let charts = null;
 let lastFrame = null;  // the frame shown
 let duration = 10;
@@ -123,7 +123,7 @@ function setup(h) {
   // Thesis colours: structural material semi-transparent, blue (hard) to red (soft); chambers
   // dark, drawn first so that they show through.
   voxelMesh = new THREE.InstancedMesh(new THREE.BoxGeometry(s, s, s),
-    new THREE.MeshLambertMaterial({ transparent: true, opacity: 0.22, depthWrite: false }), h.voxels);
+    new THREE.MeshLambertMaterial({ transparent: true, opacity: 0.35, depthWrite: false }), h.voxels);
   h.voxel_colours.forEach((c, i) => voxelMesh.setColorAt(i, new THREE.Color(c[0] / 255, c[1] / 255, c[2] / 255)));
   voxelMesh.renderOrder = 2;
   // The instances move far from where they started: three.js's cached bounds would cull them.
@@ -131,7 +131,7 @@ function setup(h) {
   scene.add(voxelMesh);
   if (h.chamber_cells > 0) {
     chamberMesh = new THREE.InstancedMesh(new THREE.BoxGeometry(s * 0.97, s * 0.97, s * 0.97),
-      new THREE.MeshLambertMaterial({ transparent: true, opacity: 0.9 }), h.chamber_cells);
+      new THREE.MeshBasicMaterial({ transparent: true, opacity: 0.9 }), h.chamber_cells);
     for (let j = 0; j < h.chamber_cells; j++) chamberMesh.setColorAt(j, new THREE.Color(0.2, 0.2, 0.22));
     chamberMesh.renderOrder = 1;
     chamberMesh.frustumCulled = false;
@@ -195,7 +195,8 @@ function showFrame(f) {
   for (let i = 0; i < f.items; i++) {
     pos.set(f.positions[3 * i], f.positions[3 * i + 1], f.positions[3 * i + 2]);
     quat.set(f.quats[4 * i + 1], f.quats[4 * i + 2], f.quats[4 * i + 3], f.quats[4 * i]).normalize();
-    matrix.compose(pos, quat, scaleVec);
+    // Inner voxels are not drawn (only the skin is, as in the thesis figures).
+    matrix.compose(pos, quat, i < v && hello.voxel_skin && !hello.voxel_skin[i] ? hidden : scaleVec);
     if (i < v) voxelMesh.setMatrixAt(i, matrix);
     else if (chamberMesh) chamberMesh.setMatrixAt(i - v, matrix);
   }
