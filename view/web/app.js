@@ -116,7 +116,7 @@ function setup(h) {
   probe.hello = h;
   duration = (h.planned_records - 1) / h.control_rate;
   floorZ = -0.5 * h.voxel_size;
-  $('title').textContent = `${h.name} (${h.kind}, ${h.task}${h.live ? ', live' : ''})`;
+  $('title').textContent = `${h.name} (${h.kind}, ${h.task}${probe.mode === 'live' && h.live ? ', live' : probe.mode === 'export' ? ', exported replay' : ''})`;
   const s = h.voxel_size * 1.04;  // deformed body: hide the cracks between rigid cubes
   if (voxelMesh) scene.remove(voxelMesh);
   if (chamberMesh) scene.remove(chamberMesh);
