@@ -46,7 +46,36 @@ struct KeyDef {
   // task.path_penalty_weight of the directed task) stay in every canonical text, because the
   // config hash of every existing archive covers them.
   std::optional<TaskKind> only_for_task = std::nullopt;
+  // A key printed (and hashed) only when this holds (keys added after archives existed: at
+  // their default they leave the canonical text, and so every existing config hash, unchanged).
+  bool (*printed_if)(const Config&) = nullptr;
+  // A key that is an error to set unless this holds (it would be ignored), and why.
+  bool (*settable_if)(const Config&) = nullptr;
+  const char* settable_text = "";
 };
+
+// `def` printed and settable only when `when` holds (`why` says when, for the error).
+KeyDef only_when(KeyDef def, bool (*when)(const Config&), const char* why) {
+  def.printed_if = when;
+  def.settable_if = when;
+  def.settable_text = why;
+  return def;
+}
+bool terrain_not_flat(const Config& c) {
+  return c.terrain.kind != "flat";
+}
+bool terrain_heightfield(const Config& c) {
+  return c.terrain.kind == "heightfield";
+}
+bool terrain_bumps(const Config& c) {
+  return terrain_heightfield(c) && c.terrain.heightfield == "bumps";
+}
+bool terrain_steps(const Config& c) {
+  return terrain_heightfield(c) && c.terrain.heightfield == "steps";
+}
+bool terrain_slope(const Config& c) {
+  return terrain_heightfield(c) && c.terrain.heightfield == "slope";
+}
 
 std::vector<std::string> task_kind_names() {
   std::vector<std::string> names;
@@ -54,8 +83,8 @@ std::vector<std::string> task_kind_names() {
   return names;
 }
 
-const std::vector<std::string> kSections = {"run",        "task", "physics", "pneumatics",
-                                            "controller", "body", "neat"};
+const std::vector<std::string> kSections = {"run",        "task",       "physics", "terrain",
+                                            "pneumatics", "controller", "body",    "neat"};
 
 std::vector<KeyDef> schema(Config& c) {
   const std::vector<std::string> activations = {"sigmoid", "sin",     "abs",   "square",
@@ -63,6 +92,7 @@ std::vector<KeyDef> schema(Config& c) {
   auto& r = c.run;
   auto& t = c.task;
   auto& p = c.physics;
+  auto& tr = c.terrain;
   auto& pn = c.pneumatics;
   auto& ct = c.controller;
   auto& b = c.body;
@@ -106,6 +136,45 @@ std::vector<KeyDef> schema(Config& c) {
       {"physics", "youngs_modulus_max", &p.youngs_modulus_max, 0, 1e12, {}, 1.0, "Pa", 0, true},
       {"physics", "material_count", &p.material_count, 1, 10},
       {"physics", "density", &p.density, 0, 1e6, {}, 1.0, "kg/m^3", 0, true},
+
+      {"terrain",
+       "kind",
+       &tr.kind,
+       0,
+       0,
+       {"flat", "rows", "heightfield"},
+       1.0,
+       "",
+       0,
+       false,
+       std::nullopt,
+       terrain_not_flat},
+      only_when({"terrain", "heightfield", &tr.heightfield, 0, 0, {"bumps", "steps", "slope"}},
+                terrain_heightfield, "terrain.kind = \"heightfield\""),
+      only_when({"terrain", "amplitude", &tr.amplitude, 0, 1, {}, 1.0, "m"}, terrain_bumps,
+                "terrain.kind = \"heightfield\" and terrain.heightfield = \"bumps\""),
+      only_when(
+          {"terrain", "correlation_length", &tr.correlation_length, 0, 100, {}, 1.0, "m", 0, true},
+          terrain_bumps, "terrain.kind = \"heightfield\" and terrain.heightfield = \"bumps\""),
+      only_when({"terrain", "step_height", &tr.step_height, 0, 1, {}, 1.0, "m"}, terrain_steps,
+                "terrain.kind = \"heightfield\" and terrain.heightfield = \"steps\""),
+      only_when({"terrain", "step_spacing", &tr.step_spacing, 0, 100, {}, 1.0, "m", 0, true},
+                terrain_steps,
+                "terrain.kind = \"heightfield\" and terrain.heightfield = \"steps\""),
+      only_when({"terrain", "slope_angle", &tr.slope_angle, -60, 60, {}, 1.0, "deg"}, terrain_slope,
+                "terrain.kind = \"heightfield\" and terrain.heightfield = \"slope\""),
+      only_when({"terrain", "slope_direction", &tr.slope_direction, -360, 360, {}, 1.0, "deg"},
+                terrain_slope,
+                "terrain.kind = \"heightfield\" and terrain.heightfield = \"slope\""),
+      only_when({"terrain", "seed", &tr.seed, 0, 9.0e15}, terrain_not_flat,
+                "terrain.kind is not \"flat\""),
+      only_when({"terrain",
+                 "resample",
+                 &tr.resample,
+                 0,
+                 0,
+                 {"per_run", "per_generation", "per_evaluation"}},
+                terrain_not_flat, "terrain.kind is not \"flat\""),
 
       {"pneumatics", "supply_pressure", &pn.supply_pressure, 0, 100, {}, kPascalPerBar, "bar"},
       {"pneumatics", "ambient_pressure", &pn.ambient_pressure, 0, 100, {}, kPascalPerBar, "bar"},
@@ -534,7 +603,7 @@ void apply_table(Config& config, const toml::table& root, const std::string& sou
     if (!table) {
       std::string home;
       for (const auto& d : defs) {
-        if (section == d.key) home = d.section;
+        if (section == d.key && home.empty()) home = d.section;  // the first (run.seed)
       }
       fail(at, "key '" + section + "' is outside any section" +
                    (home.empty() ? "" : "; it belongs under [" + home + "]"));
@@ -580,6 +649,11 @@ void apply_override(Config& config, const std::string& text, SetKeys& set_keys) 
 // hash): say so instead.
 void check_task_keys(Config& config, const SetKeys& set_keys) {
   for (const KeyDef& def : schema(config)) {
+    if (def.settable_if && !def.settable_if(config)) {
+      const auto it = set_keys.find(full_name(def));
+      if (it != set_keys.end())
+        fail(it->second, full_name(def) + " applies only when " + def.settable_text);
+    }
     if (!def.only_for_task || *def.only_for_task == config.task.kind) continue;
     const auto it = set_keys.find(full_name(def));
     if (it != set_keys.end())
@@ -686,11 +760,14 @@ std::string canonical_text(const Config& config) {
   const auto defs = schema(copy);
   std::string out;
   for (const auto& section : kSections) {
-    out += "[" + section + "]\n";
+    std::string keys;
     for (const auto& d : defs) {
       if (d.only_for_task && *d.only_for_task != config.task.kind) continue;
-      if (section == d.section) out += std::string(d.key) + " = " + value_text(d) + "\n";
+      if (d.printed_if && !d.printed_if(config)) continue;
+      if (section == d.section) keys += std::string(d.key) + " = " + value_text(d) + "\n";
     }
+    // A section whose keys are all left out (the flat [terrain]) leaves no header either.
+    if (!keys.empty()) out += "[" + section + "]\n" + keys;
   }
   return out;
 }
@@ -746,6 +823,14 @@ std::optional<TaskKind> task_kind_from_string(const std::string& name) {
   for (TaskKind k : task_kinds())
     if (name == to_string(k)) return k;
   return std::nullopt;
+}
+
+std::string experiment_name(const Config& config) {
+  const TerrainConfig& t = config.terrain;
+  if (t.kind == "flat") return experiment_name(config.task);
+  const std::string kind =
+      config.task.kind == TaskKind::directed ? "dir" : to_string(config.task.kind);
+  return kind + (t.kind == "rows" ? "-rows-" : "-rough-") + config.task.control;
 }
 
 std::string experiment_name(const TaskConfig& task) {

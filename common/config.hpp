@@ -73,6 +73,24 @@ struct PhysicsConfig {
   double density = 1000.0;  // [kg/m^3]
 };
 
+// The ground (docs/model.md §2.8a). Flat by default; every other kind's keys enter the
+// canonical text (and the config hash) only when kind is not "flat", so the configs of every
+// existing archive keep their hash.
+struct TerrainConfig {
+  std::string kind = "flat";  // "flat", "rows" (the reference's fixed voxels), "heightfield"
+  std::string heightfield = "bumps";  // kind = "heightfield": "bumps", "steps" or "slope"
+  double amplitude = 0.01;            // bumps: largest height above / below the plane [m]
+  double correlation_length = 0.05;   // bumps: grid spacing of the value noise [m]
+  double step_height = 0.005;         // steps: rise of each step [m]
+  double step_spacing = 0.05;         // steps: tread length along +x [m]
+  double slope_angle = 10.0;          // slope: inclination [deg], > 0 uphill
+  double slope_direction = 0.0;       // slope: uphill direction from +x towards +y [deg]
+  std::int64_t seed = 1;              // terrain seed, mixed with run.seed
+  // How often the ground is drawn anew: once per run, per generation (every genome of a
+  // generation on the same ground), or per evaluation (genome and direction too).
+  std::string resample = "per_run";
+};
+
 struct PneumaticsConfig {
   double supply_pressure = 1.2e5;   // inlet reservoir, absolute [Pa] (config: bar)
   double ambient_pressure = 1.0e5;  // outlet reservoir, absolute [Pa] (config: bar)
@@ -150,6 +168,7 @@ struct Config {
   RunConfig run;
   TaskConfig task;
   PhysicsConfig physics;
+  TerrainConfig terrain;
   PneumaticsConfig pneumatics;
   ControllerConfig controller;
   BodyConfig body;
@@ -187,5 +206,8 @@ std::string hash_hex(std::uint64_t hash);  // 16 lower-case hex digits
 std::vector<StructuralMaterial> material_table(const PhysicsConfig& physics);
 // "gait-open", "dir-closed", "rotate-open", ... from task.kind and task.control.
 std::string experiment_name(const TaskConfig& task);
+// The same with the ground when it is not flat: "gait-rough-open" (terrain.kind =
+// "heightfield"), "gait-rows-closed" (terrain.kind = "rows"); flat configs keep their name.
+std::string experiment_name(const Config& config);
 
 }  // namespace softevo

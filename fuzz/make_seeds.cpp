@@ -93,7 +93,7 @@ void archive(const fs::path& path, int generations, int units,
   info.host = "seed";
   info.start_time = "2026-01-01T00:00:00Z";
   info.config_hash = softevo::hash_hex(softevo::config_hash(config));
-  info.experiment = softevo::experiment_name(config.task);
+  info.experiment = softevo::experiment_name(config);
   softevo::io::create_archive(path.string(), info, softevo::canonical_text(config));
   for (int g = 0; g < generations; ++g) {
     const softevo::io::GenerationRecord r = record(g, 3, units, columns);

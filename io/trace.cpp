@@ -73,6 +73,25 @@ void write_trace(const std::string& path, const Trace& t, Overwrite overwrite) {
   if (t.direction_deg) file.write_attribute<double>("direction_deg", *t.direction_deg);
   if (t.fitness) file.write_attribute<double>("fitness", *t.fitness);
   file.write_string_attribute("status", t.status, Charset::ascii);
+  if (t.terrain) {
+    const Trace::Terrain& g = *t.terrain;
+    file.write_string_attribute("terrain_kind", g.kind, Charset::ascii);
+    file.write_string_attribute("terrain_seed", g.seed, Charset::ascii);
+    const std::pair<const char*, double> numbers[] = {
+        {"terrain_amplitude", g.amplitude},
+        {"terrain_correlation_length", g.correlation_length},
+        {"terrain_bumps_start_x", g.bumps_start_x},
+        {"terrain_step_height", g.step_height},
+        {"terrain_step_spacing", g.step_spacing},
+        {"terrain_first_riser_x", g.first_riser_x},
+        {"terrain_slope_angle_deg", g.slope_angle_deg},
+        {"terrain_slope_direction_deg", g.slope_direction_deg},
+        {"terrain_slope_start", g.slope_start},
+        {"terrain_row_y_min", g.row_y_min},
+        {"terrain_row_y_max", g.row_y_max}};
+    for (const auto& [name, value] : numbers) file.write_attribute<double>(name, value);
+    file.write_dataset<double>("terrain_row_x", {static_cast<hsize_t>(g.row_x.size())}, g.row_x);
+  }
   file.close();
   out.commit();
 }
@@ -158,6 +177,27 @@ Trace read_trace(const std::string& path) {
     t.direction_deg = file.read_attribute<double>("direction_deg");
   if (file.has_attribute("fitness")) t.fitness = file.read_attribute<double>("fitness");
   if (file.has_attribute("status")) t.status = file.read_string_attribute("status", kStringBytes);
+  if (file.has_attribute("terrain_kind")) {
+    Trace::Terrain g;
+    g.kind = file.read_string_attribute("terrain_kind", kStringBytes);
+    g.seed = file.read_string_attribute("terrain_seed", kStringBytes);
+    const std::pair<const char*, double*> numbers[] = {
+        {"terrain_amplitude", &g.amplitude},
+        {"terrain_correlation_length", &g.correlation_length},
+        {"terrain_bumps_start_x", &g.bumps_start_x},
+        {"terrain_step_height", &g.step_height},
+        {"terrain_step_spacing", &g.step_spacing},
+        {"terrain_first_riser_x", &g.first_riser_x},
+        {"terrain_slope_angle_deg", &g.slope_angle_deg},
+        {"terrain_slope_direction_deg", &g.slope_direction_deg},
+        {"terrain_slope_start", &g.slope_start},
+        {"terrain_row_y_min", &g.row_y_min},
+        {"terrain_row_y_max", &g.row_y_max}};
+    for (const auto& [name, value] : numbers) *value = file.read_attribute<double>(name);
+    if (file.has_link("terrain_row_x"))
+      g.row_x = file.open_dataset("terrain_row_x").read<double>(64);
+    t.terrain = std::move(g);
+  }
   return t;
 }
 

@@ -44,6 +44,24 @@ struct Trace {
   std::optional<double> direction_deg;  // [deg] target direction (directed task only)
   std::optional<double> fitness;        // fitness of the evaluation
   std::string status;                   // EvalStatus name ("ok", ...); "" = unknown
+  // The ground of the traced evaluation (docs/model.md §2.8a, docs/trace.md): what a viewer
+  // needs to draw it (or to rebuild it with physics::make_terrain). Absent = flat.
+  struct Terrain {
+    std::string kind;                  // "rows", "bumps", "steps" or "slope"
+    std::string seed;                  // the evaluation's terrain seed, 16 hex digits
+    double amplitude = 0.0;            // [m] bumps
+    double correlation_length = 0.0;   // [m] bumps
+    double bumps_start_x = 0.0;        // [m] bumps fade in over one correlation length from here
+    double step_height = 0.0;          // [m] steps
+    double step_spacing = 0.0;         // [m] steps
+    double first_riser_x = 0.0;        // [m] steps: centre-frame x of the first riser
+    double slope_angle_deg = 0.0;      // [deg] slope
+    double slope_direction_deg = 0.0;  // [deg] slope
+    double slope_start = 0.0;          // [m] slope: distance along the direction where it starts
+    std::vector<double> row_x;         // [m] rows: x of each row's voxel centres
+    double row_y_min = 0.0, row_y_max = 0.0;  // [m] rows: y span of the rows' centres
+  };
+  std::optional<Terrain> terrain;
 
   // Throws std::invalid_argument naming the first array whose length does not match the
   // counts (`where` names the trace in the message).

@@ -154,7 +154,7 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
   info.host = options.host.empty() ? host_name() : options.host;
   info.start_time = iso8601_now();
   info.config_hash = hash;
-  info.experiment = experiment_name(config.task);
+  info.experiment = experiment_name(config);
   info.state = "running";
 
   std::error_code ec;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
 
@@ -27,7 +28,8 @@ bool is_json(const std::string& path) {
 
 // Re-simulates and records every control frame (60 Hz) as a pose.
 Motion simulate_motion(Config config, const BodyPlan& plan, const ControllerSpec& controller,
-                       const MotionRequest& request, const std::string& name) {
+                       const MotionRequest& request, const std::string& name,
+                       const worker::EvaluationIds& ids = {}) {
   Motion motion;
   motion.body = render::body_from_plan(plan, static_cast<int>(config.physics.material_count));
   motion.name = name;
@@ -46,6 +48,8 @@ Motion simulate_motion(Config config, const BodyPlan& plan, const ControllerSpec
   if (!overrides.empty()) config = apply_overrides(config, overrides);
   const std::unique_ptr<tasks::Task> task = tasks::make_task(config);
   worker::EvaluateOptions options;
+  options.ids = ids;
+  options.on_start = [&motion](const worker::TraceHeader& h) { motion.terrain = h.model->terrain; };
   options.on_frame = [&motion](const worker::TraceFrame& frame) {
     render::Pose pose;
     pose.time = frame.time;
@@ -66,6 +70,44 @@ Motion simulate_motion(Config config, const BodyPlan& plan, const ControllerSpec
                 result.sim_seconds);
   motion.summary = line;
   return motion;
+}
+
+// The ground of an evaluation of `plan` (work unit 0) under `config`, as the simulation lays it.
+physics::Terrain ground_of(const Config& config, const BodyPlan& plan,
+                           const worker::EvaluationIds& ids) {
+  return physics::make_terrain(worker::terrain_params(config, ids, 0), plan.lattice,
+                               static_cast<double>(static_cast<float>(plan.voxel_size)));
+}
+
+// The ground a trace recorded (docs/trace.md), rebuilt from its attributes.
+physics::Terrain ground_of(const io::Trace& trace) {
+  physics::Terrain t;
+  if (!trace.terrain) return t;
+  const io::Trace::Terrain& g = *trace.terrain;
+  for (auto kind : {physics::TerrainKind::rows, physics::TerrainKind::bumps,
+                    physics::TerrainKind::steps, physics::TerrainKind::slope})
+    if (g.kind == physics::to_string(kind)) t.kind = kind;
+  if (t.kind == physics::TerrainKind::flat) return t;  // a kind this build does not know
+  t.params.kind = t.kind;
+  t.params.seed = std::strtoull(g.seed.c_str(), nullptr, 16);
+  t.params.amplitude = g.amplitude;
+  t.params.correlation_length = g.correlation_length;
+  t.params.step_height = g.step_height;
+  t.params.step_spacing = g.step_spacing;
+  t.params.slope_angle = g.slope_angle_deg;
+  t.params.slope_direction = g.slope_direction_deg;
+  // make_terrain derives everything else from the lattice; a trace records the derived
+  // positions instead, so set them over a layout for a one-cell lattice.
+  t = physics::make_terrain(t.params, {1, 1, 1}, trace.voxel_size);
+  t.start_x = g.bumps_start_x;
+  t.first_riser_x = g.first_riser_x;
+  t.start_d = g.slope_start;
+  for (std::size_t r = 0; r < t.row_x.size() && r < g.row_x.size(); ++r) t.row_x[r] = g.row_x[r];
+  if (t.kind == physics::TerrainKind::rows) {
+    t.row_y_min = g.row_y_min - trace.voxel_size;
+    t.row_y_max = g.row_y_max + trace.voxel_size;
+  }
+  return t;
 }
 
 Motion static_motion(const BodyPlan& plan, int material_count, const std::string& name) {
@@ -116,6 +158,7 @@ Motion load_trace(const std::string& path, const MotionRequest& request) {
   motion.body = trace_body(trace, path, request.robot_file);
   motion.name = fs::path(path).stem().string();
   motion.direction_deg = trace.direction_deg;
+  motion.terrain = ground_of(trace);
   const auto voxels = static_cast<std::size_t>(trace.voxels);
   const auto chambers = static_cast<std::size_t>(trace.chambers);
   for (std::size_t f = 0; f < static_cast<std::size_t>(trace.frames); ++f) {
@@ -251,7 +294,10 @@ Motion load_motion(const std::string& input, const MotionRequest& request) {
                         ? parse_config("", "(defaults)", request.overrides)
                         : load_config(request.config_file, request.overrides);
     if (!request.needs_motion || request.static_pose) {
-      return static_motion(robot.body, static_cast<int>(config.physics.material_count), name);
+      Motion still =
+          static_motion(robot.body, static_cast<int>(config.physics.material_count), name);
+      still.terrain = ground_of(config, robot.body, {});
+      return still;
     }
     // The robot file decides the task: the one its controller's inputs fit.
     config.task.kind = tasks::default_task_for(robot.controller.task_inputs());
@@ -261,11 +307,15 @@ Motion load_motion(const std::string& input, const MotionRequest& request) {
   if (io::is_run_archive(input)) {
     const ArchivedIndividual ind = archived_individual(input, request.generation, request.id);
     const RobotFile robot = robot_of(ind);
+    const worker::EvaluationIds ids{ind.generation, ind.id};
     if (!request.needs_motion || request.static_pose) {
-      return static_motion(robot.body, static_cast<int>(ind.config.physics.material_count),
-                           robot.name);
+      Motion still = static_motion(robot.body, static_cast<int>(ind.config.physics.material_count),
+                                   robot.name);
+      still.terrain = ground_of(ind.config, robot.body, ids);
+      return still;
     }
-    Motion motion = simulate_motion(ind.config, robot.body, robot.controller, request, robot.name);
+    Motion motion =
+        simulate_motion(ind.config, robot.body, robot.controller, request, robot.name, ids);
     char archived[96];
     std::snprintf(archived, sizeof archived, "; archived fitness %.17g", ind.fitness);
     motion.summary += archived;

@@ -15,6 +15,7 @@
 
 #include "common/config.hpp"
 #include "common/robot.hpp"
+#include "physics/terrain.hpp"
 #include "render/render.hpp"
 
 namespace softevo::motion {
@@ -26,6 +27,7 @@ struct Motion {
   std::string name;                     // label for pictures
   std::optional<double> direction_deg;  // target direction the motion was simulated towards
   std::string summary;                  // one line: fitness and status when simulated, "" otherwise
+  physics::Terrain terrain;             // the ground it moved on (flat unless the config says)
 };
 
 struct MotionRequest {

@@ -30,6 +30,33 @@ void check_trace_memory(const std::string& path, const Config& config, const Bod
                                 "task.eval_seconds (--seconds)");
 }
 
+namespace {
+
+// The ground as a trace records it (docs/trace.md).
+std::optional<io::Trace::Terrain> trace_terrain(const physics::Terrain& t) {
+  if (t.kind == physics::TerrainKind::flat) return std::nullopt;
+  io::Trace::Terrain g;
+  g.kind = physics::to_string(t.kind);
+  g.seed = hash_hex(t.params.seed);
+  g.amplitude = t.params.amplitude;
+  g.correlation_length = t.params.correlation_length;
+  g.bumps_start_x = t.start_x;
+  g.step_height = t.params.step_height;
+  g.step_spacing = t.params.step_spacing;
+  g.first_riser_x = t.first_riser_x;
+  g.slope_angle_deg = t.params.slope_angle;
+  g.slope_direction_deg = t.params.slope_direction;
+  g.slope_start = t.start_d;
+  if (t.kind == physics::TerrainKind::rows) {
+    g.row_x.assign(t.row_x.begin(), t.row_x.end());
+    g.row_y_min = t.row_y_min + t.voxel_size;  // the span of the row voxels' centres
+    g.row_y_max = t.row_y_max - t.voxel_size;
+  }
+  return g;
+}
+
+}  // namespace
+
 void TraceRecorder::attach(worker::EvaluateOptions& options) {
   options.on_start = [this](const worker::TraceHeader& h) {
     started_ = true;
@@ -37,6 +64,7 @@ void TraceRecorder::attach(worker::EvaluateOptions& options) {
     steps_per_frame_ = h.steps_per_frame;
     dt_ = h.model->dt;
     voxel_size_ = h.model->voxel_size;
+    terrain_ = h.model->terrain;
     voxel_cells_.clear();
     voxel_material_.clear();
     for (int v = 0; v < h.model->voxel_count; ++v) {
@@ -82,6 +110,7 @@ void TraceRecorder::write(const std::string& path, const RobotFile& robot, const
   trace.frame_rate = control_rate;
   trace.steps_per_frame = steps_per_frame_;
   if (direction_deg) trace.direction_deg = *direction_deg;
+  trace.terrain = trace_terrain(terrain_);
   trace.fitness = result.fitness;
   trace.status = to_string(result.status);
   io::write_trace(path, trace, overwrite);

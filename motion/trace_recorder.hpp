@@ -47,8 +47,9 @@ class TraceRecorder {
   bool started_ = false;
   int chambers_ = 0;
   int steps_per_frame_ = 0;
-  double dt_ = 0.0;          // [s]
-  double voxel_size_ = 0.0;  // [m]
+  double dt_ = 0.0;           // [s]
+  double voxel_size_ = 0.0;   // [m]
+  physics::Terrain terrain_;  // the evaluation's ground
   std::vector<int> voxel_cells_, voxel_material_;
   std::vector<double> positions_;     // [m], 3 per voxel per frame
   std::vector<double> orientations_;  // quaternion w, x, y, z per voxel per frame

@@ -150,6 +150,11 @@ Model build_model(const BodyPlan& plan, const PhysicsConfig& cfg, const BuildOpt
   m.rest_length = 0.5 * (m.voxel_size + m.voxel_size);
   m.inv_rest_length = 1.0 / m.rest_length;
   m.floor = cfg.floor;
+  try {
+    m.terrain = make_terrain(options.terrain, m.lattice, m.voxel_size);
+  } catch (const std::invalid_argument& e) {
+    fail(e.what());
+  }
   m.self_collision = cfg.self_collision;
   const double s = m.voxel_size;
 

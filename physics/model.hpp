@@ -23,6 +23,7 @@
 #include "common/body_plan.hpp"
 #include "common/config.hpp"
 #include "physics/quat.hpp"
+#include "physics/terrain.hpp"
 
 namespace softevo::physics {
 
@@ -103,7 +104,8 @@ struct Model {
   double voxel_size = 0.0;     // s = (double)(float)plan.voxel_size [m] (§1: through a float)
   float dt_f = 0.0f;           // time step as the float the reference passes around [s]
   double dt = 0.0;             // = dt_f: §2.14 recommended step x dt_fraction [s]
-  bool floor = true;           // floor contact at z = 0 (voxel centres, §2.8)
+  bool floor = true;           // ground contact (voxel centres, §2.8)
+  Terrain terrain;             // the ground's shape (§2.8a); flat = the plane z = 0
   bool self_collision = true;  // §2.10
   Simd simd = Simd::scalar;    // SIMD width of the step passes (never `best`)
 
@@ -200,6 +202,8 @@ struct BuildOptions {
   // SIMD width of the step passes; a width this CPU cannot run is an error. Results do not
   // depend on it (tests and `softevo bench physics --simd` compare the widths).
   Simd simd = Simd::best;
+  // The ground (§2.8a), laid out for this body's lattice; flat by default.
+  TerrainParams terrain;
 };
 
 // Build the model of §2.1 / §5 step 4: one voxel per structural cell (1..K) in the order x outer,

@@ -146,7 +146,8 @@ inline void fork_part1_group(const Model& m, State& st, Scratch& sc, std::span<c
   const VL<L> col_f = load_run<L>(sc.collision_force, v[0]);
   VL<L> fric{zero, zero, zero};
   if (m.floor) {
-    const int contact = floor_contact_lanes<L>(pos);
+    FloorContact fc[W];
+    const int contact = ground_contacts<L>(m, pos, fc);
     const VL<L> fsum{((link_f.x + ext_f.x) + grav_f.x) + col_f.x,
                      ((link_f.y + ext_f.y) + grav_f.y) + col_f.y,
                      ((link_f.z + ext_f.z) + grav_f.z) + col_f.z};
@@ -156,8 +157,7 @@ inline void fork_part1_group(const Model& m, State& st, Scratch& sc, std::span<c
         sf = 0;  // floor_force without contact
         continue;
       }
-      const Vec3 fr = floor_force(m.voxel_const[v[k]], Vec3(pos.x[k], pos.y[k], pos.z[k]),
-                                  Vec3(vel.x[k], vel.y[k], vel.z[k]),
+      const Vec3 fr = floor_force(m.voxel_const[v[k]], fc[k], Vec3(vel.x[k], vel.y[k], vel.z[k]),
                                   Vec3(fsum.x[k], fsum.y[k], fsum.z[k]), sf);
       set_lane<L>(fric, k, fr);
     }
@@ -227,19 +227,18 @@ inline void fork_part2_group(const Model& m, State& st, Scratch& sc, const int* 
   pos = {pos.x + mom.x * dt_m, pos.y + mom.y * dt_m, pos.z + mom.z * dt_m};
   mom = {mom.x + f2.x * dt, mom.y + f2.y * dt, mom.z + f2.z * dt};
   if (m.floor) {
-    const int contact = floor_contact_lanes<L>(pos);
+    FloorContact fc[W];
+    const int contact = ground_contacts<L>(m, pos, fc);
     for (int k = 0; k < W; ++k) {
       if (!(contact >> k & 1)) {
         st.static_friction[v[k]] = 0;
         continue;
       }
       Vec3 pk(pos.x[k], pos.y[k], pos.z[k]), mk(mom.x[k], mom.y[k], mom.z[k]);
-      fork_static_capture(m.voxel_const[v[k]], sc.fric[v[k]], sc.old_pos[v[k]], pk, mk,
+      fork_static_capture(m.voxel_const[v[k]], fc[k], sc.fric[v[k]], sc.old_pos[v[k]], pk, mk,
                           st.static_friction[v[k]]);
-      pos.x[k] = pk.x();
-      pos.y[k] = pk.y();
-      mom.x[k] = mk.x();
-      mom.y[k] = mk.y();
+      set_lane<L>(pos, k, pk);
+      set_lane<L>(mom, k, mk);
     }
   }
   am = {am.x + splat<L>(static_cast<double>(me_x) * dt),
@@ -368,8 +367,9 @@ inline void symplectic_group(const Model& m, State& st, Scratch& sc, std::span<c
   const VL<L> col = load_run<L>(sc.collision_force, v[0]);
   f = {f.x + col.x, f.y + col.y, f.z + col.z};
   int contact = 0;  // lane bits
+  FloorContact fc[W];
   if (m.floor) {
-    contact = floor_contact_lanes<L>(pos);
+    contact = ground_contacts<L>(m, pos, fc);
     const D zero = splat<L>(0.0);
     VL<L> fric{zero, zero, zero};
     for (int k = 0; k < W; ++k) {
@@ -378,9 +378,8 @@ inline void symplectic_group(const Model& m, State& st, Scratch& sc, std::span<c
         sf = 0;  // floor_force without contact
         continue;
       }
-      const Vec3 fr =
-          floor_force(vc[v[k]], Vec3(pos.x[k], pos.y[k], pos.z[k]),
-                      Vec3(vel.x[k], vel.y[k], vel.z[k]), Vec3(f.x[k], f.y[k], f.z[k]), sf);
+      const Vec3 fr = floor_force(vc[v[k]], fc[k], Vec3(vel.x[k], vel.y[k], vel.z[k]),
+                                  Vec3(f.x[k], f.y[k], f.z[k]), sf);
       set_lane<L>(fric, k, fr);
     }
     f = {f.x + fric.x, f.y + fric.y, f.z + fric.z};
@@ -390,14 +389,11 @@ inline void symplectic_group(const Model& m, State& st, Scratch& sc, std::span<c
   VL<L> tr{mom.x * dt_m, mom.y * dt_m, mom.z * dt_m};
   for (int k = 0; k < W; ++k) {
     if (!(contact >> k & 1)) continue;
-    std::uint8_t& sf = st.static_friction[v[k]];
-    const double work = f.x[k] * tr.x[k] + f.y[k] * tr.y[k];
-    const double hke = 0.5 * vc[v[k]].inv_mass * (mom.x[k] * mom.x[k] + mom.y[k] * mom.y[k]);
-    if (hke + work <= 0) sf = 1;
-    if (sf) {
-      mom.x[k] = mom.y[k] = 0.0;
-      tr.x[k] = tr.y[k] = 0.0;
-    }
+    Vec3 mk(mom.x[k], mom.y[k], mom.z[k]), tk(tr.x[k], tr.y[k], tr.z[k]);
+    symplectic_static_capture(vc[v[k]], fc[k], Vec3(f.x[k], f.y[k], f.z[k]), mk, tk,
+                              st.static_friction[v[k]]);
+    set_lane<L>(mom, k, mk);
+    set_lane<L>(tr, k, tk);
   }
   pos = {pos.x + tr.x, pos.y + tr.y, pos.z + tr.z};
   VL<L> rm;

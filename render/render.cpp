@@ -10,8 +10,10 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <unordered_map>
+#include <utility>
 
 namespace softevo::render {
 
@@ -236,7 +238,41 @@ bool near_grid_line(double coordinate, double spacing, double half_width) {
   return m < half_width || spacing - m < half_width;
 }
 
-// Floor and background of every raster pixel: colour and depth of the floor plane.
+// Where a ray p + t forward first meets options.ground (between ground_max and ground_min): t and
+// a Lambert shade of the surface there (light from the front-left above), or none. Marches in
+// steps of `step` [m] (about a quarter of an output pixel) and refines by bisection.
+std::optional<std::pair<double, float>> ground_hit(const SceneOptions& options,
+                                                   const Eigen::Vector3d& p,
+                                                   const Eigen::Vector3d& forward, double step) {
+  const auto below = [&](double t) {
+    const Eigen::Vector3d q = p + t * forward;
+    return q.z() <= options.ground(q.x(), q.y());
+  };
+  const double t_top = (options.ground_max - p.z()) / forward.z();
+  const double t_bottom = (options.ground_min - p.z()) / forward.z();
+  double lo = t_top, hi = t_top;
+  while (!below(hi)) {
+    if (hi >= t_bottom) return std::nullopt;
+    lo = hi;
+    hi = std::min(hi + step, t_bottom);
+  }
+  for (int i = 0; i < 20 && hi - lo > 1e-6; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (below(mid) ? hi : lo) = mid;
+  }
+  const Eigen::Vector3d q = p + hi * forward;
+  const double e = 2e-4;  // [m]
+  const Eigen::Vector3d normal =
+      Eigen::Vector3d(options.ground(q.x() - e, q.y()) - options.ground(q.x() + e, q.y()),
+                      options.ground(q.x(), q.y() - e) - options.ground(q.x(), q.y() + e), 2 * e)
+          .normalized();
+  const Eigen::Vector3d light = Eigen::Vector3d(-0.4, -0.6, 0.7).normalized();
+  const double lambert = std::max(0.0, normal.dot(light)) / light.z();
+  return std::make_pair(hi, static_cast<float>(std::clamp(0.55 + 0.45 * lambert, 0.4, 1.1)));
+}
+
+// Floor and background of every raster pixel: colour and depth of the floor plane (or of the
+// ground's surface, options.ground).
 void draw_floor(Raster& r, std::vector<Colour>& base, const SceneOptions& options,
                 const Eigen::AlignedBox3d& scene, int supersample) {
   const Camera& cam = *r.camera;
@@ -271,7 +307,14 @@ void draw_floor(Raster& r, std::vector<Colour>& base, const SceneOptions& option
       if (!options.floor || cam.forward.z() > -1e-9) continue;
       const Eigen::Vector3d p = cam.center + cam.right * ((px + 0.5 - 0.5 * r.width) / r.scale) +
                                 cam.up * ((0.5 * r.height - (py + 0.5)) / r.scale);
-      const double t = (options.floor_z - p.z()) / cam.forward.z();
+      double t = (options.floor_z - p.z()) / cam.forward.z();
+      float shade = 1.0F;
+      if (options.ground) {
+        const auto hit = ground_hit(options, p, cam.forward, std::max(0.25 / output_scale, 1e-3));
+        if (!hit) continue;
+        t = hit->first;
+        shade = hit->second;
+      }
       const Eigen::Vector3d q = p + t * cam.forward;
       if (bounded && (q.y() < y_lo || q.y() > y_hi)) continue;
       Colour c = floor_colour;
@@ -291,7 +334,7 @@ void draw_floor(Raster& r, std::vector<Colour>& base, const SceneOptions& option
           c = target_colour;
         }
       }
-      base[idx] = c;
+      base[idx] = {c.r * shade, c.g * shade, c.b * shade};
       r.opaque_depth[idx] = static_cast<float>(t);
     }
   }

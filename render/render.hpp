@@ -12,6 +12,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -113,6 +114,11 @@ struct SceneOptions {
   // Visual floor height [m]: a voxel touches the floor when its centre is at z = 0 (§2.8), so
   // the cube's lower face is half a voxel below it.
   double floor_z = -0.005;
+  // The ground when it is not that plane (terrain, docs/model.md §2.8a): the surface height [m]
+  // at (x, y), and the range of heights it takes where the scene is (the picture looks for the
+  // surface between them). Empty = the plane at floor_z.
+  std::function<double(double, double)> ground;
+  double ground_min = -0.005, ground_max = -0.005;  // [m]
   // Red target line on the floor (thesis figure 4.4): from `target_origin` [m] in direction
   // `target_direction_deg` (counter-clockwise from +x, §7.2).
   std::optional<double> target_direction_deg;

@@ -1,4 +1,5 @@
-// `softevo bench eval [DIR] [--jobs N] [--integrator I] [--only SUBSTR] [--runs N] [--json]`
+// `softevo bench eval [DIR] [--jobs N] [--integrator I] [--only SUBSTR] [--runs N] [--set K=V]
+//  [--json]`
 //
 // Speed of one 10 s gait evaluation of the thesis gait champions (robot files of DIR whose
 // controller is not directed; default ../shared/reference/bestbots), compared with the thesis
@@ -8,7 +9,8 @@
 // (goal >= 5x, one core, pneuvox integrator). CPU time is the figure to compare: wall time
 // depends on what else the machine runs. With --runs N every robot is evaluated N times and its
 // fastest run is kept (other tenants of a shared machine only ever slow a run down); the runs
-// must give bit-identical fitness, else the benchmark stops with an error.
+// must give bit-identical fitness, else the benchmark stops with an error. --set changes the
+// config of every evaluation (e.g. --set terrain.kind=heightfield: the cost of rough ground).
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
@@ -33,6 +35,7 @@ struct BenchEvalArgs {
   std::string integrator = "pneuvox";
   std::string only;
   int runs = 1;
+  std::vector<std::string> overrides;  // "section.key=value" for every evaluation
   bool json = false;
 };
 
@@ -53,10 +56,11 @@ int run_bench_eval(const BenchEvalArgs& a) {
   const std::vector<ChampionRow> unevaluated = rows;
   for (int run = 1; run <= a.runs; ++run) {
     std::vector<ChampionRow> again = unevaluated;
-    validation::evaluate_champions(again, {}, a.integrator, a.jobs, [&](const ChampionRow& r) {
-      std::fprintf(stderr, "  run %d  %-16s %.2f s CPU\n", run, r.robot.name.c_str(),
-                   r.cpu_seconds);
-    });
+    validation::evaluate_champions(again, a.overrides, a.integrator, a.jobs,
+                                   [&](const ChampionRow& r) {
+                                     std::fprintf(stderr, "  run %d  %-16s %.2f s CPU\n", run,
+                                                  r.robot.name.c_str(), r.cpu_seconds);
+                                   });
     for (std::size_t i = 0; i < rows.size(); ++i) {
       if (run > 1 && !same_bits(again[i].result.fitness, rows[i].result.fitness))
         throw std::runtime_error(rows[i].file + ": run " + std::to_string(run) +
@@ -86,6 +90,7 @@ int run_bench_eval(const BenchEvalArgs& a) {
     for (std::size_t i = 0; i < rows.size(); ++i)
       list.push_back({{"name", rows[i].robot.name},
                       {"status", to_string(rows[i].result.status)},
+                      {"fitness", rows[i].result.fitness},
                       {"cpu_seconds", rows[i].cpu_seconds},
                       {"wall_seconds", rows[i].result.wall_seconds},
                       {"reference_cpu_seconds", rows[i].ref_cpu_seconds},
@@ -134,6 +139,7 @@ void register_bench_eval(CLI::App& app, int& exit_code) {
                   "evaluations per robot; the fastest is kept (all must give the same fitness)")
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
+  cmd->add_option("--set", a->overrides, "override a config key: section.key=value");
   cmd->add_flag("--json", a->json, "print one JSON object");
   cmd->callback([&exit_code, a] { exit_code = run_bench_eval(*a); });
 }

@@ -116,6 +116,27 @@ int run_render(const RenderArgs& args) {
   render::SceneOptions scene;
   scene.supersample = args.supersample;
   scene.floor_z = -0.5 * motion.body.voxel_size;
+  if (motion.terrain.kind != physics::TerrainKind::flat) {
+    // The surface half a voxel below the height a voxel centre rests at (docs/model.md §2.8a),
+    // its range sampled over the ground the robot crosses (and a margin).
+    const physics::Terrain terrain = motion.terrain;
+    const double half = 0.5 * motion.body.voxel_size;
+    scene.ground = [terrain, half](double x, double y) {
+      return physics::terrain_height(terrain, x, y) - half;
+    };
+    Eigen::AlignedBox3d box;
+    for (const auto& pose : motion.poses) box.extend(render::pose_bounds(motion.body, pose));
+    const double margin = 0.3;  // [m]
+    double lo = scene.floor_z, hi = scene.floor_z;
+    for (double x = box.min().x() - margin; x <= box.max().x() + margin; x += 0.002)
+      for (double y = box.min().y() - margin; y <= box.max().y() + margin; y += 0.002) {
+        const double h = scene.ground(x, y);
+        lo = std::min(lo, h);
+        hi = std::max(hi, h);
+      }
+    scene.ground_min = lo;
+    scene.ground_max = hi;
+  }
   if (motion.poses.size() > 1) scene.voxel_scale = 1.04;  // deformed: hide the cracks
   const std::optional<double> direction = args.direction ? args.direction : motion.direction_deg;
   if (direction && view != View::side) {

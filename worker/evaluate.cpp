@@ -25,7 +25,7 @@ double seconds_since(Clock::time_point t) {
 // turns it into status failed).
 EvalResult simulate(const Config& config, const tasks::Task& task, const BodyPlan& plan,
                     const ControllerSpec& controller, int unit, const EvaluateOptions& opts) {
-  Simulation sim(config, task, plan, unit, opts.simd);
+  Simulation sim(config, task, plan, unit, opts.simd, opts.ids);
   if (sim.status() == EvalStatus::invalid_body) return sim.finish();
   ElmanController brain(controller, config.task.control_rate, opts.ablate_oscillator,
                         opts.ablate_sensors);
@@ -190,6 +190,7 @@ EvalResult evaluate(const Config& config, const tasks::Task& task, std::uint64_t
   EvaluateOptions unit_options = options;
   if (!unit_options.deadline)
     unit_options.deadline = deadline_after(config.run.eval_timeout_seconds);
+  unit_options.ids = {request.generation, request.genome_id};
   EvalResult result;
   try {
     const evo::Genome genome = evo::decode_genome(request.genome);

@@ -40,6 +40,7 @@
 #include "physics/model.hpp"
 #include "physics/quat.hpp"
 #include "tasks/task.hpp"
+#include "worker/simulation.hpp"
 
 namespace softevo::worker {
 
@@ -81,6 +82,9 @@ struct EvaluateOptions {
   bool ablate_sensors = false;     // feed 0 to the pressure-sensor inputs
   // SIMD width of the physics step passes; results are bit-identical for every width
   physics::Simd simd = physics::Simd::best;
+  // The evaluation's generation and genome id (the ground of terrain.resample depends on them);
+  // the request entry sets them from the work unit.
+  EvaluationIds ids;
   // Wall-clock deadline: an evaluation still running then stops with status timeout (checked
   // once per control frame). Work units from a request get now + run.eval_timeout_seconds
   // unless a deadline is given here.

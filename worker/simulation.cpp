@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/rng.hpp"
 #include "physics/observables.hpp"
 #include "physics/work_limits.hpp"
 
@@ -34,19 +35,50 @@ physics::PneumaticsModel pneumatics_of(const BodyPlan& body, const physics::Mode
   return physics::build_pneumatics(body, model, config.pneumatics);
 }
 
-physics::BuildOptions build_options_for(physics::Simd simd) {
+physics::BuildOptions build_options_for(physics::Simd simd, physics::TerrainParams terrain) {
   physics::BuildOptions options;
   options.simd = simd;
+  options.terrain = terrain;
   return options;
 }
 
 }  // namespace
 
+physics::TerrainParams terrain_params(const Config& config, const EvaluationIds& ids, int unit) {
+  const TerrainConfig& tc = config.terrain;
+  physics::TerrainParams p;
+  if (tc.kind == "flat") return p;
+  if (tc.kind == "rows") {
+    p.kind = physics::TerrainKind::rows;
+  } else if (tc.heightfield == "bumps") {
+    p.kind = physics::TerrainKind::bumps;
+  } else if (tc.heightfield == "steps") {
+    p.kind = physics::TerrainKind::steps;
+  } else {
+    p.kind = physics::TerrainKind::slope;
+  }
+  p.amplitude = tc.amplitude;
+  p.correlation_length = tc.correlation_length;
+  p.step_height = tc.step_height;
+  p.step_spacing = tc.step_spacing;
+  p.slope_angle = tc.slope_angle;
+  p.slope_direction = tc.slope_direction;
+  // -1 = "not part of this ground's identity" (derive_seed's convention for a missing id).
+  const bool per_generation = tc.resample != "per_run";
+  const bool per_evaluation = tc.resample == "per_evaluation";
+  std::uint64_t base = static_cast<std::uint64_t>(tc.seed);
+  base = splitmix64(base) ^ static_cast<std::uint64_t>(config.run.seed);
+  p.seed = derive_seed(base, per_generation ? ids.generation : -1,
+                       per_evaluation ? ids.genome_id : -1, per_evaluation ? unit : -1);
+  return p;
+}
+
 Simulation::Simulation(const Config& config, const tasks::Task& task, const BodyPlan& body,
-                       int unit, physics::Simd simd)
+                       int unit, physics::Simd simd, const EvaluationIds& ids)
     : task_(task),
       unit_(checked_unit(config, task, unit)),
-      model_(physics::build_model(body, config.physics, build_options_for(simd))),
+      model_(physics::build_model(body, config.physics,
+                                  build_options_for(simd, terrain_params(config, ids, unit_)))),
       pneumatics_model_(pneumatics_of(body, model_, config)) {
   if (model_.voxel_count == 0) {
     status_ = EvalStatus::invalid_body;

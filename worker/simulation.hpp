@@ -29,6 +29,20 @@
 
 namespace softevo::worker {
 
+// Which evaluation a simulation is: the ground of terrain.resample = "per_generation" or
+// "per_evaluation" depends on it (the master's work unit carries both; `softevo eval` of a robot
+// file is generation 0, genome 0).
+struct EvaluationIds {
+  std::int64_t generation = 0;
+  std::int64_t genome_id = 0;
+};
+
+// The ground of one evaluation (docs/model.md §2.8a): config.terrain with its seed derived from
+// (terrain.seed, run.seed) and, as terrain.resample says, the generation, the genome id and the
+// work unit (the direction of the directed task). A function of these ids only, so the same
+// evaluation gets the same ground on any rank, at any rank count, and in replay.
+physics::TerrainParams terrain_params(const Config& config, const EvaluationIds& ids, int unit);
+
 class Simulation {
  public:
   // Builds the model and pneumatics of `body` for work unit `unit` of `task`. Throws
@@ -37,7 +51,7 @@ class Simulation {
   // simulation starts with status invalid_body and never runs. `task` must outlive
   // the simulation.
   Simulation(const Config& config, const tasks::Task& task, const BodyPlan& body, int unit,
-             physics::Simd simd = physics::Simd::best);
+             physics::Simd simd = physics::Simd::best, const EvaluationIds& ids = {});
   ~Simulation();
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;

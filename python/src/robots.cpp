@@ -217,7 +217,7 @@ Make one with softevo.load_config(path, overrides) or softevo.default_config(tas
       .def_property_readonly(
           "seed", [](const Config& c) { return c.run.seed; }, "run.seed.")
       .def_property_readonly(
-          "experiment", [](const Config& c) { return experiment_name(c.task); },
+          "experiment", [](const Config& c) { return experiment_name(c); },
           "Experiment name, e.g. gait-open.")
       .def("__eq__",
            [](const Config& a, const Config& b) { return canonical_text(a) == canonical_text(b); })

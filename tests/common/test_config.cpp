@@ -107,6 +107,49 @@ TEST(Config, TaskKindIsParsedOnceAndItsKeysBelongToIt) {
   }
 }
 
+// [terrain] (docs/model.md §2.8a): flat leaves the canonical text (and so every existing
+// config hash) as it was; another kind prints its own keys only; a key of another kind is an
+// error naming it.
+TEST(Config, TerrainKeysEnterTheTextOnlyOffFlatGround) {
+  EXPECT_EQ(canonical_text(Config{}).find("[terrain]"), std::string::npos);
+  EXPECT_EQ(config_hash(parse_config("[terrain]\nkind = \"flat\"\n", "f")), config_hash(Config{}));
+  const Config rough = parse_config(
+      "[terrain]\nkind = \"heightfield\"\nheightfield = \"bumps\"\namplitude = 0.02\n"
+      "resample = \"per_generation\"\n",
+      "r.toml");
+  EXPECT_EQ(rough.terrain.amplitude, 0.02);
+  const std::string text = canonical_text(rough);
+  EXPECT_NE(text.find("[terrain]\nkind = \"heightfield\"\nheightfield = \"bumps\"\n"
+                      "amplitude = 0.02\ncorrelation_length = 0.05\nseed = 1\n"
+                      "resample = \"per_generation\"\n"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("step_height"), std::string::npos) << "a key of another height field";
+  EXPECT_EQ(canonical_text(parse_config(text, "canonical")), text);
+  EXPECT_EQ(experiment_name(rough), "gait-rough-open");
+  EXPECT_EQ(experiment_name(parse_config("[terrain]\nkind = \"rows\"\n[task]\ncontrol = "
+                                         "\"closed\"\n",
+                                         "rows")),
+            "gait-rows-closed");
+  EXPECT_EQ(experiment_name(Config{}), "gait-open");
+  for (const auto& [text_in, needle] :
+       {std::pair<std::string, std::string>{
+            "[terrain]\namplitude = 0.01\n",
+            "terrain.amplitude applies only when terrain.kind = \"heightfield\" and"},
+        {"[terrain]\nkind = \"rows\"\nslope_angle = 5\n", "terrain.slope_angle applies only"},
+        {"[terrain]\nkind = \"hills\"\n", "\"heightfield\""},
+        {"[terrain]\nkind = \"heightfield\"\nheightfield = \"slope\"\nslope_angle = 70\n",
+         "out of range"},
+        {"[terrain]\nkind = \"rows\"\nresample = \"sometimes\"\n", "per_evaluation"}}) {
+    try {
+      parse_config(text_in, "t.toml");
+      FAIL() << "expected an error for " << text_in;
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(Config, MaterialTableIsNumpyLinspace) {
   const auto table = material_table(PhysicsConfig{});
   ASSERT_EQ(table.size(), 10u);

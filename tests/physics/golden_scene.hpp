@@ -29,8 +29,11 @@ enum class Motion { gentle, tumbling };
 // `simd` picks the width of the step passes (results must not depend on it).
 // `diverge` adds a last step that diverges (one voxel moved 2 m away, a strain of about 200): the
 // state after a refused step keeps the link state of its link pass (§2.12 step 1).
+// `terrain`: the ground (flat by default), with the body moved `shift_x` [m] along +x at the
+// start (a terrain lays its features out in front of the body's lattice).
 inline std::uint64_t run_scene(const std::string& integrator, Simd simd = Simd::best,
-                               Motion motion = Motion::gentle, bool diverge = false) {
+                               Motion motion = Motion::gentle, bool diverge = false,
+                               const TerrainParams& terrain = {}, double shift_x = 0.0) {
   const double spin = motion == Motion::tumbling ? 1000.0 : 1.0;
   const double push = motion == Motion::tumbling ? 10.0 : 1.0;
   BodyPlan plan = solid_block(5, 4, 3, 3.0e4);
@@ -45,6 +48,7 @@ inline std::uint64_t run_scene(const std::string& integrator, Simd simd = Simd::
   cfg.integrator = integrator;
   BuildOptions options;
   options.simd = simd;
+  options.terrain = terrain;
   const Model m = build_model(plan, cfg, options);
   State st = initial_state(m);
   Scratch sc = make_scratch(m);
@@ -54,6 +58,7 @@ inline std::uint64_t run_scene(const std::string& integrator, Simd simd = Simd::
   const auto normal = [&rng] { return rng.normal(); };
   for (int v = 0; v < m.voxel_count; ++v) {
     st.pos[v].z() += 0.3 * m.voxel_size;
+    if (shift_x != 0.0) st.pos[v].x() += shift_x;
     st.lin_mom[v] = test::random_vec3(normal) * 2e-5;
     st.ang_mom[v] = test::random_vec3(normal) * (2e-10 * spin);
   }

@@ -270,6 +270,150 @@ TEST_P(Validation, BlockRestsStably) {
   EXPECT_FALSE(flipped(m, st));
 }
 
+// ---- terrain (docs/model.md §2.8a) ----------------------------------------------------------
+
+// A single voxel (a point contact at its centre: no tipping) of 100 kPa on terrain `t`.
+struct TerrainScene {
+  Model model;
+  State state;
+  Scratch scratch;
+};
+TerrainScene one_voxel_on(PhysicsConfig cfg, const TerrainParams& t) {
+  BuildOptions opt;
+  opt.terrain = t;
+  Model m = build_model(solid_block(1, 1, 1, 1.0e5), cfg, opt);
+  State st = initial_state(m);
+  Scratch sc = make_scratch(m);
+  return {std::move(m), std::move(st), std::move(sc)};
+}
+
+TerrainParams slope_of(double angle_deg) {
+  TerrainParams t;
+  t.kind = TerrainKind::slope;
+  t.slope_angle = angle_deg;
+  return t;
+}
+
+// Velocity along the slope's downhill direction (-x here) of voxel 0 [m/s].
+double downhill_speed(const Model& m, const State& st, double angle_rad) {
+  const Vec3 v = st.lin_mom[0] / m.voxel_mass[0];
+  return -(v.x() * std::cos(angle_rad) + v.z() * std::sin(angle_rad));
+}
+
+// A block on an incline of angle theta, mu_s = mu_k = 0.3 (atan(0.3) = 16.7 deg): below that
+// angle static friction holds it; above, it slides down with g (sin theta - mu_k cos theta).
+TEST_P(Validation, SlopeHoldsBelowFrictionAngleAndSlidesAbove) {
+  PhysicsConfig cfg = base_config();
+  cfg.self_collision = false;
+  cfg.static_friction = cfg.kinetic_friction = 0.3;
+  cfg.collision_damping = 1.0;  // the contact spring settles within a few ms
+  const double g = cfg.gravity, mu = cfg.kinetic_friction;
+  cfg.global_damping = 0.0;  // its drag would slow the slide
+  for (double angle : {10.0, 30.0}) {
+    auto [m, st, sc] = one_voxel_on(cfg, slope_of(angle));
+    const double rad = angle * std::acos(-1.0) / 180.0;
+    // Start on the incline, 20 cm up its run, resting at the surface.
+    const double x0 = 0.2;
+    st.pos[0] = Vec3(x0, 0.0, terrain_height(m.terrain, x0, 0.0));
+    const int settle = static_cast<int>(0.05 / m.dt);
+    run(m, st, sc, settle);
+    const double x_settled = st.pos[0].x(), v1 = downhill_speed(m, st, rad);
+    const int measure = static_cast<int>(0.1 / m.dt);
+    run(m, st, sc, measure);
+    const double v2 = downhill_speed(m, st, rad);
+    const double accel = (v2 - v1) / (measure * m.dt);
+    const double expected = g * (std::sin(rad) - mu * std::cos(rad));
+    const double gap = st.pos[0].z() - terrain_height(m.terrain, st.pos[0].x(), 0.0);
+    std::printf(
+        "[%s] slope %.0f deg: moved %.3e m in 0.1 s, acceleration %.4f m/s^2, analytic %.4f "
+        "m/s^2, centre %.2e m from the surface\n",
+        GetParam().c_str(), angle, x_settled - st.pos[0].x(), accel, std::max(expected, 0.0), gap);
+    EXPECT_LT(std::fabs(gap), 1e-4) << "left the surface or sank into it";
+    if (expected < 0) {
+      EXPECT_LT(std::fabs(st.pos[0].x() - x_settled), 1e-5) << "slid below the friction angle";
+    } else {
+      EXPECT_NEAR(accel, expected, 0.05 * expected);
+    }
+  }
+}
+
+// A voxel dropped onto the first tread of a staircase comes to rest at the step height (less
+// the contact spring's static compression m g / k_pen).
+TEST_P(Validation, VoxelDroppedOnAStepRestsAtTheStepHeight) {
+  PhysicsConfig cfg = base_config();
+  cfg.self_collision = false;
+  cfg.collision_damping = 1.0;
+  TerrainParams t;
+  t.kind = TerrainKind::steps;
+  t.step_height = 0.005;
+  t.step_spacing = 0.05;
+  auto [m, st, sc] = one_voxel_on(cfg, t);
+  const double x = m.terrain.first_riser_x + 0.5 * t.step_spacing;
+  st.pos[0] = Vec3(x, 0.0, 0.02);
+  run(m, st, sc, static_cast<int>(0.3 / m.dt));
+  const double sag = m.voxel_mass[0] * cfg.gravity / m.voxel_const[0].k_pen;
+  const double expected = t.step_height - sag;
+  std::printf("[%s] step: rests at z %.6e m, step height - m g / k_pen %.6e m, speed %.2e m/s\n",
+              GetParam().c_str(), st.pos[0].z(), expected, max_speed(m, st));
+  EXPECT_NEAR(st.pos[0].z(), expected, 0.01 * t.step_height);
+  EXPECT_NEAR(st.pos[0].x(), x, 1e-6);
+  EXPECT_LT(max_speed(m, st), 1e-3);
+}
+
+// A voxel pushed along +x by a constant force (twice its sliding friction) runs into the
+// reference's first row of fixed voxels and stops there: its centre one voxel before the row's,
+// less the contact spring's compression F / k_pen.
+TEST_P(Validation, BlockPushedAgainstARowStops) {
+  PhysicsConfig cfg = base_config();
+  cfg.self_collision = false;
+  cfg.collision_damping = 1.0;
+  TerrainParams t;
+  t.kind = TerrainKind::rows;
+  t.seed = 1;
+  auto [m, st, sc] = one_voxel_on(cfg, t);
+  const double push = 2.0 * cfg.kinetic_friction * m.voxel_mass[0] * cfg.gravity;  // [N]
+  const std::vector<Vec3> ext(1, Vec3(push, 0.0, 0.0));
+  run(m, st, sc, static_cast<int>(0.5 / m.dt), ext);
+  const double wall = m.terrain.row_x[0] - m.voxel_size;
+  const double expected = wall + static_cast<float>(push) / m.voxel_const[0].k_pen;
+  std::printf("[%s] row: stopped at x %.6e m, wall %.6e m (+F/k_pen %.6e m), speed %.2e m/s\n",
+              GetParam().c_str(), st.pos[0].x(), wall, expected, max_speed(m, st));
+  EXPECT_NEAR(st.pos[0].x(), expected, 0.02 * m.voxel_size);
+  EXPECT_LT(max_speed(m, st), 1e-3);
+  EXPECT_LT(std::fabs(st.pos[0].z()), 0.05 * m.voxel_size) << "climbed onto the row";
+}
+
+// A 4x4x2 block shoved over 1 cm bumps never sinks into the ground: no voxel centre gets half
+// a voxel below the surface on any step.
+TEST_P(Validation, BlockShovedOverBumpsNeverSinksIn) {
+  PhysicsConfig cfg = base_config();
+  TerrainParams t;
+  t.kind = TerrainKind::bumps;
+  t.amplitude = 0.01;
+  t.correlation_length = 0.05;
+  t.seed = 7;
+  BuildOptions opt;
+  opt.terrain = t;
+  const Model m = build_model(solid_block(4, 4, 2, 1.0e5), cfg, opt);
+  State st = initial_state(m);
+  Scratch sc = make_scratch(m);
+  const std::vector<Vec3> ext(m.voxel_count, Vec3(0.012, 0.0, 0.0));  // [N] per voxel
+  double deepest = -1.0, travelled = 0.0;
+  const int steps = static_cast<int>(0.6 / m.dt);
+  for (int i = 0; i < steps; ++i) {
+    ASSERT_EQ(step(m, st, sc, ext), StepStatus::ok) << "step " << i;
+    for (int v = 0; v < m.voxel_count; ++v) {
+      const Vec3& p = st.pos[v];
+      deepest = std::max(deepest, terrain_height(m.terrain, p.x(), p.y()) - p.z());
+    }
+  }
+  travelled = centre_of_mass(m, st).x();
+  std::printf("[%s] bumps: travelled %.3f m, deepest centre %.3e m below the surface\n",
+              GetParam().c_str(), travelled, deepest);
+  EXPECT_GT(travelled, 0.1) << "did not reach the bumps";
+  EXPECT_LT(deepest, 0.5 * m.voxel_size);
+}
+
 INSTANTIATE_TEST_SUITE_P(Integrators, Validation, ::testing::Values("pneuvox", "symplectic"),
                          [](const auto& info) { return info.param; });
 

@@ -240,6 +240,42 @@ TEST(RenderImage, TargetLineGoesTheRequestedWay) {
   EXPECT_GT(red_line_pixels(behind, 0, 80), 40);
 }
 
+// A ground that is not the plane (SceneOptions::ground): a raised, tilted strip in front of the
+// body is drawn where it is, shaded by its slope, in the side and the top view; the plane
+// elsewhere looks as without a ground.
+TEST(RenderImage, GroundIsDrawnAsItIs) {
+  const Body body = body_from_plan(bar(1, 10));
+  const Pose pose = rest_pose(body);
+  SceneOptions flat;
+  flat.supersample = 1;
+  SceneOptions ramp = flat;
+  ramp.ground = [](double x, double) {
+    return x > 0.05 && x < 0.1 ? -0.005 + 0.5 * (x - 0.05) : -0.005;  // a 26.6 deg ramp
+  };
+  ramp.ground_min = -0.005;
+  ramp.ground_max = 0.02;
+  for (View view : {View::top, View::side}) {
+    Camera cam = view_camera(view, 300, 150);
+    cam.scale = 2000.0;
+    cam.center = Eigen::Vector3d(0.05, 0.0, 0.0);
+    const Image a = render_poses(body, {pose}, cam, flat);
+    const Image b = render_poses(body, {pose}, cam, ramp);
+    long differ_ramp = 0, differ_elsewhere = 0;
+    for (int y = 0; y < a.height; ++y)
+      for (int x = 0; x < a.width; ++x) {
+        const std::size_t i = (static_cast<std::size_t>(y) * a.width + x) * 3;
+        const bool differs = std::abs(a.rgb[i] - b.rgb[i]) + std::abs(a.rgb[i + 1] - b.rgb[i + 1]) +
+                                 std::abs(a.rgb[i + 2] - b.rgb[i + 2]) >
+                             6;
+        // image x of world x: 150 + (x_w - 0.05) * 2000; the ramp spans 150 .. 250
+        if (x > 160 && x < 240) differ_ramp += differs;
+        if (x < 140) differ_elsewhere += differs;
+      }
+    EXPECT_GT(differ_ramp, 500) << "view " << static_cast<int>(view);
+    EXPECT_LT(differ_elsewhere, differ_ramp / 4) << "view " << static_cast<int>(view);
+  }
+}
+
 TEST(RenderImage, FitCameraKeepsEverythingInside) {
   const Body body = body_from_plan(block_with_chamber(true));
   const Pose pose = rest_pose(body);

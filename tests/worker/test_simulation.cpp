@@ -145,3 +145,30 @@ TEST(Simulation, StopEndsItWithTheGivenStatus) {
   EXPECT_EQ(r.fitness, 0.0);
   EXPECT_THROW(sim.stop(EvalStatus::ok, ""), std::invalid_argument);
 }
+
+// The ground of an evaluation is a function of the ids terrain.resample names, and of nothing
+// else (docs/model.md §2.8a): the same on every rank and in replay.
+TEST(Simulation, TerrainSeedFollowsTheResampleChoice) {
+  Config config = parse_config("[terrain]\nkind = \"heightfield\"\n", "t");
+  EXPECT_EQ(worker::terrain_params(Config{}, {3, 7}, 0).kind, physics::TerrainKind::flat);
+  const auto seed = [&](const char* resample, std::int64_t generation, std::int64_t id, int unit) {
+    config.terrain.resample = resample;
+    const physics::TerrainParams p = worker::terrain_params(config, {generation, id}, unit);
+    EXPECT_EQ(p.kind, physics::TerrainKind::bumps);
+    EXPECT_EQ(p.amplitude, config.terrain.amplitude);
+    return p.seed;
+  };
+  EXPECT_EQ(seed("per_run", 0, 0, 0), seed("per_run", 5, 9, 2));
+  EXPECT_EQ(seed("per_generation", 4, 0, 0), seed("per_generation", 4, 9, 2));
+  EXPECT_NE(seed("per_generation", 4, 0, 0), seed("per_generation", 5, 0, 0));
+  EXPECT_EQ(seed("per_evaluation", 4, 9, 2), seed("per_evaluation", 4, 9, 2));
+  EXPECT_NE(seed("per_evaluation", 4, 9, 2), seed("per_evaluation", 4, 8, 2));
+  EXPECT_NE(seed("per_evaluation", 4, 9, 2), seed("per_evaluation", 4, 9, 1));
+  const std::uint64_t run1 = seed("per_run", 0, 0, 0);
+  config.run.seed = 2;
+  EXPECT_NE(seed("per_run", 0, 0, 0), run1) << "another run, another ground";
+  config.terrain.seed = 5;
+  const std::uint64_t terrain5 = seed("per_run", 0, 0, 0);
+  config.terrain.seed = 6;
+  EXPECT_NE(seed("per_run", 0, 0, 0), terrain5);
+}
