@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """All figures and tables of an experiment grid from a folder of softevo run archives.
 
-    python3 analysis/figures.py RUNS_DIR -o OUT_DIR [--generation G]
+    python3 analysis/figures.py RUNS_DIR -o OUT_DIR [--generation G] [--compare A,B]
 
 Writes (PNG and PDF for every figure, CSV for every table):
   fitness_gait.*, fitness_directed.*   mean and best fitness over generations per experiment,
@@ -14,6 +14,11 @@ Writes (PNG and PDF for every figure, CSV for every table):
   comparison.csv                       Welch's t-test and Mann-Whitney U for those (the thesis
                                        reports p = 0.012 for the gait population means)
   champions.csv, champions.*           table of run champions (best of the last generation)
+
+Pairs compared: the thesis' open vs closed loop of each task (gait, directed) and of their
+rough-ground variants (gait-rough-*, dir-rough-*) when the folder has them, or, with
+--compare A,B, experiments A and B of the grid (any two, e.g. gait-open,gait-rough-open);
+such a pair's files are named fitness_A_vs_B.*, comparison_A_vs_B.*.
 
 The experiment of each archive is its root attribute `experiment`, else derived from its
 /config text (task.kind, task.control).
@@ -42,10 +47,14 @@ from scipy import stats  # noqa: E402
 
 from softevo_archive import EXPERIMENTS, Run, find_runs, status_name  # noqa: E402
 
-TASKS = {"gait": ("gait-open", "gait-closed"), "directed": ("dir-open", "dir-closed")}
-TASK_TITLES = {"gait": "Gait learning", "directed": "Directed locomotion"}
-COLOURS = {"gait-open": "tab:blue", "gait-closed": "tab:red",
-           "dir-open": "tab:blue", "dir-closed": "tab:red"}
+# The pairs compared by default: name -> (first, second) experiment, and their titles.
+TASKS = {"gait": ("gait-open", "gait-closed"), "directed": ("dir-open", "dir-closed"),
+         "gait_rough": ("gait-rough-open", "gait-rough-closed"),
+         "directed_rough": ("dir-rough-open", "dir-rough-closed")}
+TASK_TITLES = {"gait": "Gait learning", "directed": "Directed locomotion",
+               "gait_rough": "Gait learning on rough ground",
+               "directed_rough": "Directed locomotion on rough ground"}
+PAIR_COLOURS = ("tab:blue", "tab:red")  # first and second experiment of a pair
 
 
 def save(fig, out: pathlib.Path, stem: str, written: list[pathlib.Path]) -> None:
@@ -88,7 +97,7 @@ def fitness_figure(task: str, by_exp: dict[str, list[Run]], out: pathlib.Path,
                    written: list[pathlib.Path]) -> None:
     fig, ax = plt.subplots(figsize=(7.0, 4.2))
     plotted = False
-    for exp in TASKS[task]:
+    for exp, colour in zip(TASKS[task], PAIR_COLOURS):
         runs = by_exp.get(exp, [])
         if not runs:
             continue
@@ -98,8 +107,8 @@ def fitness_figure(task: str, by_exp: dict[str, list[Run]], out: pathlib.Path,
         rows = []
         for label, data, style in (("mean", means, "--"), ("best", bests, "-")):
             mu, s = np.mean(data, axis=0), sd(data, axis=0)
-            ax.plot(gens, mu, style, color=COLOURS[exp], label=f"{exp} {label} (n={len(runs)})")
-            ax.fill_between(gens, mu - s, mu + s, color=COLOURS[exp], alpha=0.15, linewidth=0)
+            ax.plot(gens, mu, style, color=colour, label=f"{exp} {label} (n={len(runs)})")
+            ax.fill_between(gens, mu - s, mu + s, color=colour, alpha=0.15, linewidth=0)
             rows.append((mu, s))
         write_csv(out / f"fitness_{exp}.csv",
                   ["generation", "runs", "mean_of_population_mean", "sd_of_population_mean",
@@ -114,7 +123,8 @@ def fitness_figure(task: str, by_exp: dict[str, list[Run]], out: pathlib.Path,
     ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
     ax.set_xlabel("generation")
     # Gait fitness is the distance covered in task.eval_seconds (10 s in the thesis), docs/model.md §7.1.
-    ax.set_ylabel("fitness" + (" [cm covered in one evaluation]" if task == "gait" else ""))
+    gait = all(e.startswith("gait-") for e in TASKS[task])
+    ax.set_ylabel("fitness" + (" [cm covered in one evaluation]" if gait else ""))
     ax.set_title(f"{TASK_TITLES[task]}: mean and best fitness, averaged over runs (+-1 sd)")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
@@ -156,7 +166,7 @@ def comparison(task: str, by_exp: dict[str, list[Run]], generation: int | None,
         return
     g = generation if generation is not None else last_common_generation(runs_open + runs_closed)
     if g is None:
-        print(f"figures: {task}: open and closed runs share no generation, no comparison",
+        print(f"figures: {task}: {open_exp} and {closed_exp} share no generation, no comparison",
               file=sys.stderr)
         return
     missing = [str(r.path) for r in runs_open + runs_closed if g not in r.generation_numbers]
@@ -175,13 +185,13 @@ def comparison(task: str, by_exp: dict[str, list[Run]], generation: int | None,
         ax.boxplot([a, b], widths=0.5, showfliers=False)
         for j, data in enumerate((a, b)):
             jitter = np.linspace(-0.08, 0.08, len(data)) if len(data) > 1 else np.zeros(1)
-            ax.plot(np.full(len(data), j + 1) + jitter, data, "o", color=COLOURS[(open_exp, closed_exp)[j]],
-                    alpha=0.7)
+            ax.plot(np.full(len(data), j + 1) + jitter, data, "o", color=PAIR_COLOURS[j], alpha=0.7)
         ax.set_xticks([1, 2], [open_exp, closed_exp])
         ax.set_title(f"{metric} fitness, gen {g}\nWelch p={p_t:.3g}, Mann-Whitney p={p_u:.3g}",
                      fontsize=9)
         ax.grid(True, axis="y", alpha=0.3)
-    fig.suptitle(f"{TASK_TITLES[task]}: open vs closed loop (one point per run)", fontsize=10)
+    fig.suptitle(f"{TASK_TITLES[task]}: {open_exp} vs {closed_exp} (one point per run)",
+                 fontsize=10)
     fig.tight_layout()
     save(fig, out, f"comparison_{task}", written)
 
@@ -191,7 +201,9 @@ def champions(runs: list[Run], out: pathlib.Path, written: list[pathlib.Path]) -
               "champion_id", "fitness", "status", "voxels", "chambers", "best_ever_fitness",
               "best_ever_generation", "best_ever_id"]
     rows = []
-    for r in sorted(runs, key=lambda r: (EXPERIMENTS.index(r.experiment), r.seed, str(r.path))):
+    order = {e: i for i, e in enumerate(EXPERIMENTS)}
+    for r in sorted(runs, key=lambda r: (order.get(r.experiment, len(order)), r.experiment, r.seed,
+                                         str(r.path))):
         if not r.generation_numbers:
             continue
         last = r.generation(r.generation_numbers[-1])
@@ -232,7 +244,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("-o", "--out", required=True, help="output folder (created)")
     ap.add_argument("--generation", type=int, default=None,
                     help="generation of the open/closed comparison (default: last common)")
+    ap.add_argument("--compare", default=None, metavar="A,B",
+                    help="compare experiments A and B of the grid instead of the default pairs")
     args = ap.parse_args(argv)
+    if args.compare is not None:
+        pair = tuple(e.strip() for e in args.compare.split(","))
+        if len(pair) != 2 or not all(pair) or pair[0] == pair[1]:
+            ap.error(f"--compare wants two different experiments A,B, got {args.compare!r}")
+        name = f"{pair[0]}_vs_{pair[1]}"
+        TASKS.clear()
+        TASKS[name] = pair
+        TASK_TITLES[name] = f"{pair[0]} vs {pair[1]}"
 
     runs, skipped = find_runs(args.runs_dir)
     for msg in skipped:
@@ -249,7 +271,13 @@ def main(argv: list[str] | None = None) -> int:
             by_exp.setdefault(r.experiment, []).append(r)
         else:
             print(f"figures: {r.path} has no generation yet, left out", file=sys.stderr)
-    print("runs: " + ", ".join(f"{e} x{len(by_exp[e])}" for e in EXPERIMENTS if e in by_exp))
+    print("runs: " + ", ".join(f"{e} x{len(by_exp[e])}" for e in sorted(by_exp)))
+    if args.compare is not None:
+        missing = [e for e in TASKS[name] if e not in by_exp]
+        if missing:
+            print(f"figures: no run of {', '.join(missing)} under {args.runs_dir} (it has "
+                  f"{', '.join(sorted(by_exp)) or 'none'})", file=sys.stderr)
+            return 2
 
     written: list[pathlib.Path] = []
     for task in TASKS:

@@ -11,7 +11,10 @@ import numpy as np
 
 import softevo
 
-EXPERIMENTS = ("gait-open", "gait-closed", "dir-open", "dir-closed")
+# The thesis grid's experiments, in table order; any other experiment name (gait-rough-open,
+# rotate-open, ...) is accepted too and sorts after them.
+EXPERIMENTS = ("gait-open", "gait-closed", "dir-open", "dir-closed", "gait-rough-open",
+               "gait-rough-closed", "dir-rough-open", "dir-rough-closed")
 ArchiveError = softevo.ArchiveError
 
 
@@ -44,14 +47,11 @@ class Run:
         self.path = pathlib.Path(path)
         try:
             self.run = softevo.open_run(self.path)
-            self.experiment = self.run.info["experiment"]
-            if self.experiment not in EXPERIMENTS:
-                self.experiment = self.run.config.experiment
+            self.experiment = self.run.info["experiment"] or self.run.config.experiment
         except (OSError, ValueError) as e:
             raise ArchiveError(f"{self.path}: {e}") from e
-        if self.experiment not in EXPERIMENTS:
-            raise ArchiveError(f"{self.path}: experiment {self.experiment!r} is not one of "
-                               f"{', '.join(EXPERIMENTS)}")
+        if not self.experiment:
+            raise ArchiveError(f"{self.path}: no experiment name (root attribute or /config)")
         self.seed = int(self.run.info["seed"])
         self.state = self.run.info["state"]
         table = self.run.individuals()

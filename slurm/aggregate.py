@@ -31,11 +31,15 @@ def main():
     ap.add_argument("--runs", required=True)
     ap.add_argument("--array", default="0-39")
     ap.add_argument("--reps", type=int, default=10)
+    ap.add_argument("--experiments", default=",".join(EXPERIMENTS),
+                    help="comma-separated experiments of the grid, in array order")
+    ap.add_argument("--seed-first", type=int, default=1, help="seed of each experiment's first task")
     a = ap.parse_args()
+    experiments = [e for e in a.experiments.split(",") if e]
 
     rows, problems = [], []
     for t in tasks_of(a.array):
-        exp, seed = EXPERIMENTS[t // a.reps], t % a.reps + 1
+        exp, seed = experiments[t // a.reps], t % a.reps + a.seed_first
         path = "%s/%s-%02d.h5" % (a.runs, exp, seed)
         r = subprocess.run([a.softevo, "info", path, "--json"], capture_output=True, text=True)
         if r.returncode != 0:
@@ -60,7 +64,7 @@ def main():
         print("%-12s %4d %11d %12.6g %12.6g  %s" % (r[0], r[1], r[3], r[4], r[5], r[6]))
     print("\n# final best fitness per experiment")
     print("%-12s %3s %12s %12s %12s %12s" % ("experiment", "n", "mean", "sd", "min", "max"))
-    for exp in EXPERIMENTS:
+    for exp in experiments:
         v = [r[4] for r in rows if r[0] == exp]
         if not v:
             continue

@@ -5,15 +5,34 @@
 # Prints "ARRAY_JOB_ID AGGREGATION_JOB_ID". Environment: see slurm/grid.sbatch, plus
 #   SOFTEVO_ARRAY (array spec, default 0-39), SOFTEVO_NTASKS (ranks per task, default 5),
 #   SOFTEVO_TIME (time limit per task, default 7-00:00:00), SOFTEVO_BUILD (default build).
+#   slurm/submit.sh --experiments gait-rough-open,gait-rough-closed --seeds 1-10
+#                                        # any experiments (configs/<name>.toml), seeds A-B each
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --experiments) export SOFTEVO_EXPERIMENTS=${2:?--experiments needs a list}; shift 2 ;;
+    --seeds)
+      [[ ${2:-} =~ ^([0-9]+)-([0-9]+)$ ]] && (( BASH_REMATCH[1] <= BASH_REMATCH[2] )) ||
+        { echo "submit.sh: --seeds wants A-B with A <= B, got '${2:-}'" >&2; exit 2; }
+      export SOFTEVO_SEED_FIRST=${BASH_REMATCH[1]}
+      export SOFTEVO_REPS=$(( BASH_REMATCH[2] - BASH_REMATCH[1] + 1 )); shift 2 ;;
+    *) echo "submit.sh: unknown argument '$1' (--experiments LIST, --seeds A-B)" >&2; exit 2 ;;
+  esac
+done
+IFS=, read -ra EXPS <<<"${SOFTEVO_EXPERIMENTS:-gait-open,gait-closed,dir-open,dir-closed}"
+for e in "${EXPS[@]}"; do
+  [ -f "$ROOT/configs/$e.toml" ] || { echo "submit.sh: no config configs/$e.toml" >&2; exit 2; }
+done
+export SOFTEVO_EXPERIMENTS=$(IFS=,; echo "${EXPS[*]}")
 BUILD=${SOFTEVO_BUILD:-$ROOT/build}
 export SOFTEVO_ROOT=$ROOT
 export SOFTEVO_MPI=${SOFTEVO_MPI:-$BUILD/bin/softevo-mpi}
 export SOFTEVO_CLI=${SOFTEVO_CLI:-$BUILD/bin/softevo}
 export SOFTEVO_RUNS=${SOFTEVO_RUNS:-$ROOT/runs}
-export SOFTEVO_ARRAY=${SOFTEVO_ARRAY:-0-39}
 export SOFTEVO_REPS=${SOFTEVO_REPS:-10}
+export SOFTEVO_SEED_FIRST=${SOFTEVO_SEED_FIRST:-1}
+export SOFTEVO_ARRAY=${SOFTEVO_ARRAY:-0-$(( ${#EXPS[@]} * SOFTEVO_REPS - 1 ))}
 for b in "$SOFTEVO_MPI" "$SOFTEVO_CLI"; do
   [ -x "$b" ] || { echo "submit.sh: $b not built (cmake --build $BUILD)" >&2; exit 2; }
 done
