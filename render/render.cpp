@@ -243,14 +243,18 @@ bool near_grid_line(double coordinate, double spacing, double half_width) {
 // steps of `step` [m] (about a quarter of an output pixel) and refines by bisection.
 std::optional<std::pair<double, float>> ground_hit(const SceneOptions& options,
                                                    const Eigen::Vector3d& p,
-                                                   const Eigen::Vector3d& forward, double step) {
+                                                   const Eigen::Vector3d& forward, double step,
+                                                   double t_min) {
   const auto below = [&](double t) {
     const Eigen::Vector3d q = p + t * forward;
     return q.z() <= options.ground(q.x(), q.y());
   };
   const double t_top = (options.ground_max - p.z()) / forward.z();
   const double t_bottom = (options.ground_min - p.z()) / forward.z();
-  double lo = t_top, hi = t_top;
+  double lo = std::max(t_top, t_min), hi = lo;
+  // Below the ground where the stage starts: its cut face where the ground is raised above the
+  // plane floor_z (a row's end), nothing below the plane (as the plane's stage).
+  if (lo > t_top && below(lo) && (p + lo * forward).z() < options.floor_z) return std::nullopt;
   while (!below(hi)) {
     if (hi >= t_bottom) return std::nullopt;
     lo = hi;
@@ -295,6 +299,11 @@ void draw_floor(Raster& r, std::vector<Colour>& base, const SceneOptions& option
     const double beta = *options.target_direction_deg * kPi / 180.0;
     target_dir = Eigen::Vector2d(std::cos(beta), std::sin(beta));
   }
+  // A bounded stage starts at y_lo: the ground in front of it (a row's near end) is not drawn.
+  const auto stage_front = [&](const Eigen::Vector3d& p) {
+    return bounded && cam.forward.y() > 1e-9 ? (y_lo - p.y()) / cam.forward.y()
+                                             : -std::numeric_limits<double>::infinity();
+  };
   for (int py = 0; py < r.height; ++py) {
     const float t_sky = static_cast<float>(py) / std::max(1, r.height - 1);
     const Colour sky{sky_top.r + (sky_bottom.r - sky_top.r) * t_sky,
@@ -310,7 +319,8 @@ void draw_floor(Raster& r, std::vector<Colour>& base, const SceneOptions& option
       double t = (options.floor_z - p.z()) / cam.forward.z();
       float shade = 1.0F;
       if (options.ground) {
-        const auto hit = ground_hit(options, p, cam.forward, std::max(0.25 / output_scale, 1e-3));
+        const auto hit = ground_hit(options, p, cam.forward, std::max(0.25 / output_scale, 1e-3),
+                                    stage_front(p));
         if (!hit) continue;
         t = hit->first;
         shade = hit->second;
