@@ -206,6 +206,14 @@ class Walker {
 };
 
 [[noreturn]] void probe_in_child(const std::string& path) {
+  // The parent's crash handlers (Open MPI's print a backtrace) are not this child's business:
+  // a crash here is the expected outcome for a damaged file, reported by the parent.
+  for (const int signal : {SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT}) {
+    struct sigaction action {};
+    action.sa_handler = SIG_DFL;
+    sigemptyset(&action.sa_mask);
+    ::sigaction(signal, &action, nullptr);
+  }
   silence_error_printing();
   tolerate([&] {
     const Id file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
