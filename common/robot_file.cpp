@@ -88,7 +88,11 @@ class Reader {
     if (j.is_number_integer()) return j.get<long long>();
     if (j.is_number_float()) {
       const double v = j.get<double>();
-      if (std::isfinite(v) && v == static_cast<double>(static_cast<long long>(v)))
+      // In range before the cast: converting a double beyond long long is undefined (a cell
+      // of 4.4e68 reached it, found by fuzz_robot_file); -2^63 <= v < 2^63 are exact doubles.
+      constexpr double kLimit = 9223372036854775808.0;  // 2^63
+      if (std::isfinite(v) && v >= -kLimit && v < kLimit &&
+          v == static_cast<double>(static_cast<long long>(v)))
         return static_cast<long long>(v);
     }
     fail(key, std::string("expected an integer, got ") + (j.is_number() ? j.dump() : type_name(j)));

@@ -84,7 +84,7 @@ softevo::io::GenerationRecord record(std::int64_t g, int n, int units,
 
 void archive(const fs::path& path, int generations, int units,
              const std::vector<std::string>& columns) {
-  fs::remove(path);
+  softevo::io::remove_archive(path.string());  // with the segments of an earlier build
   const softevo::Config config;
   softevo::io::RunInfo info;
   info.version = "seed";
@@ -102,6 +102,11 @@ void archive(const fs::path& path, int generations, int units,
     softevo::io::append_generation(path.string(), info, r, row,
                                    {g + 1, {1, 2, 3, 4, 5, 6, 7, static_cast<std::uint8_t>(g)}});
   }
+  // Packed into one self-contained file, as a finished run leaves it: a fuzz input is one file
+  // (a root alone would only reach the "segment missing" error of its external links).
+  info.state = "complete";
+  info.end_time = "2026-01-01T00:01:00Z";
+  softevo::io::finish_archive(path.string(), info);
 }
 
 }  // namespace
@@ -131,8 +136,9 @@ int main(int argc, char** argv) {
     archive(out / "archive" / "directed-2.h5", 2, 2,
             {"fitness", "direction_deg", "distance", "path_length", "angle_error",
              "perpendicular_penalty", "status"});
+    // Only the archives are seeds (no lock file or segment directory of the writer).
     for (const fs::path& p : fs::directory_iterator(out / "archive"))
-      if (p.string().find(".lock") != std::string::npos || p.extension() != ".h5") fs::remove(p);
+      if (p.extension() != ".h5") fs::remove_all(p);
   } catch (const std::exception& e) {
     std::cerr << "make_seeds: " << e.what() << "\n";
     return 1;

@@ -854,6 +854,8 @@ bool is_run_archive(const std::string& path) {
     const h5::File file = h5::File::open(path);
     return file.has_attribute("format") &&
            file.read_string_attribute("format", kStringBytes) == kArchiveFormat;
+  } catch (const h5::DamagedFileError& e) {
+    throw ArchiveError(e.what());
   } catch (const h5::Error&) {
     return false;
   }

@@ -217,7 +217,8 @@ class Archive {
   std::unique_ptr<h5::File> file_;
 };
 
-// `path` is an HDF5 file whose root attribute `format` is kArchiveFormat (never throws).
+// `path` is an HDF5 file whose root attribute `format` is kArchiveFormat. Throws only for a file
+// that crashes libhdf5 (ArchiveError "damaged HDF5 file", io/open_probe.hpp): that is the answer.
 bool is_run_archive(const std::string& path);
 
 // FNV-1a 64 over every archived (generation, id, status, fitness bits), generations ascending,

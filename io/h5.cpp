@@ -796,6 +796,7 @@ File File::open(const std::string& path, Access access, const std::string& label
     take_error_message();
     w.fail("open file", "not an HDF5 file (or unreadable)");
   }
+  probe_before_open(path, w);  // a file that crashes libhdf5 must not crash this process
   const unsigned flags = access == Access::read_write ? H5F_ACC_RDWR : H5F_ACC_RDONLY;
   // Objects added to a file opened for writing take the access properties' format.
   const Id properties = access == Access::read_write && kChecksummedFormats

@@ -36,6 +36,14 @@ class Error : public std::runtime_error {
   std::string file_, object_, action_, reason_;
 };
 
+// A file the structure probe refused (io/open_probe.hpp): libhdf5 crashed or hung on it in a
+// test process. Callers that only ask "is this my kind of file?" let it through: "damaged" is
+// the answer the user needs, not "not an archive".
+class DamagedFileError : public Error {
+ public:
+  using Error::Error;
+};
+
 // Read limits. Every read is bounded before anything is allocated: a dataset never yields more
 // values than its file has bytes for (a flipped extent or length would otherwise make HDF5
 // allocate and fill gigabytes), and each caller passes the tighter limit its schema allows
@@ -318,6 +326,12 @@ class Group : public Object {
   Dataset create_dataset_raw(const std::string& name, hid_t file_type, const Dataspace& space,
                              const PropertyList* creation) const;
 };
+
+// The structure probe of io/open_probe.hpp: unless it is switched off or this version of `path`
+// passed it before, a forked child reads all of the file through libhdf5 first. Throws
+// DamagedFileError (naming `where`'s file, the signal, and that the file was not changed) when
+// the child crashed or did not finish in time. File::open calls it; nothing else needs to.
+void probe_before_open(const std::string& path, const Where& where);
 
 // A file; as a Group it is the root group "/".
 class File : public Group {

@@ -204,6 +204,8 @@ Trace read_trace(const std::string& path) {
 bool is_trace(const std::string& path) {
   try {
     return h5::File::is_hdf5(path) && h5::File::open(path).has_link("positions");
+  } catch (const h5::DamagedFileError& e) {
+    throw std::runtime_error(e.what());
   } catch (const h5::Error&) {
     return false;
   }

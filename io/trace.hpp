@@ -82,7 +82,8 @@ void write_trace(const std::string& path, const Trace& trace,
 // object and the reason (a missing required dataset, a wrong shape).
 Trace read_trace(const std::string& path);
 
-// `path` is an HDF5 file with a /positions dataset, the mark of a trace (never throws).
+// `path` is an HDF5 file with a /positions dataset, the mark of a trace. Throws only for a file
+// that crashes libhdf5 (std::runtime_error "damaged HDF5 file", io/open_probe.hpp).
 bool is_trace(const std::string& path);
 
 }  // namespace softevo::io

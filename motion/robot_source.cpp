@@ -26,7 +26,73 @@ bool is_json(const std::string& path) {
   return ext == ".json";
 }
 
-// Re-simulates and records every control frame (60 Hz) as a pose.
+render::Pose pose_of(const worker::TraceFrame& frame) {
+  render::Pose pose;
+  pose.time = frame.time;
+  pose.position.assign(frame.positions.begin(), frame.positions.end());
+  pose.orientation.reserve(frame.orientations.size());
+  for (const auto& q : frame.orientations) pose.orientation.emplace_back(q.w, q.x, q.y, q.z);
+  pose.chamber_pressure.assign(frame.pressures.begin(), frame.pressures.end());
+  return pose;
+}
+
+// Of poses offered in ascending time, keeps the first, the last and for each wanted time the
+// nearest one (the earlier of two equally near, as render::pose_at chooses), holding at most one
+// pose besides those; nullopt = keeps every pose.
+class NearestPoses {
+ public:
+  explicit NearestPoses(std::optional<std::vector<double>> wanted) : wanted_(std::move(wanted)) {
+    if (wanted_) std::sort(wanted_->begin(), wanted_->end());
+  }
+  void offer(render::Pose pose) {
+    if (!wanted_) {
+      kept_.push_back(std::move(pose));
+      return;
+    }
+    bool keep_new = !previous_;  // the first pose: the camera and the target line start there
+    for (; next_ < wanted_->size() && (*wanted_)[next_] <= pose.time; ++next_) {
+      const double t = (*wanted_)[next_];
+      if (!previous_ || std::abs(pose.time - t) < std::abs(previous_->time - t)) {
+        keep_new = true;
+      } else {
+        previous_needed_ = true;
+      }
+    }
+    if (previous_ && previous_needed_) kept_.push_back(std::move(*previous_));
+    previous_ = std::move(pose);
+    previous_needed_ = keep_new;
+  }
+  // The kept poses, ascending; the last pose is among them (a clip's end is its time).
+  std::vector<render::Pose> finish() {
+    if (previous_) kept_.push_back(std::move(*previous_));
+    previous_.reset();
+    return std::move(kept_);
+  }
+
+ private:
+  std::optional<std::vector<double>> wanted_;
+  std::size_t next_ = 0;  // first wanted time later than every pose offered so far
+  std::optional<render::Pose> previous_;
+  bool previous_needed_ = false;
+  std::vector<render::Pose> kept_;
+};
+
+// Refuses, before anything is simulated, a motion whose kept poses would need more than
+// kMaxMotionBytes.
+void check_motion_memory(const std::string& name, double poses, std::size_t voxels) {
+  const double bytes =
+      poses * static_cast<double>(voxels) * (sizeof(Eigen::Vector3d) + sizeof(Eigen::Quaterniond));
+  if (bytes <= kMaxMotionBytes) return;
+  char message[320];
+  std::snprintf(message, sizeof message,
+                "%s: showing %.0f poses of %zu voxels needs %.1f GiB of memory, more than the "
+                "limit of %.0f GiB; lower --seconds or --fps, or render a still or a time-lapse",
+                name.c_str(), poses, voxels, bytes / (1024.0 * 1024 * 1024),
+                kMaxMotionBytes / (1024.0 * 1024 * 1024));
+  throw std::invalid_argument(message);
+}
+
+// Re-simulates and keeps the control frames (60 Hz) the output shows as poses.
 Motion simulate_motion(Config config, const BodyPlan& plan, const ControllerSpec& controller,
                        const MotionRequest& request, const std::string& name,
                        const worker::EvaluationIds& ids = {}) {
@@ -47,19 +113,34 @@ Motion simulate_motion(Config config, const BodyPlan& plan, const ControllerSpec
   }
   if (!overrides.empty()) config = apply_overrides(config, overrides);
   const std::unique_ptr<tasks::Task> task = tasks::make_task(config);
-  worker::EvaluateOptions options;
-  options.ids = ids;
-  options.on_start = [&motion](const worker::TraceHeader& h) { motion.terrain = h.model->terrain; };
-  options.on_frame = [&motion](const worker::TraceFrame& frame) {
-    render::Pose pose;
-    pose.time = frame.time;
-    pose.position.assign(frame.positions.begin(), frame.positions.end());
-    pose.orientation.reserve(frame.orientations.size());
-    for (const auto& q : frame.orientations) pose.orientation.emplace_back(q.w, q.x, q.y, q.z);
-    pose.chamber_pressure.assign(frame.pressures.begin(), frame.pressures.end());
-    motion.poses.push_back(std::move(pose));
-  };
-  const EvalResult result = worker::evaluate(config, *task, plan, controller, 0, options);
+  // The shown times follow from the end: planned from the evaluation's length, and planned
+  // again from the real end when the simulation stopped early (a failed robot); the second run
+  // gives the same bits, so it keeps exactly the poses the first would have needed.
+  const double planned_end = config.task.eval_seconds;
+  std::optional<std::vector<double>> wanted;
+  if (request.shown_times) wanted = request.shown_times(planned_end);
+  const double poses = wanted ? static_cast<double>(wanted->size() + 2)
+                              : std::floor(planned_end * config.task.control_rate) + 1;
+  check_motion_memory(name, poses, motion.body.voxel_cells.size());
+  EvalResult result;
+  for (int run = 0; run < 2; ++run) {
+    NearestPoses keep(wanted);
+    worker::EvaluateOptions options;
+    options.ids = ids;
+    options.on_start = [&motion](const worker::TraceHeader& h) {
+      motion.terrain = h.model->terrain;
+    };
+    options.on_frame = [&keep](const worker::TraceFrame& frame) { keep.offer(pose_of(frame)); };
+    result = worker::evaluate(config, *task, plan, controller, 0, options);
+    motion.poses = keep.finish();
+    if (!wanted || motion.poses.empty()) break;
+    std::vector<double> again = request.shown_times(motion.poses.back().time);
+    std::sort(again.begin(), again.end());
+    std::vector<double> planned = *wanted;
+    std::sort(planned.begin(), planned.end());
+    if (again == planned) break;
+    wanted = std::move(again);
+  }
   if (motion.poses.empty()) {
     throw std::runtime_error("simulation of " + name + " recorded no frame: " +
                              (result.message.empty() ? to_string(result.status) : result.message));
@@ -161,6 +242,12 @@ Motion load_trace(const std::string& path, const MotionRequest& request) {
   motion.terrain = ground_of(trace);
   const auto voxels = static_cast<std::size_t>(trace.voxels);
   const auto chambers = static_cast<std::size_t>(trace.chambers);
+  std::optional<std::vector<double>> wanted;
+  if (request.shown_times && trace.frames > 0) wanted = request.shown_times(trace.time.back());
+  check_motion_memory(
+      path, wanted ? static_cast<double>(wanted->size() + 2) : static_cast<double>(trace.frames),
+      voxels);
+  NearestPoses keep(wanted);
   for (std::size_t f = 0; f < static_cast<std::size_t>(trace.frames); ++f) {
     render::Pose pose;
     pose.time = trace.time[f];
@@ -177,8 +264,9 @@ Motion load_trace(const std::string& path, const MotionRequest& request) {
           trace.pressures.begin() + static_cast<std::ptrdiff_t>(f * chambers),
           trace.pressures.begin() + static_cast<std::ptrdiff_t>((f + 1) * chambers));
     }
-    motion.poses.push_back(std::move(pose));
+    keep.offer(std::move(pose));
   }
+  motion.poses = keep.finish();
   if (motion.poses.empty()) throw std::runtime_error(path + ": trace has no frame");
   if (trace.fitness && !trace.status.empty()) {
     char line[160];

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -30,6 +31,11 @@ struct Motion {
   physics::Terrain terrain;             // the ground it moved on (flat unless the config says)
 };
 
+// What the poses of a re-simulation or trace may hold in memory at most (positions and
+// orientations of every voxel of every kept pose): beyond it a render is refused before it
+// simulates, naming the pose count and what to lower. The same bound as a trace's.
+inline constexpr double kMaxMotionBytes = 4.0 * 1024 * 1024 * 1024;
+
 struct MotionRequest {
   bool needs_motion = false;  // robot file / archive: simulate (else the rest pose is drawn)
   bool static_pose = false;   // never simulate
@@ -44,6 +50,11 @@ struct MotionRequest {
   std::vector<std::string> overrides;
   // Traces: robot file that gives the chamber cells.
   std::string robot_file;
+  // The times [s] the output shows, given the time of the motion's last pose. Set: only the
+  // first and last pose and, for each time, the pose nearest to it (render/compose.hpp
+  // pose_at's choice) are kept, so a still or a time-lapse of an hour-long re-simulation holds
+  // a few poses, and a video one per frame. Unset: every control frame is kept.
+  std::function<std::vector<double>(double end)> shown_times;
 };
 
 // Dispatches on the input: *.json = robot file; HDF5 with root attribute format

@@ -97,21 +97,25 @@ Layout parse_layout(const std::string& name) {
   throw std::invalid_argument("layout must be strip or overlay, not '" + name + "'");
 }
 
-Image render_timelapse(const Clip& clip, View view, const Timelapse& timelapse, int width,
-                       int height, SceneOptions scene) {
+std::vector<double> timelapse_times(const Timelapse& timelapse, View view, double end) {
   const int n = timelapse.snapshots;
   if (n < 1 || n > kMaxSnapshots)
     throw std::invalid_argument("a time-lapse needs 1 to 64 snapshots, not " + std::to_string(n));
-  // Snapshot times: n evenly spaced over [start, start + span].
-  const double end = clip.poses.back().time;
+  // n evenly spaced over [start, start + span].
   const double span = timelapse.span ? *timelapse.span : (view == View::top ? end : 0.5);
   double start = timelapse.start ? *timelapse.start : (view == View::top ? 0.0 : 5.0);
   start = std::clamp(start, 0.0, std::max(0.0, end - span));
+  std::vector<double> times;
+  for (int i = 0; i < n; ++i) times.push_back(n == 1 ? start : start + span * i / (n - 1));
+  return times;
+}
+
+Image render_timelapse(const Clip& clip, View view, const Timelapse& timelapse, int width,
+                       int height, SceneOptions scene) {
+  const int n = timelapse.snapshots;
   std::vector<Pose> snaps;
-  for (int i = 0; i < n; ++i) {
-    const double t = n == 1 ? start : start + span * i / (n - 1);
+  for (const double t : timelapse_times(timelapse, view, clip.poses.back().time))
     snaps.push_back(clip.poses[pose_at(clip.poses, t)]);
-  }
   const Eigen::AlignedBox3d box = scene_box(clip.body, snaps, scene.floor_z);
   if (timelapse.layout == Layout::strip) {
     const Camera cam = fit_camera(view, box, width > 0 ? width : 360, height > 0 ? height : 300);
@@ -161,6 +165,14 @@ std::optional<std::string> find_on_path(const std::string& program) {
   return std::nullopt;
 }
 
+std::vector<double> video_frame_times(double fps, double end) {
+  const int frames = static_cast<int>(std::floor(end * fps + 1e-9)) + 1;
+  std::vector<double> times;
+  times.reserve(static_cast<std::size_t>(frames));
+  for (int f = 0; f < frames; ++f) times.push_back(f / fps);
+  return times;
+}
+
 VideoWritten write_video(const Clip& clip, View view, const VideoOptions& options,
                          const SceneOptions& scene, const std::string& ffmpeg,
                          const std::string& output, Overwrite overwrite) {
@@ -192,12 +204,16 @@ VideoWritten write_video(const Clip& clip, View view, const VideoOptions& option
                               muxer + " " + shell_quote(file.temp_path());
   FILE* pipe = ::popen(command.c_str(), "w");
   if (pipe == nullptr) throw std::runtime_error("render: cannot start ffmpeg: " + command);
-  const double end = clip.poses.back().time;
-  written.frames = static_cast<int>(std::floor(end * options.fps + 1e-9)) + 1;
+  const std::vector<double> times = video_frame_times(options.fps, clip.poses.back().time);
+  written.frames = static_cast<int>(times.size());
   bool ok = true;
-  for (int f = 0; f < written.frames && ok; ++f) {
-    const double t = f / options.fps;
-    const Pose& pose = clip.poses[pose_at(clip.poses, t)];
+  std::size_t nearest = 0;
+  for (std::size_t f = 0; f < times.size() && ok; ++f) {
+    // pose_at's choice, found by walking on: times and poses both ascend (a search from the
+    // start for every frame made a long video quadratic in its length).
+    const auto gap = [&](std::size_t i) { return std::abs(clip.poses[i].time - times[f]); };
+    while (nearest + 1 < clip.poses.size() && gap(nearest + 1) < gap(nearest)) ++nearest;
+    const Pose& pose = clip.poses[nearest];
     Eigen::Vector3d follow = centroid(pose) - start_centroid;
     follow.z() = 0.0;
     cam.center = start_centre + follow;

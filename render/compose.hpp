@@ -46,6 +46,9 @@ struct Timelapse {
 // snapshots <= 64.
 Image render_timelapse(const Clip& clip, View view, const Timelapse& timelapse, int width,
                        int height, SceneOptions scene);
+// The snapshot times [s] render_timelapse shows of a clip whose last pose is at `end` [s].
+// Throws std::invalid_argument unless 1 <= snapshots <= 64.
+std::vector<double> timelapse_times(const Timelapse& timelapse, View view, double end);
 
 // Full path of an executable `program` on PATH, if any.
 std::optional<std::string> find_on_path(const std::string& program);
@@ -60,6 +63,9 @@ struct VideoWritten {
   int width = 0;
   int height = 0;
 };
+// The frame times [s] write_video shows of a clip whose last pose is at `end` [s]: 0, 1/fps, ...
+// up to `end`.
+std::vector<double> video_frame_times(double fps, double end);
 // Encodes the clip at `fps` through `ffmpeg` (a path) into `output`: the camera keeps its scale
 // and follows the centroid over the floor. ffmpeg writes a temporary file beside `output` that
 // replaces it at the end (common/safe_write.hpp: an existing regular file only with

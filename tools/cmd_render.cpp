@@ -108,6 +108,18 @@ int run_render(const RenderArgs& args) {
   request.config_file = args.config_file;
   request.overrides = args.overrides;
   request.robot_file = args.robot_file;
+  // Only the poses the output shows are kept (memory bounded for long re-simulations).
+  if (video) {
+    request.shown_times = [fps = args.fps](double end) {
+      return render::video_frame_times(fps, end);
+    };
+  } else if (args.timelapse > 0) {
+    request.shown_times = [timelapse, view](double end) {
+      return render::timelapse_times(timelapse, view, end);
+    };
+  } else {
+    request.shown_times = [at = args.at](double) { return std::vector<double>{at}; };
+  }
   const Motion motion = load_motion(args.input, request);
   if (request.needs_motion && motion.poses.size() < 2 && !args.static_pose) {
     throw std::runtime_error("render " + args.input + ": no motion to show (single pose)");

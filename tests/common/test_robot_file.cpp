@@ -125,6 +125,17 @@ TEST(RobotFile, ErrorsNameTheKey) {
       "cell type", [](auto& j) { j["cells"][2] = "x"; }, "key 'cells[2]': expected an integer");
   add(
       "cell range", [](auto& j) { j["cells"][2] = 21; }, "key 'cells[2]': value 21 out of range");
+  // Integral doubles beyond long long (fuzz_robot_file: converting them was undefined, which
+  // the sanitizer build stops at), at both ends and just past 2^63.
+  add(
+      "cell beyond long long", [](auto& j) { j["cells"][4] = 4.4444e68; },
+      "key 'cells[4]': expected an integer, got 4.4444e+68");
+  add(
+      "cell below long long", [](auto& j) { j["cells"][4] = -1e19; },
+      "key 'cells[4]': expected an integer, got -1e+19");
+  add(
+      "cell at 2^63", [](auto& j) { j["cells"][4] = 9223372036854775808.0; },
+      "key 'cells[4]': expected an integer, got 9.223372036854776e+18");
   add(
       "chamber ids dense", [](auto& j) { j["cells"][4] = 12; }, "ids must be dense from 11");
   add(

@@ -1,0 +1,114 @@
+// Where a motion comes from (motion/robot_source.hpp), here the bound on what a re-simulation
+// keeps: only the poses the output shows (the first, the last and the nearest to each shown
+// time, the same pose render::pose_at picks from all of them), and a clear refusal, before
+// anything is simulated, of a motion whose kept poses would need more than kMaxMotionBytes.
+#include "motion/robot_source.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "render/compose.hpp"
+
+namespace softevo::motion {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A 3x1x3 open-loop robot of 8 voxels around one chamber cell.
+std::string write_robot(const fs::path& dir) {
+  const auto numbers = [](int n, const char* value) {
+    std::string s = "[";
+    for (int i = 0; i < n; ++i) s += (i > 0 ? ", " : "") + std::string(value);
+    return s + "]";
+  };
+  const std::string path = (dir / "robot.json").string();
+  std::ofstream(path) << "{\"format\": \"softevo.robot/1\", \"name\": \"r\", \"voxel_size\": 0.01,"
+                      << " \"lattice\": [3, 1, 3], \"cells\": [10, 10, 10, 10, 11, 10, 10, 10, 10],"
+                      << " \"controller\": {\"kind\": \"elman\", \"control\": \"open\","
+                      << " \"directed\": false, \"hidden\": 4, \"outputs\": 20, \"frequency\": 2.0,"
+                      << " \"weights_hidden\": " << numbers(8, "1.5")
+                      << ", \"bias_hidden\": " << numbers(4, "0.1")
+                      << ", \"weights_out\": " << numbers(80, "2.0")
+                      << ", \"bias_out\": " << numbers(20, "0.0")
+                      << ", \"weights_recurrent\": " << numbers(16, "0.0")
+                      << ", \"weights_recurrent_self\": " << numbers(4, "0.0")
+                      << ", \"weights_context\": " << numbers(4, "0.0")
+                      << ", \"bias_context\": " << numbers(4, "0.0") << "}}";
+  return path;
+}
+
+class RobotSource : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("softevo-robot-source-" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+    robot_ = write_robot(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  MotionRequest request(double seconds) const {
+    MotionRequest r;
+    r.needs_motion = true;
+    r.seconds = seconds;
+    return r;
+  }
+  fs::path dir_;
+  std::string robot_;
+};
+
+TEST_F(RobotSource, OnlyTheShownPosesAreKeptAndTheyAreThePosesShownFromAll) {
+  const std::vector<double> shown = {0.0, 0.51, 1.25, 1.5 + 1.0 / 120.0, 7.0};
+  MotionRequest some = request(2.0);
+  some.shown_times = [&shown](double) { return shown; };
+  const Motion all = load_motion(robot_, request(2.0));
+  const Motion kept = load_motion(robot_, some);
+  EXPECT_EQ(all.poses.size(), 121u);  // 2 s at 60 Hz and the start
+  EXPECT_LE(kept.poses.size(), shown.size() + 2);
+  EXPECT_EQ(kept.poses.front().time, all.poses.front().time);
+  EXPECT_EQ(kept.poses.back().time, all.poses.back().time);
+  for (const double t : shown) {
+    const render::Pose& a = all.poses[render::pose_at(all.poses, t)];
+    const render::Pose& k = kept.poses[render::pose_at(kept.poses, t)];
+    EXPECT_EQ(k.time, a.time) << "at t = " << t;
+    ASSERT_EQ(k.position.size(), a.position.size());
+    for (std::size_t v = 0; v < a.position.size(); ++v) EXPECT_EQ(k.position[v], a.position[v]);
+  }
+  EXPECT_EQ(kept.summary, all.summary);
+}
+
+TEST_F(RobotSource, AStillOfALongReSimulationKeepsAFewPoses) {
+  MotionRequest still = request(120.0);  // 7,200 control frames
+  still.shown_times = [](double) { return std::vector<double>{60.0}; };
+  const Motion m = load_motion(robot_, still);
+  EXPECT_LE(m.poses.size(), 3u);
+  EXPECT_NEAR(m.poses[render::pose_at(m.poses, 60.0)].time, 60.0, 1.0 / 60.0);  // a frame away
+}
+
+TEST_F(RobotSource, AMotionBeyondTheMemoryLimitIsRefusedBeforeItIsSimulated) {
+  // A video of 3600 s at 1000 frames per second: 3.6 million poses of 8 voxels = 1.6 GiB fits;
+  // of a 1000-voxel body it would not. Here: more shown times than the limit allows for 8 voxels.
+  const double limit_poses = kMaxMotionBytes / (8.0 * 56.0);
+  MotionRequest video = request(3600.0);
+  video.shown_times = [limit_poses](double) {
+    return std::vector<double>(static_cast<std::size_t>(limit_poses) + 10, 1.0);
+  };
+  try {
+    (void)load_motion(robot_, video);
+    FAIL() << "not refused";
+  } catch (const std::invalid_argument& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("more than the limit of 4 GiB"), std::string::npos) << message;
+    EXPECT_NE(message.find("--fps"), std::string::npos) << message;
+  }
+}
+
+}  // namespace
+}  // namespace softevo::motion
