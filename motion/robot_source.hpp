@@ -26,6 +26,7 @@ struct Motion {
   std::string name;                     // label for pictures
   std::optional<double> direction_deg;  // target direction the motion was simulated towards
   std::string summary;                  // one line: fitness and status when simulated, "" otherwise
+  std::string status;                   // status of the simulation or trace, "" for a still
 };
 
 struct MotionRequest {
