@@ -16,7 +16,9 @@ Writes (PNG and PDF for every figure, CSV for every table):
   champions.csv, champions.*           table of run champions (best of the last generation)
 
 The experiment of each archive is its root attribute `experiment`, else derived from its
-/config text (task.kind, task.control).
+/config text (task.kind, task.control). Runs are repetitions of each other when their experiment
+hashes agree (the config without run length and seed, docs/archive.md); runs of one experiment
+name with different configs are kept apart, labelled with their hash, and a warning names them.
 """
 
 from __future__ import annotations
@@ -44,8 +46,40 @@ from softevo_archive import EXPERIMENTS, Run, find_runs, status_name  # noqa: E4
 
 TASKS = {"gait": ("gait-open", "gait-closed"), "directed": ("dir-open", "dir-closed")}
 TASK_TITLES = {"gait": "Gait learning", "directed": "Directed locomotion"}
-COLOURS = {"gait-open": "tab:blue", "gait-closed": "tab:red",
-           "dir-open": "tab:blue", "dir-closed": "tab:red"}
+# (best, mean) colours per experiment: open loop blues, closed loop reds; best dark, mean light.
+COLOURS = {"gait-open": ("#1f4e9c", "#6fa8dc"), "gait-closed": ("#a61c1c", "#f08a5d"),
+           "dir-open": ("#1f4e9c", "#6fa8dc"), "dir-closed": ("#a61c1c", "#f08a5d")}
+# Fitness units (docs/model.md §7): gait and directed fitness are distances.
+UNITS = {"gait": "cm", "directed": "cm"}
+
+
+def base_experiment(label: str) -> str:
+    """"gait-open" of a group label "gait-open" or "gait-open [1a2b3c4d]"."""
+    return label.split(" ")[0]
+
+
+def group_runs(runs: list[Run]) -> tuple[dict[str, list[Run]], list[str]]:
+    """Runs grouped by experiment hash, labelled by experiment name ("gait-open"), or by name
+    and hash ("gait-open [1a2b3c4d]") when one name covers several configs; plus one warning
+    per such name."""
+    by_hash: dict[tuple[str, str], list[Run]] = {}
+    for r in runs:
+        by_hash.setdefault((r.experiment, r.experiment_hash), []).append(r)
+    groups: dict[str, list[Run]] = {}
+    messages: list[str] = []
+    for exp in EXPERIMENTS:
+        hashes = sorted(h for (e, h) in by_hash if e == exp)
+        if len(hashes) > 1:
+            parts = "; ".join(
+                f"{h or '(none)'}: " + ", ".join(str(r.path.name) for r in by_hash[(exp, h)])
+                for h in hashes)
+            messages.append(f"figures: warning: experiment {exp} covers {len(hashes)} different "
+                            f"configs (experiment hash {parts}); they are not pooled, each is "
+                            f"its own group")
+        for h in hashes:
+            label = exp if len(hashes) == 1 else f"{exp} [{h[:8]}]"
+            groups[label] = by_hash[(exp, h)]
+    return groups, messages
 
 
 def save(fig, out: pathlib.Path, stem: str, written: list[pathlib.Path]) -> None:
@@ -88,20 +122,26 @@ def fitness_figure(task: str, by_exp: dict[str, list[Run]], out: pathlib.Path,
                    written: list[pathlib.Path]) -> None:
     fig, ax = plt.subplots(figsize=(7.0, 4.2))
     plotted = False
-    for exp in TASKS[task]:
-        runs = by_exp.get(exp, [])
-        if not runs:
-            continue
+    labels = [label for exp in TASKS[task] for label in by_exp if base_experiment(label) == exp]
+    for label in labels:
+        runs = by_exp[label]
+        exp = base_experiment(label)
+        # Several configs of one name share its colours: markers tell them apart.
+        same_name = [other for other in labels if base_experiment(other) == exp]
+        marker = (None, "o", "s", "^")[same_name.index(label) % 4]
         gens, means, bests = aligned_curves(runs)
         if len(gens) == 0:
             continue
         rows = []
-        for label, data, style in (("mean", means, "--"), ("best", bests, "-")):
+        for k, (name, data, style) in enumerate((("mean", means, "--"), ("best", bests, "-"))):
+            colour = COLOURS[exp][1 if name == "mean" else 0]
             mu, s = np.mean(data, axis=0), sd(data, axis=0)
-            ax.plot(gens, mu, style, color=COLOURS[exp], label=f"{exp} {label} (n={len(runs)})")
-            ax.fill_between(gens, mu - s, mu + s, color=COLOURS[exp], alpha=0.15, linewidth=0)
+            ax.plot(gens, mu, style, color=colour, marker=marker, markersize=4,
+                    label=f"{label} {name} (n={len(runs)})")
+            ax.fill_between(gens, mu - s, mu + s, color=colour, alpha=0.15, linewidth=0)
             rows.append((mu, s))
-        write_csv(out / f"fitness_{exp}.csv",
+        stem = label.replace(" [", "-").replace("]", "")
+        write_csv(out / f"fitness_{stem}.csv",
                   ["generation", "runs", "mean_of_population_mean", "sd_of_population_mean",
                    "mean_of_best", "sd_of_best"],
                   [[int(g), len(runs), float(rows[0][0][i]), float(rows[0][1][i]),
@@ -113,9 +153,11 @@ def fitness_figure(task: str, by_exp: dict[str, list[Run]], out: pathlib.Path,
         return
     ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
     ax.set_xlabel("generation")
-    # Gait fitness is the distance covered in task.eval_seconds (10 s in the thesis), docs/model.md §7.1.
-    ax.set_ylabel("fitness" + (" [cm covered in one evaluation]" if task == "gait" else ""))
-    ax.set_title(f"{TASK_TITLES[task]}: mean and best fitness, averaged over runs (+-1 sd)")
+    # Gait fitness is the distance covered in task.eval_seconds (10 s in the thesis), docs/model.md
+    # §7.1; directed fitness a distance weighted by path straightness and heading, §7.2.
+    ax.set_ylabel(f"fitness [{UNITS[task]}]")
+    ax.set_title(f"{TASK_TITLES[task]}: mean and best fitness\naveraged over runs (band: +-1 sd)",
+                 fontsize=10)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     save(fig, out, f"fitness_{task}", written)
@@ -151,7 +193,15 @@ def test_groups(a: list[float], b: list[float]) -> tuple[float, float, float, fl
 def comparison(task: str, by_exp: dict[str, list[Run]], generation: int | None,
                out: pathlib.Path, written: list[pathlib.Path], rows: list[list]) -> None:
     open_exp, closed_exp = TASKS[task]
-    runs_open, runs_closed = by_exp.get(open_exp, []), by_exp.get(closed_exp, [])
+    chosen = []
+    for exp in (open_exp, closed_exp):
+        labels = sorted((label for label in by_exp if base_experiment(label) == exp),
+                        key=lambda label: -len(by_exp[label]))
+        if len(labels) > 1:
+            print(f"figures: warning: {task} comparison uses {labels[0]} ({len(by_exp[labels[0]])}"
+                  f" runs) of the {len(labels)} configs named {exp}", file=sys.stderr)
+        chosen.append(by_exp[labels[0]] if labels else [])
+    runs_open, runs_closed = chosen
     if not runs_open or not runs_closed:
         return
     g = generation if generation is not None else last_common_generation(runs_open + runs_closed)
@@ -175,11 +225,12 @@ def comparison(task: str, by_exp: dict[str, list[Run]], generation: int | None,
         ax.boxplot([a, b], widths=0.5, showfliers=False)
         for j, data in enumerate((a, b)):
             jitter = np.linspace(-0.08, 0.08, len(data)) if len(data) > 1 else np.zeros(1)
-            ax.plot(np.full(len(data), j + 1) + jitter, data, "o", color=COLOURS[(open_exp, closed_exp)[j]],
-                    alpha=0.7)
+            ax.plot(np.full(len(data), j + 1) + jitter, data, "o",
+                    color=COLOURS[(open_exp, closed_exp)[j]][0], alpha=0.7)
         ax.set_xticks([1, 2], [open_exp, closed_exp])
         ax.set_title(f"{metric} fitness, gen {g}\nWelch p={p_t:.3g}, Mann-Whitney p={p_u:.3g}",
                      fontsize=9)
+        ax.set_ylabel(f"fitness [{UNITS[task]}]")
         ax.grid(True, axis="y", alpha=0.3)
     fig.suptitle(f"{TASK_TITLES[task]}: open vs closed loop (one point per run)", fontsize=10)
     fig.tight_layout()
@@ -191,6 +242,7 @@ def champions(runs: list[Run], out: pathlib.Path, written: list[pathlib.Path]) -
               "champion_id", "fitness", "status", "voxels", "chambers", "best_ever_fitness",
               "best_ever_generation", "best_ever_id"]
     rows = []
+    killed = []
     for r in sorted(runs, key=lambda r: (EXPERIMENTS.index(r.experiment), r.seed, str(r.path))):
         if not r.generation_numbers:
             continue
@@ -201,28 +253,39 @@ def champions(runs: list[Run], out: pathlib.Path, written: list[pathlib.Path]) -
             j = int(np.argmax(gen.fitness))
             if gen.fitness[j] > best_ever[0]:
                 best_ever = (float(gen.fitness[j]), gen.number, int(gen.id[j]))
+        if status_name(last.status[i]) != "ok":
+            killed.append(f"{r.path.name} (id {int(last.id[i])}: {status_name(last.status[i])})")
         rows.append([r.experiment, r.seed, r.path.name, r.state, len(r.generation_numbers),
                      last.number, int(last.id[i]), float(last.fitness[i]),
                      status_name(last.status[i]),
                      int(last.voxels[i]), int(last.chambers[i]), best_ever[0], best_ever[1],
                      best_ever[2]])
     write_csv(out / "champions.csv", header, rows, written)
+    if killed:
+        print("figures: warning: a champion was not evaluated ok (its fitness is 0 by rule): " +
+              ", ".join(killed), file=sys.stderr)
     # The same table as a figure.
-    shown = ["experiment", "seed", "champion_generation", "champion_id", "fitness", "voxels",
-             "chambers", "best_ever_fitness"]
+    shown = ["experiment", "seed", "champion_generation", "champion_id", "fitness", "status",
+             "voxels", "chambers", "best_ever_fitness"]
     idx = [header.index(c) for c in shown]
     cells = [[f"{row[i]:.2f}" if isinstance(row[i], float) else str(row[i]) for i in idx]
              for row in rows]
     fig, ax = plt.subplots(figsize=(8.5, 0.6 + 0.25 * max(1, len(cells))))
     ax.axis("off")
     if cells:
-        labels = ["experiment", "seed", "gen", "id", "fitness", "voxels", "chambers",
-                  "best ever"]
+        labels = ["experiment", "seed", "gen", "id", "fitness [cm]", "status", "voxels",
+                  "chambers", "best ever [cm]"]
         table = ax.table(cellText=cells, colLabels=labels, loc="center")
         table.auto_set_font_size(False)
         table.set_fontsize(7)
         table.scale(1.0, 1.2)
-    ax.set_title("Run champions (best individual of each run's last generation)", fontsize=9)
+        # A champion that was not evaluated ok is marked, not passed off as a result.
+        status_col = labels.index("status")
+        for k, row in enumerate(cells):
+            if row[status_col] != "ok":
+                table[k + 1, status_col].set_facecolor("#f4cccc")
+    ax.set_title("Run champions: best individual of each run's last generation", fontsize=9,
+                 pad=12)
     save(fig, out, "champions", written)
 
 
@@ -243,13 +306,16 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    by_exp: dict[str, list[Run]] = {}
+    with_data = []
     for r in runs:
         if r.generation_numbers:
-            by_exp.setdefault(r.experiment, []).append(r)
+            with_data.append(r)
         else:
             print(f"figures: {r.path} has no generation yet, left out", file=sys.stderr)
-    print("runs: " + ", ".join(f"{e} x{len(by_exp[e])}" for e in EXPERIMENTS if e in by_exp))
+    by_exp, mixed = group_runs(with_data)
+    for msg in mixed:
+        print(msg, file=sys.stderr)
+    print("runs: " + ", ".join(f"{label} x{len(rs)}" for label, rs in by_exp.items()))
 
     written: list[pathlib.Path] = []
     for task in TASKS:

@@ -52,6 +52,9 @@ class Run:
         if self.experiment not in EXPERIMENTS:
             raise ArchiveError(f"{self.path}: experiment {self.experiment!r} is not one of "
                                f"{', '.join(EXPERIMENTS)}")
+        # The config without run length and seed: runs with equal hashes are repetitions of
+        # one experiment (computed from /config for archives that predate the attribute).
+        self.experiment_hash = str(self.run.info.get("experiment_hash", ""))
         self.seed = int(self.run.info["seed"])
         self.state = self.run.info["state"]
         table = self.run.individuals()
