@@ -21,7 +21,9 @@ rough-ground variants (gait-rough-*, dir-rough-*) when the folder has them, or, 
 such a pair's files are named fitness_A_vs_B.*, comparison_A_vs_B.*.
 
 The experiment of each archive is its root attribute `experiment`, else derived from its
-/config text (task.kind, task.control).
+/config text (task.kind, task.control). Runs are repetitions of each other when their experiment
+hashes agree (the config without run length and seed, docs/archive.md); runs of one experiment
+name with different configs are kept apart, labelled with their hash, and a warning names them.
 """
 
 from __future__ import annotations
@@ -54,7 +56,44 @@ TASKS = {"gait": ("gait-open", "gait-closed"), "directed": ("dir-open", "dir-clo
 TASK_TITLES = {"gait": "Gait learning", "directed": "Directed locomotion",
                "gait_rough": "Gait learning on rough ground",
                "directed_rough": "Directed locomotion on rough ground"}
-PAIR_COLOURS = ("tab:blue", "tab:red")  # first and second experiment of a pair
+# (best, mean) colours of the first and second experiment of a pair (open loop first in the
+# thesis pairs): blues, then reds; best dark, mean light.
+PAIR_COLOURS = (("#1f4e9c", "#6fa8dc"), ("#a61c1c", "#f08a5d"))
+
+
+def fitness_unit(experiments) -> str:
+    """Gait and directed fitness are distances in cm (docs/model.md §7)."""
+    return "cm" if all(e.startswith(("gait-", "dir-")) for e in experiments) else "task units"
+
+
+def base_experiment(label: str) -> str:
+    """"gait-open" of a group label "gait-open" or "gait-open [1a2b3c4d]"."""
+    return label.split(" ")[0]
+
+
+def group_runs(runs: list[Run]) -> tuple[dict[str, list[Run]], list[str]]:
+    """Runs grouped by experiment hash, labelled by experiment name ("gait-open"), or by name
+    and hash ("gait-open [1a2b3c4d]") when one name covers several configs; plus one warning
+    per such name."""
+    by_hash: dict[tuple[str, str], list[Run]] = {}
+    for r in runs:
+        by_hash.setdefault((r.experiment, r.experiment_hash), []).append(r)
+    groups: dict[str, list[Run]] = {}
+    messages: list[str] = []
+    order = {e: i for i, e in enumerate(EXPERIMENTS)}
+    for exp in sorted({e for (e, _) in by_hash}, key=lambda e: (order.get(e, len(order)), e)):
+        hashes = sorted(h for (e, h) in by_hash if e == exp)
+        if len(hashes) > 1:
+            parts = "; ".join(
+                f"{h or '(none)'}: " + ", ".join(str(r.path.name) for r in by_hash[(exp, h)])
+                for h in hashes)
+            messages.append(f"figures: warning: experiment {exp} covers {len(hashes)} different "
+                            f"configs (experiment hash {parts}); they are not pooled, each is "
+                            f"its own group")
+        for h in hashes:
+            label = exp if len(hashes) == 1 else f"{exp} [{h[:8]}]"
+            groups[label] = by_hash[(exp, h)]
+    return groups, messages
 
 
 def save(fig, out: pathlib.Path, stem: str, written: list[pathlib.Path]) -> None:
@@ -97,20 +136,26 @@ def fitness_figure(task: str, by_exp: dict[str, list[Run]], out: pathlib.Path,
                    written: list[pathlib.Path]) -> None:
     fig, ax = plt.subplots(figsize=(7.0, 4.2))
     plotted = False
-    for exp, colour in zip(TASKS[task], PAIR_COLOURS):
-        runs = by_exp.get(exp, [])
-        if not runs:
-            continue
+    labels = [label for exp in TASKS[task] for label in by_exp if base_experiment(label) == exp]
+    for label in labels:
+        runs = by_exp[label]
+        exp = base_experiment(label)
+        # Several configs of one name share its colours: markers tell them apart.
+        same_name = [other for other in labels if base_experiment(other) == exp]
+        marker = (None, "o", "s", "^")[same_name.index(label) % 4]
         gens, means, bests = aligned_curves(runs)
         if len(gens) == 0:
             continue
         rows = []
-        for label, data, style in (("mean", means, "--"), ("best", bests, "-")):
+        for k, (name, data, style) in enumerate((("mean", means, "--"), ("best", bests, "-"))):
+            colour = PAIR_COLOURS[TASKS[task].index(exp)][1 if name == "mean" else 0]
             mu, s = np.mean(data, axis=0), sd(data, axis=0)
-            ax.plot(gens, mu, style, color=colour, label=f"{exp} {label} (n={len(runs)})")
+            ax.plot(gens, mu, style, color=colour, marker=marker, markersize=4,
+                    label=f"{label} {name} (n={len(runs)})")
             ax.fill_between(gens, mu - s, mu + s, color=colour, alpha=0.15, linewidth=0)
             rows.append((mu, s))
-        write_csv(out / f"fitness_{exp}.csv",
+        stem = label.replace(" [", "-").replace("]", "")
+        write_csv(out / f"fitness_{stem}.csv",
                   ["generation", "runs", "mean_of_population_mean", "sd_of_population_mean",
                    "mean_of_best", "sd_of_best"],
                   [[int(g), len(runs), float(rows[0][0][i]), float(rows[0][1][i]),
@@ -122,10 +167,11 @@ def fitness_figure(task: str, by_exp: dict[str, list[Run]], out: pathlib.Path,
         return
     ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
     ax.set_xlabel("generation")
-    # Gait fitness is the distance covered in task.eval_seconds (10 s in the thesis), docs/model.md §7.1.
-    gait = all(e.startswith("gait-") for e in TASKS[task])
-    ax.set_ylabel("fitness" + (" [cm covered in one evaluation]" if gait else ""))
-    ax.set_title(f"{TASK_TITLES[task]}: mean and best fitness, averaged over runs (+-1 sd)")
+    # Gait fitness is the distance covered in task.eval_seconds (10 s in the thesis), docs/model.md
+    # §7.1; directed fitness a distance weighted by path straightness and heading, §7.2.
+    ax.set_ylabel(f"fitness [{fitness_unit(TASKS[task])}]")
+    ax.set_title(f"{TASK_TITLES[task]}: mean and best fitness\naveraged over runs (band: +-1 sd)",
+                 fontsize=10)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     save(fig, out, f"fitness_{task}", written)
@@ -161,7 +207,15 @@ def test_groups(a: list[float], b: list[float]) -> tuple[float, float, float, fl
 def comparison(task: str, by_exp: dict[str, list[Run]], generation: int | None,
                out: pathlib.Path, written: list[pathlib.Path], rows: list[list]) -> None:
     open_exp, closed_exp = TASKS[task]
-    runs_open, runs_closed = by_exp.get(open_exp, []), by_exp.get(closed_exp, [])
+    chosen = []
+    for exp in (open_exp, closed_exp):
+        labels = sorted((label for label in by_exp if base_experiment(label) == exp),
+                        key=lambda label: -len(by_exp[label]))
+        if len(labels) > 1:
+            print(f"figures: warning: {task} comparison uses {labels[0]} ({len(by_exp[labels[0]])}"
+                  f" runs) of the {len(labels)} configs named {exp}", file=sys.stderr)
+        chosen.append(by_exp[labels[0]] if labels else [])
+    runs_open, runs_closed = chosen
     if not runs_open or not runs_closed:
         return
     g = generation if generation is not None else last_common_generation(runs_open + runs_closed)
@@ -185,10 +239,12 @@ def comparison(task: str, by_exp: dict[str, list[Run]], generation: int | None,
         ax.boxplot([a, b], widths=0.5, showfliers=False)
         for j, data in enumerate((a, b)):
             jitter = np.linspace(-0.08, 0.08, len(data)) if len(data) > 1 else np.zeros(1)
-            ax.plot(np.full(len(data), j + 1) + jitter, data, "o", color=PAIR_COLOURS[j], alpha=0.7)
+            ax.plot(np.full(len(data), j + 1) + jitter, data, "o",
+                    color=PAIR_COLOURS[j][0], alpha=0.7)
         ax.set_xticks([1, 2], [open_exp, closed_exp])
         ax.set_title(f"{metric} fitness, gen {g}\nWelch p={p_t:.3g}, Mann-Whitney p={p_u:.3g}",
                      fontsize=9)
+        ax.set_ylabel(f"fitness [{fitness_unit(TASKS[task])}]")
         ax.grid(True, axis="y", alpha=0.3)
     fig.suptitle(f"{TASK_TITLES[task]}: {open_exp} vs {closed_exp} (one point per run)",
                  fontsize=10)
@@ -201,6 +257,7 @@ def champions(runs: list[Run], out: pathlib.Path, written: list[pathlib.Path]) -
               "champion_id", "fitness", "status", "voxels", "chambers", "best_ever_fitness",
               "best_ever_generation", "best_ever_id"]
     rows = []
+    killed = []
     order = {e: i for i, e in enumerate(EXPERIMENTS)}
     for r in sorted(runs, key=lambda r: (order.get(r.experiment, len(order)), r.experiment, r.seed,
                                          str(r.path))):
@@ -213,28 +270,39 @@ def champions(runs: list[Run], out: pathlib.Path, written: list[pathlib.Path]) -
             j = int(np.argmax(gen.fitness))
             if gen.fitness[j] > best_ever[0]:
                 best_ever = (float(gen.fitness[j]), gen.number, int(gen.id[j]))
+        if status_name(last.status[i]) != "ok":
+            killed.append(f"{r.path.name} (id {int(last.id[i])}: {status_name(last.status[i])})")
         rows.append([r.experiment, r.seed, r.path.name, r.state, len(r.generation_numbers),
                      last.number, int(last.id[i]), float(last.fitness[i]),
                      status_name(last.status[i]),
                      int(last.voxels[i]), int(last.chambers[i]), best_ever[0], best_ever[1],
                      best_ever[2]])
     write_csv(out / "champions.csv", header, rows, written)
+    if killed:
+        print("figures: warning: a champion was not evaluated ok (its fitness is 0 by rule): " +
+              ", ".join(killed), file=sys.stderr)
     # The same table as a figure.
-    shown = ["experiment", "seed", "champion_generation", "champion_id", "fitness", "voxels",
-             "chambers", "best_ever_fitness"]
+    shown = ["experiment", "seed", "champion_generation", "champion_id", "fitness", "status",
+             "voxels", "chambers", "best_ever_fitness"]
     idx = [header.index(c) for c in shown]
     cells = [[f"{row[i]:.2f}" if isinstance(row[i], float) else str(row[i]) for i in idx]
              for row in rows]
     fig, ax = plt.subplots(figsize=(8.5, 0.6 + 0.25 * max(1, len(cells))))
     ax.axis("off")
     if cells:
-        labels = ["experiment", "seed", "gen", "id", "fitness", "voxels", "chambers",
-                  "best ever"]
+        labels = ["experiment", "seed", "gen", "id", "fitness [cm]", "status", "voxels",
+                  "chambers", "best ever [cm]"]
         table = ax.table(cellText=cells, colLabels=labels, loc="center")
         table.auto_set_font_size(False)
         table.set_fontsize(7)
         table.scale(1.0, 1.2)
-    ax.set_title("Run champions (best individual of each run's last generation)", fontsize=9)
+        # A champion that was not evaluated ok is marked, not passed off as a result.
+        status_col = labels.index("status")
+        for k, row in enumerate(cells):
+            if row[status_col] != "ok":
+                table[k + 1, status_col].set_facecolor("#f4cccc")
+    ax.set_title("Run champions: best individual of each run's last generation", fontsize=9,
+                 pad=12)
     save(fig, out, "champions", written)
 
 
@@ -265,18 +333,22 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    by_exp: dict[str, list[Run]] = {}
+    with_data = []
     for r in runs:
         if r.generation_numbers:
-            by_exp.setdefault(r.experiment, []).append(r)
+            with_data.append(r)
         else:
             print(f"figures: {r.path} has no generation yet, left out", file=sys.stderr)
-    print("runs: " + ", ".join(f"{e} x{len(by_exp[e])}" for e in sorted(by_exp)))
+    by_exp, mixed = group_runs(with_data)
+    for msg in mixed:
+        print(msg, file=sys.stderr)
+    print("runs: " + ", ".join(f"{label} x{len(rs)}" for label, rs in by_exp.items()))
     if args.compare is not None:
-        missing = [e for e in TASKS[name] if e not in by_exp]
+        present = {base_experiment(label) for label in by_exp}
+        missing = [e for e in TASKS[name] if e not in present]
         if missing:
             print(f"figures: no run of {', '.join(missing)} under {args.runs_dir} (it has "
-                  f"{', '.join(sorted(by_exp)) or 'none'})", file=sys.stderr)
+                  f"{', '.join(sorted(present)) or 'none'})", file=sys.stderr)
             return 2
 
     written: list[pathlib.Path] = []

@@ -61,8 +61,13 @@ def main(argv: list[str] | None = None) -> int:
         for e in line:
             print(",".join(f"{e[c]:.10g}" if isinstance(e[c], float) else str(e[c]) for c in cols))
     else:
-        print(f"lineage of id {ind} (generation {g}) in {args.archive} [{experiment}]: "
+        me = line[0]
+        print(f"lineage of id {ind} (generation {g}, fitness {me['fitness']:.4f}, status "
+              f"{me['status']}) in {args.archive} [{experiment}]: "
               f"{len(line)} ancestors incl. itself")
+        if me["status"] != "ok":
+            print(f"lineage: warning: id {ind} was not evaluated ok ({me['status']}): its "
+                  f"fitness is 0 by rule", file=sys.stderr)
         print(f"{'gen':>6} {'id':>8} {'fitness':>12} {'status':<17} {'voxels':>6} {'chambers':>8}"
               f" {'species':>7} {'parents':>15}")
         prev_chambers = None

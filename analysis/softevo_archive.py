@@ -52,6 +52,9 @@ class Run:
             raise ArchiveError(f"{self.path}: {e}") from e
         if not self.experiment:
             raise ArchiveError(f"{self.path}: no experiment name (root attribute or /config)")
+        # The config without run length and seed: runs with equal hashes are repetitions of
+        # one experiment (computed from /config for archives that predate the attribute).
+        self.experiment_hash = str(self.run.info.get("experiment_hash", ""))
         self.seed = int(self.run.info["seed"])
         self.state = self.run.info["state"]
         table = self.run.individuals()

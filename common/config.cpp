@@ -2,6 +2,8 @@
 // values and its unit conversion. Parsing, validation, printing and hashing all walk it, so a key
 // cannot be parsed but not printed (or hashed).
 #include "common/config.hpp"
+#include "common/closest_word.hpp"
+#include "common/config_identity.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -15,6 +17,7 @@
 #include <map>
 #include <regex>
 #include <sstream>
+#include <string_view>
 #include <variant>
 
 #define TOML_EXCEPTIONS 1
@@ -342,32 +345,8 @@ std::string allowed_text(const KeyDef& def) {
       def.target);
 }
 
-// Levenshtein distance, for "did you mean" hints on typos.
-std::size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diag = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diag = up;
-    }
-  }
-  return row[b.size()];
-}
-
 std::string suggestion(const std::string& name, const std::vector<std::string>& candidates) {
-  std::string best;
-  std::size_t best_d = std::max<std::size_t>(1, name.size() / 3) + 1;  // accept d <= that - 1
-  for (const auto& c : candidates) {
-    const std::size_t d = edit_distance(name, c);
-    if (d < best_d) {
-      best_d = d;
-      best = c;
-    }
-  }
+  const std::string best = closest_word(name, candidates);
   return best.empty() ? "" : " (did you mean '" + best + "'?)";
 }
 
@@ -772,14 +751,45 @@ std::string canonical_text(const Config& config) {
   return out;
 }
 
-std::uint64_t config_hash(const Config& config) {
+std::uint64_t text_hash(const std::string& text) {
   // FNV-1a 64 (offset basis 14695981039346656037, prime 1099511628211).
   std::uint64_t h = 14695981039346656037ULL;
-  for (unsigned char ch : canonical_text(config)) {
+  for (unsigned char ch : text) {
     h ^= ch;
     h *= 1099511628211ULL;
   }
   return h;
+}
+
+std::uint64_t config_hash(const Config& config) {
+  return text_hash(canonical_text(config));
+}
+
+std::string experiment_text(const std::string& canonical_config_text) {
+  // Canonical text has one "key = value" line per key under its "[section]" line; the lines of
+  // run.generations and run.seed are left out.
+  std::string out;
+  std::string section;
+  std::size_t begin = 0;
+  while (begin < canonical_config_text.size()) {
+    std::size_t end = canonical_config_text.find('\n', begin);
+    end = end == std::string::npos ? canonical_config_text.size() : end + 1;
+    const std::string_view line(canonical_config_text.data() + begin, end - begin);
+    if (line.starts_with("[")) section = std::string(line.substr(0, line.find(']') + 1));
+    const bool run_identity_only =
+        section == "[run]" && (line.starts_with("generations = ") || line.starts_with("seed = "));
+    if (!run_identity_only) out.append(line);
+    begin = end;
+  }
+  return out;
+}
+
+std::uint64_t experiment_hash_of_text(const std::string& canonical_config_text) {
+  return text_hash(experiment_text(canonical_config_text));
+}
+
+std::uint64_t experiment_hash(const Config& config) {
+  return experiment_hash_of_text(canonical_text(config));
 }
 
 std::string hash_hex(std::uint64_t hash) {

@@ -74,11 +74,26 @@ struct RobotGenomeRecord {
   std::string distance_input = "pneuvox";  // "pneuvox" or "center"
 };
 
+// Optional "evaluation" section: the settings of the run the robot was exported from, so that
+// `softevo eval`, `render` and the Python package reproduce its archived fitness by default
+// (docs/model.md §10). The config text is the archive's /config verbatim.
+struct RobotEvaluation {
+  std::string config;           // canonical TOML text of the run's config
+  std::string config_hash;      // 16 hex digits, text_hash(config) (checked on read)
+  std::string experiment_hash;  // 16 hex digits, experiment_hash_of_text(config) (checked)
+  std::string run;              // the archive it came from, as given to export ("" unknown)
+  std::optional<std::int64_t> generation;
+  std::optional<std::int64_t> id;
+  std::optional<double> fitness;  // archived fitness (what a re-evaluation must give)
+  std::string status;             // archived status ("ok", "killed: flipped", ...; "" unknown)
+};
+
 struct RobotFile {
   std::string name;
   BodyPlan body;  // lattice, cells, materials (defaults E = 10 kPa x k, 1000 kg/m^3), voxel size
   ControllerSpec controller;
   std::optional<RobotGenomeRecord> genome;
+  std::optional<RobotEvaluation> evaluation;
   std::string reference_json;  // "reference" object verbatim (never interpreted), "" if absent
 };
 

@@ -18,6 +18,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/config.hpp"
+#include "common/config_identity.hpp"
 #include "common/robot.hpp"
 
 namespace softevo {
@@ -335,6 +337,38 @@ RobotGenomeRecord read_genome(const Reader& r, const Json& j, const ControllerSp
   return g;
 }
 
+RobotEvaluation read_evaluation(const Reader& r, const Json& j) {
+  const std::string key = "evaluation";
+  r.expect_object(j, key);
+  r.check_keys(
+      j, key,
+      {"config", "config_hash", "experiment_hash", "run", "generation", "id", "fitness", "status"});
+  RobotEvaluation e;
+  e.config = r.string(r.require(j, key, "config"), "evaluation.config");
+  e.config_hash = r.string(r.require(j, key, "config_hash"), "evaluation.config_hash");
+  // The hashes say the text is the run's: an edited config would silently evaluate another
+  // experiment under the run's name.
+  const std::string text_hex = hash_hex(text_hash(e.config));
+  if (e.config_hash != text_hex)
+    r.fail("evaluation.config_hash", "is " + e.config_hash + " but evaluation.config hashes to " +
+                                         text_hex + " (the config text was edited after export)");
+  const std::string experiment_hex = hash_hex(experiment_hash_of_text(e.config));
+  e.experiment_hash = experiment_hex;
+  if (auto it = j.find("experiment_hash"); it != j.end()) {
+    const std::string given = r.string(*it, "evaluation.experiment_hash");
+    if (given != experiment_hex)
+      r.fail("evaluation.experiment_hash",
+             "is " + given + " but evaluation.config gives " + experiment_hex);
+  }
+  if (auto it = j.find("run"); it != j.end()) e.run = r.string(*it, "evaluation.run");
+  if (auto it = j.find("generation"); it != j.end())
+    e.generation = r.integer(*it, "evaluation.generation");
+  if (auto it = j.find("id"); it != j.end()) e.id = r.integer(*it, "evaluation.id");
+  if (auto it = j.find("fitness"); it != j.end()) e.fitness = r.number(*it, "evaluation.fitness");
+  if (auto it = j.find("status"); it != j.end()) e.status = r.string(*it, "evaluation.status");
+  return e;
+}
+
 std::vector<StructuralMaterial> default_materials() {
   std::vector<StructuralMaterial> m(kDefaultMaterialCount);
   for (int k = 1; k <= kDefaultMaterialCount; ++k)
@@ -439,7 +473,7 @@ RobotFile parse_robot_json(const std::string& json_text, const std::string& sour
   if (!root.is_object()) r.fail_top("the robot file must be a JSON object");
   r.check_keys(root, "",
                {"format", "name", "voxel_size", "lattice", "cells", "materials", "controller",
-                "genome", "reference"});
+                "genome", "evaluation", "reference"});
   const std::string format = r.string(r.require(root, "", "format"), "format");
   if (format != kFormat)
     r.fail("format", "expected \"" + std::string(kFormat) + "\", got \"" + format + "\"");
@@ -455,6 +489,8 @@ RobotFile parse_robot_json(const std::string& json_text, const std::string& sour
                                      " chambers (2 valves each, §4.5)");
   if (auto it = root.find("genome"); it != root.end())
     robot.genome = read_genome(r, *it, robot.controller);
+  if (auto it = root.find("evaluation"); it != root.end())
+    robot.evaluation = read_evaluation(r, *it);
   if (auto it = root.find("reference"); it != root.end()) {
     r.expect_object(*it, "reference");
     robot.reference_json = it->dump();
@@ -516,6 +552,19 @@ std::string robot_to_json(const RobotFile& robot) {
           vectors_to_json(g.controller_step_sizes, c.input_count(), c.hidden, c.outputs, true);
     genome["body"] = {{"lattice", g.body_lattice}, {"distance_input", g.distance_input}};
     root["genome"] = genome;
+  }
+  if (robot.evaluation) {
+    const RobotEvaluation& e = *robot.evaluation;
+    Json ev = Json::object();
+    ev["config"] = e.config;
+    ev["config_hash"] = hash_hex(text_hash(e.config));
+    ev["experiment_hash"] = hash_hex(experiment_hash_of_text(e.config));
+    if (!e.run.empty()) ev["run"] = e.run;
+    if (e.generation) ev["generation"] = *e.generation;
+    if (e.id) ev["id"] = *e.id;
+    if (e.fitness) ev["fitness"] = *e.fitness;
+    if (!e.status.empty()) ev["status"] = e.status;
+    root["evaluation"] = ev;
   }
   if (!robot.reference_json.empty()) {
     try {

@@ -16,7 +16,8 @@
 #include <filesystem>
 #include <utility>
 
-#include "common/config.hpp"  // hash_hex
+#include "common/config.hpp"
+#include "common/config_identity.hpp"  // hash_hex
 #include "common/safe_write.hpp"
 #include "io/h5.hpp"
 
@@ -55,6 +56,8 @@ void write_run_info(const h5::File& file, const RunInfo& info) {
   file.write_string_attribute("start_time", info.start_time, Charset::utf8);
   file.write_string_attribute("end_time", info.end_time, Charset::utf8);
   file.write_string_attribute("config_hash", info.config_hash, Charset::utf8);
+  if (!info.experiment_hash.empty())
+    file.write_string_attribute("experiment_hash", info.experiment_hash, Charset::utf8);
   file.write_string_attribute("experiment", info.experiment, Charset::utf8);
   file.write_string_attribute("state", info.state, Charset::utf8);
   file.write_attribute<std::int64_t>("generations_done", info.generations_done);
@@ -542,6 +545,20 @@ int remove_unreferenced_segments(const std::string& path) {
   return removed;
 }
 
+// A new root with new attributes (and /config, when given): the state changes of a run.
+void update_root(const std::string& path, const RunInfo& info,
+                 const std::optional<std::string>& config_text, const WriteStepHook& hook) {
+  const WriteSteps steps(hook);
+  archive_update(path, [&] {
+    RootContent c = read_root(path, true);
+    require_generations_done(path, c, info);
+    keep_generation_data_apart(path, c, steps);
+    c.info = info;
+    if (config_text) c.config_text = *config_text;
+    write_root(path, c, steps);
+  });
+}
+
 }  // namespace
 
 void create_archive(const std::string& path, const RunInfo& info, const std::string& config_text,
@@ -578,14 +595,12 @@ void append_generation(const std::string& path, const RunInfo& info, const Gener
 }
 
 void update_run_info(const std::string& path, const RunInfo& info, const WriteStepHook& hook) {
-  const WriteSteps steps(hook);
-  archive_update(path, [&] {
-    RootContent c = read_root(path, true);
-    require_generations_done(path, c, info);
-    keep_generation_data_apart(path, c, steps);
-    c.info = info;
-    write_root(path, c, steps);
-  });
+  update_root(path, info, std::nullopt, hook);
+}
+
+void update_run_config(const std::string& path, const RunInfo& info, const std::string& config_text,
+                       const WriteStepHook& hook) {
+  update_root(path, info, config_text, hook);
 }
 
 void finish_archive(const std::string& path, const RunInfo& info, const WriteStepHook& hook) {
@@ -677,6 +692,16 @@ RunInfo Archive::info() const {
     r.start_time = f.read_string_attribute("start_time", kStringBytes);
     r.end_time = f.read_string_attribute("end_time", kStringBytes);
     r.config_hash = f.read_string_attribute("config_hash", kStringBytes);
+    if (f.has_attribute("experiment_hash")) {
+      r.experiment_hash = f.read_string_attribute("experiment_hash", kStringBytes);
+    } else {
+      // An older archive: the hash of its stored config, "" when that cannot be read (the
+      // integrity checks say why; the other attributes are still worth showing).
+      try {
+        r.experiment_hash = hash_hex(experiment_hash_of_text(config_text()));
+      } catch (const ArchiveError&) {
+      }
+    }
     // Optional: the analysis scripts take an archive's experiment from its config without it.
     r.experiment =
         f.has_attribute("experiment") ? f.read_string_attribute("experiment", kStringBytes) : "";

@@ -66,11 +66,14 @@ struct RunInfo {
   // physics/revision.hpp; an archive written before the attribute existed reads as 1
   std::int32_t physics_revision = 1;
   std::int64_t seed = 0;
-  std::int32_t ranks = 1;         // (not part of the run's identity)
-  std::string host;               // (not part of the run's identity)
-  std::string start_time;         // ISO 8601 UTC (not part of the run's identity)
-  std::string end_time;           // ISO 8601 UTC, "" while running
-  std::string config_hash;        // 16 lower-case hex digits (hash_hex(config_hash(config)))
+  std::int32_t ranks = 1;   // (not part of the run's identity)
+  std::string host;         // (not part of the run's identity)
+  std::string start_time;   // ISO 8601 UTC (not part of the run's identity)
+  std::string end_time;     // ISO 8601 UTC, "" while running
+  std::string config_hash;  // 16 lower-case hex digits (hash_hex(config_hash(config)))
+  // 16 hex digits, hash_hex(experiment_hash(config)): the config without run length and seed
+  // (common/config.hpp). An archive written before the attribute existed reads it from /config.
+  std::string experiment_hash;
   std::string experiment;         // "gait-open" | "gait-closed" | "dir-open" | "dir-closed"
   std::string state = "running";  // "running" | "complete" | "interrupted"
   std::int64_t generations_done = 0;
@@ -161,6 +164,10 @@ void append_generation(const std::string& path, const RunInfo& info, const Gener
 // Replaces the root attributes (state changes, end time). `info.generations_done` must equal
 // the archive's: a state change never claims generations (ArchiveError otherwise).
 void update_run_info(const std::string& path, const RunInfo& info, const WriteStepHook& hook = {});
+// As update_run_info, and /config replaced by `config_text`: a run continued with another run
+// length (--resume --generations N) records the config it now runs.
+void update_run_config(const std::string& path, const RunInfo& info, const std::string& config_text,
+                       const WriteStepHook& hook = {});
 // Sets the root attributes (as update_run_info) and packs the archive into one self-contained
 // file (every generation group copied as written), replacing the root atomically, then removes
 // the segments. A failure leaves the archive as it was (consistent, in either form).

@@ -6,24 +6,13 @@
 #include <optional>
 
 #include "common/config.hpp"
+#include "common/config_identity.hpp"
 #include "common/eval_types.hpp"
 #include "evo/population.hpp"
 #include "tasks/task.hpp"
 
 namespace softevo::master {
 namespace {
-
-// FNV-1a 64 of `text`: the config_hash of the config whose canonical text it is
-// (common/config.hpp config_hash), computed without parsing, so that an archive written by an
-// older build (fewer config keys) is checked against the hash it was written with.
-std::uint64_t text_hash(const std::string& text) {
-  std::uint64_t h = 14695981039346656037ULL;
-  for (unsigned char ch : text) {
-    h ^= ch;
-    h *= 1099511628211ULL;
-  }
-  return h;
-}
 
 bool same_bits(double a, double b) {
   return std::memcmp(&a, &b, sizeof a) == 0;

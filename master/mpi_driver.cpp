@@ -185,11 +185,15 @@ class MpiExecutor : public UnitExecutor {
   Clock::time_point roll_call_end_;
 };
 
-void print_header(const PreparedRun& r, const std::string& config_path, int ranks) {
+void print_header(const PreparedRun& r, const std::string& config_path, int ranks, bool verbose) {
   std::printf("softevo-mpi %s (commit %s), %d rank%s\n", kVersion, kGitCommit, ranks,
               ranks == 1 ? "" : "s");
-  std::printf("# config %s (hash %s)\n%s", config_path.c_str(), hash_hex(r.config_hash).c_str(),
-              r.config_text.c_str());
+  // The resolved config is in the archive (/config, `softevo info`); -v prints it here too.
+  std::printf("# config %s (config hash %s, experiment %s hash %s)%s\n", config_path.c_str(),
+              hash_hex(r.config_hash).c_str(), r.info.experiment.c_str(),
+              r.info.experiment_hash.c_str(),
+              verbose ? "" : "; -v or `softevo info ARCHIVE` shows every resolved key");
+  if (verbose) std::printf("%s", r.config_text.c_str());
   std::printf("# archive %s (%s)\n", r.options.out_path.c_str(),
               r.already_complete ? (r.info.state == "complete" ? "complete: nothing to do"
                                                                : "every generation archived: "
@@ -270,9 +274,12 @@ std::string format_rank_process(long pid, const std::string& host) {
 }
 
 int run_master(const mpi::Communicator& comm, PreparedRun& run, const MasterOptions& options) {
-  if (!options.quiet) print_header(run, options.config_path, comm.size());
-  ProgressReporter progress = options.quiet ? ProgressReporter::silent()
-                                            : ProgressReporter::console(run.config.run.generations);
+  const bool chatty = !options.quiet && !options.terse;
+  if (chatty) print_header(run, options.config_path, comm.size(), options.verbose);
+  ProgressReporter progress =
+      options.quiet
+          ? ProgressReporter::silent()
+          : ProgressReporter::console(run.config.run.generations, options.progress, options.terse);
   const auto t0 = std::chrono::steady_clock::now();
   const double cpu0 = cpu_seconds();
   RunOutcome outcome = RunOutcome::complete;
@@ -295,7 +302,8 @@ int run_master(const mpi::Communicator& comm, PreparedRun& run, const MasterOpti
   }
   if (stop_reason.empty() && outcome == RunOutcome::interrupted) stop_reason = rank0_stop_cause();
   const int code = exit_code_of(outcome);
-  if (!options.quiet) {
+  // -q keeps the one line that says how to continue an interrupted run.
+  if (chatty || (!options.quiet && outcome == RunOutcome::interrupted)) {
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     print_summary(run, outcome, stop_reason, code, wall, cpu_seconds() - cpu0);

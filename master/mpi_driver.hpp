@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "master/progress.hpp"
 #include "master/run.hpp"
 #include "mpi/communicator.hpp"
 
@@ -42,7 +43,11 @@ struct MasterOptions {
   std::string config_path;                   // shown in the console header
   LocalExecutor::EvaluateFn evaluate_alone;  // evaluates a unit when there is no worker rank
   bool quiet = false;                        // no console output (tests)
-  std::vector<RankProcess> processes;        // by rank (empty: unknown)
+  // -q: warnings and errors only; -v: the resolved config in the header too.
+  bool terse = false;
+  bool verbose = false;
+  ProgressMode progress = ProgressMode::automatic;  // --progress: the live line
+  std::vector<RankProcess> processes;               // by rank (empty: unknown)
 };
 
 // Runs `run` (prepared by prepare_run) on rank 0 of `comm` and returns the exit code. Throws on

@@ -1,8 +1,12 @@
 #include "master/progress.hpp"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <map>
 
 namespace softevo::master {
 
@@ -20,11 +24,127 @@ void format_duration(double seconds, char* buf, std::size_t size) {
     std::snprintf(buf, size, "%llds", s);
 }
 
-ProgressReporter::ProgressReporter(std::FILE* out, std::FILE* live, std::int64_t total_generations)
-    : out_(out), live_(live), total_generations_(total_generations) {}
+namespace {
 
-ProgressReporter ProgressReporter::console(std::int64_t total_generations) {
-  return ProgressReporter(stdout, ::isatty(STDERR_FILENO) != 0 ? stderr : nullptr,
+// The short status names of a generation line, in EvalStatus order.
+constexpr std::array<const char*, kStatusKinds> kStatusShort = {
+    "ok", "flipped", "exploded", "diverged", "failed", "timeout", "invalid body"};
+// Statuses always shown (the thesis' kill rules and failures); the rest when they occur.
+constexpr std::size_t kAlwaysShown = static_cast<std::size_t>(EvalStatus::failed) + 1;
+
+std::string duration_text(double seconds) {
+  char buf[32];
+  format_duration(seconds, buf, sizeof buf);
+  return buf;
+}
+
+}  // namespace
+
+std::string status_counts_text(const StatusCounts& counts) {
+  std::string out;
+  for (std::size_t k = 0; k < kStatusKinds; ++k) {
+    if (k >= kAlwaysShown && counts[k] == 0) continue;
+    out +=
+        (out.empty() ? "" : ", ") + std::string(kStatusShort[k]) + " " + std::to_string(counts[k]);
+  }
+  return out;
+}
+
+std::string generation_line(const GenerationSummary& s, std::int64_t total_generations,
+                            double elapsed_seconds, double eta_seconds) {
+  const double rate =
+      s.eval_wall_seconds > 0 ? static_cast<double>(s.evaluations) / s.eval_wall_seconds : 0.0;
+  const std::string unit = s.fitness_unit.empty() ? "" : " " + s.fitness_unit;
+  char head[160];
+  std::snprintf(head, sizeof head, "gen %6lld/%lld  best %10.4f%s  mean %10.4f%s  ",
+                static_cast<long long>(s.generation), static_cast<long long>(total_generations),
+                s.best, unit.c_str(), s.mean, unit.c_str());
+  char tail[160];
+  std::snprintf(tail, sizeof tail, "  species %3lld  eval/s %7.2f  elapsed %s  ETA %s",
+                static_cast<long long>(s.species), rate, duration_text(elapsed_seconds).c_str(),
+                duration_text(eta_seconds).c_str());
+  return head + status_counts_text(s.status_counts) + tail;
+}
+
+std::string generation_warning(const GenerationSummary& s) {
+  std::int64_t genomes = 0;
+  for (const std::int64_t n : s.status_counts) genomes += n;
+  const std::int64_t ok = s.status_counts[static_cast<std::size_t>(EvalStatus::ok)];
+  const std::string g = "generation " + std::to_string(s.generation);
+  if (genomes == 0) return "";
+  if (ok == 0)
+    return g + ": all " + std::to_string(genomes) + " robots were killed (" +
+           status_counts_text(s.status_counts) + "): best and mean are 0 by rule, not measured";
+  if (s.max_abs_ok_fitness == 0.0)
+    return g + ": none of the " + std::to_string(ok) +
+           " robots that finished moved (every fitness is exactly 0" +
+           (s.fitness_unit.empty() ? "" : " " + s.fitness_unit) + ")";
+  return "";
+}
+
+std::optional<ProgressMode> parse_progress_mode(const std::string& text) {
+  if (text == "auto") return ProgressMode::automatic;
+  if (text == "always") return ProgressMode::always;
+  if (text == "never") return ProgressMode::never;
+  return std::nullopt;
+}
+
+StreamKind stream_kind(int fd) {
+  if (::isatty(fd) != 0) return StreamKind::terminal;
+  struct stat st {};
+  if (::fstat(fd, &st) == 0 && (S_ISFIFO(st.st_mode) || S_ISSOCK(st.st_mode)))
+    return StreamKind::pipe;
+  return StreamKind::other;
+}
+
+bool show_live_line(ProgressMode mode, StreamKind stderr_kind,
+                    const std::function<const char*(const char*)>& env) {
+  if (mode != ProgressMode::automatic) return mode == ProgressMode::always;
+  if (stderr_kind == StreamKind::terminal) return true;
+  if (stderr_kind != StreamKind::pipe) return false;  // a file: a log, not a person
+  const auto is = [&env](const char* name, const char* value) {
+    const char* v = env(name);
+    return v != nullptr && std::strcmp(v, value) == 0;
+  };
+  if (is("ENVIRONMENT", "BATCH") || is("PBS_ENVIRONMENT", "PBS_BATCH")) return false;
+  for (const char* launcher : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "SLURM_STEP_ID"})
+    if (env(launcher) != nullptr) return true;
+  return false;
+}
+
+ProgressReporter::ProgressReporter(std::FILE* out, std::FILE* live, std::FILE* warn,
+                                   std::int64_t total_generations)
+    : out_(out),
+      live_(live),
+      warn_(warn),
+      total_generations_(total_generations),
+      start_(std::chrono::steady_clock::now()) {}
+
+namespace {
+
+// The launcher's variables as the process was started with them: read during static
+// initialisation, before main and so before MPI_Init, which sets OMPI_COMM_WORLD_SIZE in a
+// singleton (no mpirun) as well.
+std::map<std::string, std::string> launch_environment() {
+  std::map<std::string, std::string> vars;
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "SLURM_STEP_ID",
+                           "ENVIRONMENT", "PBS_ENVIRONMENT"})
+    if (const char* v = std::getenv(name)) vars[name] = v;
+  return vars;
+}
+const std::map<std::string, std::string> kLaunchEnvironment = launch_environment();
+
+}  // namespace
+
+ProgressReporter ProgressReporter::console(std::int64_t total_generations, ProgressMode mode,
+                                           bool quiet) {
+  const bool live =
+      !quiet &&
+      show_live_line(mode, stream_kind(STDERR_FILENO), [](const char* name) -> const char* {
+        const auto it = kLaunchEnvironment.find(name);
+        return it == kLaunchEnvironment.end() ? nullptr : it->second.c_str();
+      });
+  return ProgressReporter(quiet ? nullptr : stdout, live ? stderr : nullptr, stderr,
                           total_generations);
 }
 
@@ -63,19 +183,20 @@ void ProgressReporter::generation_finished(const GenerationSummary& s) {
   clear_live();
   ++generations_reported_;
   seconds_reported_ += s.generation_seconds;
-  if (out_ == nullptr) return;
-  const double rate =
-      s.eval_wall_seconds > 0 ? static_cast<double>(s.evaluations) / s.eval_wall_seconds : 0.0;
   const std::int64_t remaining = total_generations_ - (s.generation + 1);
-  char eta[32];
-  format_duration(static_cast<double>(remaining) * seconds_reported_ /
-                      static_cast<double>(generations_reported_),
-                  eta, sizeof eta);
-  std::fprintf(out_,
-               "gen %6lld/%lld  best %10.4f  mean %10.4f  species %3lld  eval/s %7.2f  ETA %s\n",
-               static_cast<long long>(s.generation), static_cast<long long>(total_generations_),
-               s.best, s.mean, static_cast<long long>(s.species), rate, eta);
-  std::fflush(out_);
+  const double eta = static_cast<double>(remaining) * seconds_reported_ /
+                     static_cast<double>(generations_reported_);
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  if (out_ != nullptr) {
+    std::fprintf(out_, "%s\n", generation_line(s, total_generations_, elapsed, eta).c_str());
+    std::fflush(out_);
+  }
+  const std::string warning = generation_warning(s);
+  if (warn_ != nullptr && !warning.empty()) {
+    std::fprintf(warn_, "softevo-mpi: warning: %s\n", warning.c_str());
+    std::fflush(warn_);
+  }
 }
 
 void ProgressReporter::message(const char* text) {

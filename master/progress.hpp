@@ -1,13 +1,25 @@
 // Progress reporter: observes the generation loop (ARCHITECTURE.md section 3: reporters, not
-// print statements inside the loop). One line per evaluated generation on `out`; on a terminal
-// also a live line within the generation (carriage return, throttled to a few updates/s).
+// print statements inside the loop). One line per evaluated generation on `out` (elapsed time,
+// fitness with its unit, the count of each status), a warning on `warn` when a whole generation
+// is killed or none of its robots moved, and a live line within the generation (carriage
+// return, throttled to a few updates/s) where someone watches it (show_live_line).
 #pragma once
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "common/eval_types.hpp"
 
 namespace softevo::master {
+
+// EvalStatus values 0..invalid_body.
+inline constexpr std::size_t kStatusKinds = static_cast<std::size_t>(EvalStatus::invalid_body) + 1;
+using StatusCounts = std::array<std::int64_t, kStatusKinds>;  // genomes per EvalStatus
 
 struct GenerationSummary {
   std::int64_t generation = 0;
@@ -17,16 +29,48 @@ struct GenerationSummary {
   std::int64_t evaluations = 0;     // work units
   double eval_wall_seconds = 0.0;   // [s] evaluation phase
   double generation_seconds = 0.0;  // [s] whole generation incl. reproduction and archive
+  StatusCounts status_counts{};     // the genomes' archived statuses
+  double max_abs_ok_fitness = 0.0;  // largest |fitness| of an ok genome: 0 = nothing moved
+  std::string fitness_unit;         // the task's ("cm", "rad")
 };
+
+// The generation's line: "gen 3/10  best 1.6440 cm  mean ... ok 11 flipped 1 ... elapsed 12s
+// ETA 28s". `elapsed_seconds` [s] since the run (or this resume) started.
+std::string generation_line(const GenerationSummary& s, std::int64_t total_generations,
+                            double elapsed_seconds, double eta_seconds);
+// "ok 11, flipped 1, exploded 0, diverged 0, failed 0" (timeout and invalid body when present):
+// the status names of `softevo info` and the archive docs.
+std::string status_counts_text(const StatusCounts& counts);
+// The warning for a generation whose numbers mean nothing ("" when fine): every genome killed
+// (best and mean are then 0 by rule), or no ok genome with a fitness other than 0.
+std::string generation_warning(const GenerationSummary& s);
+
+// --progress: the live in-generation line.
+enum class ProgressMode : std::uint8_t { automatic, always, never };
+std::optional<ProgressMode> parse_progress_mode(const std::string& text);  // auto|always|never
+// How rank 0's stderr is connected.
+enum class StreamKind : std::uint8_t { terminal, pipe, other };
+StreamKind stream_kind(int fd);
+// Whether to show the live line. auto: stderr is a terminal, or it is a pipe to an MPI launcher
+// (Open MPI's mpirun: OMPI_COMM_WORLD_SIZE; PMIx: PMIX_RANK; MPICH/Hydra: PMI_RANK; srun:
+// SLURM_STEP_ID) that forwards it to the user's terminal, i.e. not inside a batch job
+// (Slurm's sbatch sets ENVIRONMENT=BATCH, PBS sets PBS_ENVIRONMENT=PBS_BATCH), whose output goes
+// to a log file where carriage returns only clutter. `env` reads an environment variable
+// (nullptr when unset).
+bool show_live_line(ProgressMode mode, StreamKind stderr_kind,
+                    const std::function<const char*(const char*)>& env);
 
 class ProgressReporter {
  public:
-  // `live` = nullptr disables the live line (not a terminal, or quiet).
-  ProgressReporter(std::FILE* out, std::FILE* live, std::int64_t total_generations);
+  // `out` = nullptr: no generation lines (quiet); `live` = nullptr: no live line; `warn` =
+  // nullptr: no warnings.
+  ProgressReporter(std::FILE* out, std::FILE* live, std::FILE* warn,
+                   std::int64_t total_generations);
   // A reporter that prints nothing.
-  static ProgressReporter silent() { return ProgressReporter(nullptr, nullptr, 0); }
-  // stdout for the lines, stderr for the live line if stderr is a terminal.
-  static ProgressReporter console(std::int64_t total_generations);
+  static ProgressReporter silent() { return ProgressReporter(nullptr, nullptr, nullptr, 0); }
+  // stdout for the lines (none when quiet), stderr for the warnings and, as `mode` decides,
+  // the live line.
+  static ProgressReporter console(std::int64_t total_generations, ProgressMode mode, bool quiet);
 
   void generation_started(std::int64_t generation, std::size_t units_total);
   void unit_done(std::size_t units_done, std::size_t units_total);
@@ -37,11 +81,13 @@ class ProgressReporter {
   void clear_live();
   std::FILE* out_;
   std::FILE* live_;
+  std::FILE* warn_;
   std::int64_t total_generations_;
   std::int64_t generation_ = 0;
   std::int64_t generations_reported_ = 0;
   double seconds_reported_ = 0.0;  // sum of generation_seconds, for the ETA
   bool live_visible_ = false;
+  std::chrono::steady_clock::time_point start_;
   std::chrono::steady_clock::time_point generation_start_;
   std::chrono::steady_clock::time_point last_live_;
 };

@@ -4,11 +4,13 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <ctime>
 #include <exception>
 #include <filesystem>
 #include <numeric>
 
+#include "common/config_identity.hpp"
 #include "common/version.hpp"
 #include "evo/genome.hpp"
 #include "master/archive_check.hpp"
@@ -154,6 +156,7 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
   info.host = options.host.empty() ? host_name() : options.host;
   info.start_time = iso8601_now();
   info.config_hash = hash;
+  info.experiment_hash = hash_hex(experiment_hash(config));
   info.experiment = experiment_name(config);
   info.state = "running";
 
@@ -178,10 +181,21 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
         throw StartupError(out + ": cannot resume: the archive fails its integrity checks:\n" +
                            check.describe(out) + repair_hint(out, check));
       const RunInfo old = archive.info();
-      if (old.config_hash != hash || archive.config_text() != run.config_text)
-        throw StartupError(out + ": cannot resume: the archive was written with config hash " +
-                           old.config_hash + ", this run has " + hash +
-                           " (use the same config file, --set overrides and --seed)");
+      // The experiment (everything but run length and seed) must be the archive's; the run
+      // length may grow: the generations evolve the same whatever the target.
+      const std::string old_text = archive.config_text();
+      if (experiment_text(old_text) != experiment_text(run.config_text))
+        throw StartupError(out + ": cannot resume: the archive was written with experiment hash " +
+                           hash_hex(experiment_hash_of_text(old_text)) + ", this run has " +
+                           info.experiment_hash +
+                           " (use the same config file and --set overrides; only --generations "
+                           "may differ)");
+      if (old.seed != config.run.seed)
+        throw StartupError(out + ": cannot resume: the archive was written with --seed " +
+                           std::to_string(old.seed) + ", this run has --seed " +
+                           std::to_string(config.run.seed) +
+                           " (another seed is another run: give it its own --out)");
+      run.run_length_changed = old_text != run.config_text;
       if (old.physics_revision != physics::kPhysicsRevision)
         throw StartupError(
             out + ": cannot resume: the archive was simulated with physics revision " +
@@ -194,7 +208,9 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
       // The lock is ours now: a "running" archive was left by a run that died.
       run.previous_run = previous_run_note(old, std::nullopt, config.run.generations);
       if (old.generations_done >= config.run.generations) {
+        // Nothing to evaluate: the archive keeps the config it was written with.
         run.already_complete = true;
+        run.run_length_changed = false;
         run.info = old;
         return run;
       }
@@ -262,7 +278,10 @@ RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporte
     if (run.resumed) {
       info.state = "running";
       info.end_time.clear();
-      update_run_info(out, info, run.options.archive_fault);
+      if (run.run_length_changed)
+        io::update_run_config(out, info, run.config_text, run.options.archive_fault);
+      else
+        update_run_info(out, info, run.options.archive_fault);
     } else {
       create_archive(out, info, run.config_text, run.options.archive_fault);
     }
@@ -368,9 +387,23 @@ RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporte
       commit_generation(out, info, rec, stats,
                         Checkpoint{population.generation(), population.serialize()},
                         run.options.archive_fault);
-      progress.generation_finished(GenerationSummary{g, rec.best, rec.mean, rec.species_count,
-                                                     rec.evaluations, eval_seconds,
-                                                     seconds_since(t_generation)});
+      GenerationSummary summary{g,
+                                rec.best,
+                                rec.mean,
+                                rec.species_count,
+                                rec.evaluations,
+                                eval_seconds,
+                                seconds_since(t_generation),
+                                {},
+                                0.0,
+                                task->fitness_unit()};
+      for (std::size_t i = 0; i < rec.size(); ++i) {
+        if (rec.status[i] < summary.status_counts.size()) ++summary.status_counts[rec.status[i]];
+        if (rec.status[i] == static_cast<std::uint8_t>(EvalStatus::ok))
+          summary.max_abs_ok_fitness =
+              std::max(summary.max_abs_ok_fitness, std::fabs(rec.fitness[i]));
+      }
+      progress.generation_finished(summary);
       if (stop_requested() != StopRequest::none &&
           population.generation() < config.run.generations) {
         outcome = RunOutcome::interrupted;

@@ -88,6 +88,9 @@ struct PreparedRun {
   std::optional<evo::Population> population;
   bool already_complete = false;
   bool resumed = false;
+  // --resume with another run length than the archive's config (an extended run): the archive's
+  // /config and config_hash are replaced by this run's when it starts.
+  bool run_length_changed = false;
   // --resume of an archive whose last run did not complete: what happened to it, in the words
   // of master/run_state.hpp, for the start's console header.
   std::optional<std::string> previous_run;
@@ -96,8 +99,9 @@ struct PreparedRun {
 };
 
 // Start-up: validates the output path, takes the run lock (a second run on the same archive
-// fails here, naming the holder), loads the checkpoint for --resume (the config hash must match
-// the archive's), creates the population. Throws StartupError (nothing touched) or
+// fails here, naming the holder), loads the checkpoint for --resume (the experiment hash and
+// the seed must match the archive's: a finished run can be extended with more generations),
+// creates the population. Throws StartupError (nothing touched) or
 // ConfigError. Writes nothing but the lock file.
 PreparedRun prepare_run(const Config& config, const RunOptions& options, int ranks);
 // The loop. Creates or updates the archive; throws RunError (the archive then holds the last

@@ -150,6 +150,7 @@ Motion simulate_motion(Config config, const BodyPlan& plan, const ControllerSpec
                 to_string(config.task.kind), result.fitness, to_string(result.status),
                 result.sim_seconds);
   motion.summary = line;
+  motion.status = to_string(result.status);
   return motion;
 }
 
@@ -273,6 +274,7 @@ Motion load_trace(const std::string& path, const MotionRequest& request) {
     std::snprintf(line, sizeof line, "traced fitness %.17g, status %s", *trace.fitness,
                   trace.status.c_str());
     motion.summary = line;
+    motion.status = trace.status;
   }
   if (motion.body.chamber_cells.empty()) {
     motion.summary += std::string(motion.summary.empty() ? "" : "; ") +
@@ -378,19 +380,20 @@ Motion load_motion(const std::string& input, const MotionRequest& request) {
   if (is_json(input)) {
     const RobotFile robot = read_robot_file(input);
     const std::string name = robot.name.empty() ? fs::path(input).stem().string() : robot.name;
-    Config config = request.config_file.empty()
-                        ? parse_config("", "(defaults)", request.overrides)
-                        : load_config(request.config_file, request.overrides);
+    // As `softevo eval`: --config, else the robot file's run config, else the defaults.
+    worker::RobotEvalSettings settings;
+    settings.config_path = request.config_file;
+    settings.overrides = request.overrides;
+    const Config config = worker::robot_eval_config(robot, settings);
     if (!request.needs_motion || request.static_pose) {
       Motion still =
           static_motion(robot.body, static_cast<int>(config.physics.material_count), name);
       still.terrain = ground_of(config, robot.body, {});
       return still;
     }
-    // The robot file decides the task: the one its controller's inputs fit.
-    config.task.kind = tasks::default_task_for(robot.controller.task_inputs());
-    config.task.control = robot.controller.closed_loop ? "closed" : "open";
-    return simulate_motion(config, robot.body, robot.controller, request, name);
+    Motion motion = simulate_motion(config, robot.body, robot.controller, request, name);
+    motion.summary += "; config: " + worker::describe_config_source(robot, settings);
+    return motion;
   }
   if (io::is_run_archive(input)) {
     const ArchivedIndividual ind = archived_individual(input, request.generation, request.id);

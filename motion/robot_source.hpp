@@ -29,6 +29,7 @@ struct Motion {
   std::optional<double> direction_deg;  // target direction the motion was simulated towards
   std::string summary;                  // one line: fitness and status when simulated, "" otherwise
   physics::Terrain terrain;             // the ground it moved on (flat unless the config says)
+  std::string status;                   // status of the simulation or trace, "" for a still
 };
 
 // What the poses of a re-simulation or trace may hold in memory at most (positions and

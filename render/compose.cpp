@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <stdexcept>
 
 namespace softevo::render {
@@ -19,7 +20,7 @@ constexpr double kPi = 3.14159265358979323846;
 
 std::string time_label(double t) {
   char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "t=%.2fs", t);
+  std::snprintf(buffer, sizeof buffer, "t = %.2f s", t);
   return buffer;
 }
 
@@ -49,13 +50,52 @@ std::string shell_quote(const std::string& s) {
 // `image` below a band of the sky's top colour holding `title`, in the font size the panels'
 // labels have (render_poses: one font pixel per 200 image rows, rounded).
 Image with_title_band(const Image& image, const std::string& title) {
-  const int size = std::max(1, (image.height + 100) / 200);
+  // A long title gets a smaller font rather than being cut off at the right edge.
+  int size = std::max(1, (image.height + 100) / 200);
+  while (size > 1 && 6 * size + text_width(title, size) > image.width) --size;
   const int band = kTitleBandFontRows * size;
   Image out(image.width, image.height + band, {247, 247, 252});
   std::copy(image.rgb.begin(), image.rgb.end(),
             out.rgb.begin() + static_cast<std::ptrdiff_t>(band) * image.width * 3);
   draw_text(out, 6 * size, 2 * size, title, {40, 40, 48}, size);
   return out;
+}
+
+// Pixel of a point under an orthographic camera.
+Eigen::Vector2d project(const Camera& cam, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d d = p - cam.center;
+  return {cam.width / 2.0 + d.dot(cam.right) * cam.scale,
+          cam.height / 2.0 - d.dot(cam.up) * cam.scale};
+}
+
+void dot(Image& image, double x, double y, int radius, std::array<std::uint8_t, 3> colour) {
+  const int cx = static_cast<int>(std::lround(x)), cy = static_cast<int>(std::lround(y));
+  for (int dy = -radius; dy <= radius; ++dy)
+    for (int dx = -radius; dx <= radius; ++dx)
+      if (dx * dx + dy * dy <= radius * radius && cx + dx >= 0 && cy + dy >= 0 &&
+          cx + dx < image.width && cy + dy < image.height)
+        image.set(cx + dx, cy + dy, colour);
+}
+
+// A polyline through `points` and an open ring at the first (the start).
+void draw_path(Image& image, const Camera& cam, const std::vector<Eigen::Vector3d>& points,
+               std::array<std::uint8_t, 3> colour, int size) {
+  if (points.empty()) return;
+  const int half = std::max(0, size / 2);
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    const Eigen::Vector2d a = project(cam, points[i - 1]), b = project(cam, points[i]);
+    const int steps = std::max(1, static_cast<int>(std::ceil((b - a).norm())));
+    for (int k = 0; k <= steps; ++k) {
+      const Eigen::Vector2d q = a + (b - a) * (static_cast<double>(k) / steps);
+      dot(image, q.x(), q.y(), half, colour);
+    }
+  }
+  const Eigen::Vector2d start = project(cam, points.front());
+  const int r = 4 * size;
+  for (int k = 0; k < 360; ++k) {
+    const double a = k * kPi / 180.0;
+    dot(image, start.x() + r * std::cos(a), start.y() + r * std::sin(a), half, colour);
+  }
 }
 
 }  // namespace
@@ -123,6 +163,7 @@ Image render_timelapse(const Clip& clip, View view, const Timelapse& timelapse, 
     for (std::size_t i = 0; i < snaps.size(); ++i) {
       SceneOptions o = scene;
       o.label = time_label(snaps[i].time);
+      o.legend = scene.legend && i + 1 == snaps.size();  // one scale and colour bar per strip
       panels.push_back(render_poses(clip.body, {snaps[i]}, cam, o));
     }
     // The name goes in a band above all panels: inside the first panel a long name ran into the
@@ -142,10 +183,31 @@ Image render_timelapse(const Clip& clip, View view, const Timelapse& timelapse, 
     // Earlier snapshots fainter, the last one at full strength.
     scene.pose_fade.push_back(n == 1 ? 1.0 : 0.35 + 0.65 * i / (n - 1));
   }
-  char range[64];
-  std::snprintf(range, sizeof range, "  t=%.1f-%.1fs", snaps.front().time, snaps.back().time);
-  scene.label = clip.name + range;
-  return render_poses(clip.body, snaps, cam, scene);
+  // The title, above the picture (a target line never crosses it), says when each pose was
+  // (fainter = earlier) and, for a directed robot, the target direction.
+  std::string title = clip.name + "   poses at t =";
+  for (std::size_t i = 0; i < snaps.size(); ++i) {
+    char t[32];
+    std::snprintf(t, sizeof t, "%s %.2f", i == 0 ? "" : ",", snaps[i].time);
+    title += t;
+  }
+  title += " s (fainter = earlier)";
+  if (scene.target_direction_deg) {
+    char target[48];
+    std::snprintf(target, sizeof target, "   target %+.0f deg", *scene.target_direction_deg);
+    title += target;
+  }
+  scene.label.clear();
+  Image picture = render_poses(clip.body, snaps, cam, scene);
+  if (view == View::top) {
+    // The centroid's path up to the last snapshot, a ring at its start.
+    std::vector<Eigen::Vector3d> path;
+    for (const Pose& p : clip.poses)
+      if (p.time <= snaps.back().time + 1e-9) path.push_back(centroid(p));
+    const int size = std::max(1, (picture.height + 100) / 200);
+    draw_path(picture, cam, path, {30, 30, 30}, size);
+  }
+  return with_title_band(picture, title);
 }
 
 std::optional<std::string> find_on_path(const std::string& program) {
@@ -173,6 +235,39 @@ std::vector<double> video_frame_times(double fps, double end) {
   return times;
 }
 
+int render_frames(const Clip& clip, View view, const VideoOptions& options,
+                  const SceneOptions& scene, const std::function<bool(const Image&)>& sink) {
+  if (clip.poses.size() < 2) throw std::runtime_error("a video needs motion (a single pose)");
+  if (!(options.fps > 0.0) || !std::isfinite(options.fps))
+    throw std::runtime_error("the frame rate must be a finite number > 0");
+  const int width = (options.width > 0 ? options.width : 960) & ~1;  // yuv420p needs even sizes
+  const int height = (options.height > 0 ? options.height : 540) & ~1;
+  const Pose& first = clip.poses.front();
+  Eigen::AlignedBox3d box = scene_box(clip.body, {first}, scene.floor_z);
+  const Eigen::Vector3d grow = box.sizes() * 0.9;
+  box.extend(box.min() - grow);
+  box.extend(box.max() + grow);
+  Camera cam = fit_camera(view, box, width, height);
+  const Eigen::Vector3d start_centre = cam.center;
+  const Eigen::Vector3d start_centroid = centroid(first);
+  const std::vector<double> times = video_frame_times(options.fps, clip.poses.back().time);
+  std::size_t nearest = 0;
+  for (std::size_t f = 0; f < times.size(); ++f) {
+    // pose_at's choice, found by walking on: times and poses both ascend (a search from the
+    // start for every frame made a long video quadratic in its length).
+    const auto gap = [&](std::size_t i) { return std::abs(clip.poses[i].time - times[f]); };
+    while (nearest + 1 < clip.poses.size() && gap(nearest + 1) < gap(nearest)) ++nearest;
+    const Pose& pose = clip.poses[nearest];
+    Eigen::Vector3d follow = centroid(pose) - start_centroid;
+    follow.z() = 0.0;
+    cam.center = start_centre + follow;
+    SceneOptions o = scene;
+    o.label = clip.name + "  " + time_label(pose.time);
+    if (!sink(render_poses(clip.body, {pose}, cam, o))) return static_cast<int>(f);
+  }
+  return static_cast<int>(times.size());
+}
+
 VideoWritten write_video(const Clip& clip, View view, const VideoOptions& options,
                          const SceneOptions& scene, const std::string& ffmpeg,
                          const std::string& output, Overwrite overwrite) {
@@ -185,16 +280,8 @@ VideoWritten write_video(const Clip& clip, View view, const VideoOptions& option
   // The temporary's name has no extension, so the container is named explicitly.
   const std::string muxer = video_muxer(output);
   VideoWritten written;
-  written.width = (options.width > 0 ? options.width : 960) & ~1;  // yuv420p needs even sizes
+  written.width = (options.width > 0 ? options.width : 960) & ~1;
   written.height = (options.height > 0 ? options.height : 540) & ~1;
-  const Pose& first = clip.poses.front();
-  Eigen::AlignedBox3d box = scene_box(clip.body, {first}, scene.floor_z);
-  const Eigen::Vector3d grow = box.sizes() * 0.9;
-  box.extend(box.min() - grow);
-  box.extend(box.max() + grow);
-  Camera cam = fit_camera(view, box, written.width, written.height);
-  const Eigen::Vector3d start_centre = cam.center;
-  const Eigen::Vector3d start_centroid = centroid(first);
 
   AtomicOutput file(output, overwrite);  // ffmpeg writes the temporary; -y: it exists, empty
   const std::string command = shell_quote(ffmpeg) +
@@ -204,24 +291,11 @@ VideoWritten write_video(const Clip& clip, View view, const VideoOptions& option
                               muxer + " " + shell_quote(file.temp_path());
   FILE* pipe = ::popen(command.c_str(), "w");
   if (pipe == nullptr) throw std::runtime_error("render: cannot start ffmpeg: " + command);
-  const std::vector<double> times = video_frame_times(options.fps, clip.poses.back().time);
-  written.frames = static_cast<int>(times.size());
   bool ok = true;
-  std::size_t nearest = 0;
-  for (std::size_t f = 0; f < times.size() && ok; ++f) {
-    // pose_at's choice, found by walking on: times and poses both ascend (a search from the
-    // start for every frame made a long video quadratic in its length).
-    const auto gap = [&](std::size_t i) { return std::abs(clip.poses[i].time - times[f]); };
-    while (nearest + 1 < clip.poses.size() && gap(nearest + 1) < gap(nearest)) ++nearest;
-    const Pose& pose = clip.poses[nearest];
-    Eigen::Vector3d follow = centroid(pose) - start_centroid;
-    follow.z() = 0.0;
-    cam.center = start_centre + follow;
-    SceneOptions o = scene;
-    o.label = clip.name + "  " + time_label(pose.time);
-    const Image image = render_poses(clip.body, {pose}, cam, o);
+  written.frames = render_frames(clip, view, options, scene, [&](const Image& image) {
     ok = std::fwrite(image.rgb.data(), 1, image.rgb.size(), pipe) == image.rgb.size();
-  }
+    return ok;
+  });
   const int status = ::pclose(pipe);
   if (!ok || status != 0) {
     throw std::runtime_error("render " + output + ": ffmpeg failed (exit status " +

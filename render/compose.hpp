@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -74,5 +75,9 @@ std::vector<double> video_frame_times(double fps, double end);
 VideoWritten write_video(const Clip& clip, View view, const VideoOptions& options,
                          const SceneOptions& scene, const std::string& ffmpeg,
                          const std::string& output, Overwrite overwrite = Overwrite::refuse);
+// The frames of that video, in order, to `sink` (false stops); returns the frames given.
+// `softevo render` writes them as a PNG sequence when there is no ffmpeg.
+int render_frames(const Clip& clip, View view, const VideoOptions& options,
+                  const SceneOptions& scene, const std::function<bool(const Image&)>& sink);
 
 }  // namespace softevo::render

@@ -1,6 +1,7 @@
 // Software rasteriser for `softevo render` (see render.hpp for the approach).
 #include "render/render.hpp"
 #include "common/safe_write.hpp"
+#include "render/font.hpp"
 
 #ifdef SOFTEVO_HAVE_PNG
 #include <png.h>
@@ -8,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <optional>
@@ -547,6 +549,51 @@ std::array<std::uint8_t, 3> material_colour(int material, int material_count) {
           static_cast<std::uint8_t>(std::lround(255.0 * f))};
 }
 
+namespace {
+
+void fill_rect(Image& image, int x0, int y0, int x1, int y1, std::array<std::uint8_t, 3> colour) {
+  for (int y = std::max(0, y0); y < std::min(image.height, y1); ++y)
+    for (int x = std::max(0, x0); x < std::min(image.width, x1); ++x) image.set(x, y, colour);
+}
+
+// A scale bar of a round length in cm at the bottom left, and the materials' colours from soft
+// (left) to stiff (right) at the bottom right. Orthographic cameras: `camera.scale` pixels per
+// metre hold everywhere in the picture plane.
+void draw_legend(Image& image, const Camera& camera, int material_count, int size) {
+  const std::array<std::uint8_t, 3> ink{40, 40, 48};
+  const int margin = 6 * size, bar_height = 2 * size;
+  const int text_height = 9 * size;
+  const int baseline = image.height - margin - text_height;
+  if (baseline < image.height / 2) return;  // no room: a tiny picture
+  // The longest round length (1, 2, 5 x 10^k cm) under a quarter of the width.
+  double length_cm = 0.0;
+  for (double decade = 0.1; decade <= 1000.0; decade *= 10.0)
+    for (const double step : {1.0, 2.0, 5.0})
+      if (step * decade * 0.01 * camera.scale <= image.width / 4.0) length_cm = step * decade;
+  if (length_cm > 0.0) {
+    const int pixels = static_cast<int>(std::lround(length_cm * 0.01 * camera.scale));
+    fill_rect(image, margin, baseline - bar_height, margin + pixels, baseline, ink);
+    fill_rect(image, margin, baseline - 3 * bar_height, margin + size, baseline, ink);
+    fill_rect(image, margin + pixels - size, baseline - 3 * bar_height, margin + pixels, baseline,
+              ink);
+    char text[32];
+    std::snprintf(text, sizeof text, "%g cm", length_cm);
+    draw_text(image, margin, baseline + size, text, ink, size);
+  }
+  if (material_count < 1) return;
+  const int swatch = 5 * size;
+  const int right = image.width - margin;
+  const int left = right - swatch * material_count;
+  if (left < image.width / 2) return;
+  for (int k = 1; k <= material_count; ++k)
+    fill_rect(image, left + (k - 1) * swatch, baseline - 3 * bar_height, left + k * swatch,
+              baseline, material_colour(k, material_count));
+  draw_text(image, left, baseline + size, "soft", ink, size);
+  draw_text(image, right - text_width("stiff", size), baseline + size, "stiff", ink, size);
+}
+
+}  // namespace
+
 Image render_poses(const Body& body, const std::vector<Pose>& poses, const Camera& camera,
                    const SceneOptions& options) {
   if (poses.empty()) throw std::invalid_argument("render: no pose to draw");
@@ -645,10 +692,10 @@ Image render_poses(const Body& body, const std::vector<Pose>& poses, const Camer
       image.set(x, y, {to_byte(sum.r * norm), to_byte(sum.g * norm), to_byte(sum.b * norm)});
     }
   }
-  if (!options.label.empty()) {
-    const int size = std::max(1, (camera.height + 100) / 200);
+  const int size = std::max(1, (camera.height + 100) / 200);
+  if (!options.label.empty())
     draw_text(image, 6 * size, 6 * size, options.label, {40, 40, 48}, size);
-  }
+  if (options.legend) draw_legend(image, camera, body.material_count, size);
   return image;
 }
 
@@ -747,8 +794,14 @@ constexpr Glyph kFont[] = {
 };
 }  // namespace
 
+int text_width(const std::string& text, int size) {
+  if (const std::optional<int> w = font_text_width(text, size)) return *w;
+  return 6 * size * static_cast<int>(text.size());
+}
+
 void draw_text(Image& image, int x, int y, const std::string& text,
                std::array<std::uint8_t, 3> colour, int size) {
+  if (draw_font_text(image, x, y, text, colour, size)) return;
   int pen = x;
   for (char ch : text) {
     const char up = (ch >= 'a' && ch <= 'z') ? static_cast<char>(ch - 'a' + 'A') : ch;

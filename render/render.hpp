@@ -126,6 +126,9 @@ struct SceneOptions {
   // Opacity factor per pose when several poses are overlaid (time-lapse); empty = all 1.
   std::vector<double> pose_fade;
   std::string label;  // drawn in the top-left corner, "" = none
+  // A scale bar in cm (bottom left) and the stiffness colour bar of the materials (bottom
+  // right), as a figure in a paper needs them (`softevo render` draws them).
+  bool legend = false;
 };
 
 // Renders one or more poses of the same body into a single image (several poses = overlaid
@@ -144,9 +147,13 @@ long count_pixels_unlike(const Image& image, std::array<std::uint8_t, 3> backgro
 // (k = n, stiffest): red = 255 - 255 (k-1)/(n-1), blue = 255 (k-1)/(n-1).
 std::array<std::uint8_t, 3> material_colour(int material, int material_count);
 
-// Small built-in bitmap font (5x7 cells, printable ASCII subset; unknown characters are
-// blanks). Draws at pixel (x, y) = top-left, each font pixel `size` x `size` image pixels.
+// Text with its top-left corner at pixel (x, y), cap height 7 `size` pixels: in DejaVu Sans
+// when the build has stb_truetype and the font (render/font.hpp), else in a small built-in
+// bitmap font (5x7 cells, printable ASCII in capitals; unknown characters are blanks, each font
+// pixel `size` x `size` image pixels).
 void draw_text(Image& image, int x, int y, const std::string& text,
                std::array<std::uint8_t, 3> colour, int size = 2);
+// Width [pixel] of `text` as draw_text draws it.
+int text_width(const std::string& text, int size = 2);
 
 }  // namespace softevo::render

@@ -4,7 +4,8 @@
 #   SOFTEVO_ARRAY=0,10,20,30 SOFTEVO_NTASKS=2 SOFTEVO_ARGS="--generations 2" slurm/submit.sh
 # Prints "ARRAY_JOB_ID AGGREGATION_JOB_ID". Environment: see slurm/grid.sbatch, plus
 #   SOFTEVO_ARRAY (array spec, default 0-39), SOFTEVO_NTASKS (ranks per task, default 5),
-#   SOFTEVO_TIME (time limit per task, default 7-00:00:00), SOFTEVO_BUILD (default build).
+#   SOFTEVO_TIME (time limit per task, default 7-00:00:00), SOFTEVO_BUILD (default build), and
+#   the site settings of slurm/site.sh (partition, account, memory, modules, launcher).
 #   slurm/submit.sh --experiments gait-rough-open,gait-rough-closed --seeds 1-10
 #                                        # any experiments (configs/<name>.toml), seeds A-B each
 set -euo pipefail
@@ -25,6 +26,12 @@ for e in "${EXPS[@]}"; do
   [ -f "$ROOT/configs/$e.toml" ] || { echo "submit.sh: no config configs/$e.toml" >&2; exit 2; }
 done
 export SOFTEVO_EXPERIMENTS=$(IFS=,; echo "${EXPS[*]}")
+# shellcheck source=slurm/site.sh
+. "$ROOT/slurm/site.sh"
+SITE_ARGS=()
+[ -z "${SOFTEVO_PARTITION:-}" ] || SITE_ARGS+=(--partition="$SOFTEVO_PARTITION")
+[ -z "${SOFTEVO_ACCOUNT:-}" ] || SITE_ARGS+=(--account="$SOFTEVO_ACCOUNT")
+[ -z "${SOFTEVO_MEM:-}" ] || SITE_ARGS+=(--mem-per-cpu="$SOFTEVO_MEM")
 BUILD=${SOFTEVO_BUILD:-$ROOT/build}
 export SOFTEVO_ROOT=$ROOT
 export SOFTEVO_MPI=${SOFTEVO_MPI:-$BUILD/bin/softevo-mpi}
@@ -37,11 +44,11 @@ for b in "$SOFTEVO_MPI" "$SOFTEVO_CLI"; do
   [ -x "$b" ] || { echo "submit.sh: $b not built (cmake --build $BUILD)" >&2; exit 2; }
 done
 mkdir -p "$SOFTEVO_RUNS"
-ARRAY=$(sbatch --parsable --array="$SOFTEVO_ARRAY" --ntasks="${SOFTEVO_NTASKS:-5}" \
+ARRAY=$(sbatch --parsable "${SITE_ARGS[@]}" --array="$SOFTEVO_ARRAY" --ntasks="${SOFTEVO_NTASKS:-5}" \
   --time="${SOFTEVO_TIME:-7-00:00:00}" --chdir="$SOFTEVO_RUNS" \
   --output="$SOFTEVO_RUNS/softevo-grid-%A_%a.out" "$ROOT/slurm/grid.sbatch")
 ARRAY=${ARRAY%%;*}
-AGG=$(sbatch --parsable --dependency="afterok:$ARRAY" --chdir="$SOFTEVO_RUNS" \
+AGG=$(sbatch --parsable "${SITE_ARGS[@]}" --dependency="afterok:$ARRAY" --chdir="$SOFTEVO_RUNS" \
   --output="$SOFTEVO_RUNS/softevo-grid-aggregate-%j.out" "$ROOT/slurm/aggregate.sbatch")
 AGG=${AGG%%;*}
 echo "$ARRAY $AGG"

@@ -87,6 +87,8 @@ class DirectedTask : public Task {
   TaskKind kind() const override { return TaskKind::directed; }
   int controller_inputs() const override { return 1; }
   int units() const override { return static_cast<int>(config_.task.directions.size()); }
+  // |D| / L x (D / (delta + 1) - P): a distance (§7.2)
+  std::string fitness_unit() const override { return "cm"; }
   std::vector<ComponentName> component_names() const override {
     return {{"direction_deg", "deg"},
             {"distance", "cm"},

@@ -24,6 +24,8 @@ class GaitTask : public Task {
   TaskKind kind() const override { return TaskKind::gait; }
   int controller_inputs() const override { return 0; }
   int units() const override { return 1; }
+  // mean x displacement (§7.1)
+  std::string fitness_unit() const override { return "cm"; }
   std::vector<ComponentName> component_names() const override { return {{"distance", "cm"}}; }
   std::unique_ptr<UnitScore> start_unit(int, const physics::Model&) const override {
     return std::make_unique<GaitScore>();

@@ -94,6 +94,8 @@ class RotateTask : public Task {
   TaskKind kind() const override { return TaskKind::rotate; }
   int controller_inputs() const override { return 0; }
   int units() const override { return 1; }
+  // |heading change| - travel penalty (§7.6)
+  std::string fitness_unit() const override { return "rad"; }
   std::vector<ComponentName> component_names() const override {
     return {{"heading_change", "rad"}, {"travel", "body lengths"}, {"travel_penalty", "rad"}};
   }

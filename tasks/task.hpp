@@ -65,6 +65,8 @@ class Task {
   // Work units per genome; each is simulated on its own (one MPI work unit each).
   virtual int units() const = 0;
   virtual std::vector<ComponentName> component_names() const = 0;
+  // Unit of the genome's fitness ("cm", "rad"), for progress lines and plot axes.
+  virtual std::string fitness_unit() const = 0;
   // A fresh score for work unit `unit` (0 .. units()-1) of the robot built as `model`.
   virtual std::unique_ptr<UnitScore> start_unit(int unit, const physics::Model& model) const = 0;
   // Default: the sum of the unit fitnesses in unit order (§7.4), 0 if any unit is not ok (a

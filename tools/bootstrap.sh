@@ -4,9 +4,11 @@
 #   tools/bootstrap.sh test         install dependencies, build, run the whole test suite
 #   tools/bootstrap.sh sanitize     the test suite built with -fsanitize=address,undefined
 #   tools/bootstrap.sh clang        the physics bit tests built with clang (same golden hashes)
-#   tools/bootstrap.sh minimal      the optional dependencies really are optional: softevo-mpi
-#                                   without GoogleTest, libpng and the system's Eigen, CLI11,
-#                                   nlohmann-json and toml++ (downloaded instead)
+#   tools/bootstrap.sh minimal      a cluster build without root (docs/cluster.md): softevo-mpi
+#                                   built by an unprivileged user, Eigen and CLI11 found through
+#                                   CMAKE_PREFIX_PATH (as cluster modules provide them),
+#                                   nlohmann-json and toml++ downloaded, GoogleTest, libpng and
+#                                   Python off
 #   tools/bootstrap.sh aarch64      the same bits on AArch64: the core cross-compiled with Debian's
 #                                   g++-aarch64-linux-gnu, its bit tests run under qemu-user
 #   tools/bootstrap.sh fuzz [SECONDS]  the libFuzzer targets (robot file, config, archive reader)
@@ -25,6 +27,7 @@ PACKAGES=(
   libgtest-dev                       # tests
   libcli11-dev libtomlplusplus-dev nlohmann-json3-dev  # command lines, config, JSON
   libpng-dev                         # headless rendering to PNG
+  libstb-dev fonts-dejavu-core       # render labels: stb_truetype and the DejaVu Sans font
   python3 python3-numpy python3-scipy python3-matplotlib  # analysis/ figures
   python3-h5py                       # the analysis test writes synthetic archives with it
   python3-dev pybind11-dev python3-pybind11  # the softevo Python package (python/, pybind11)
@@ -181,15 +184,54 @@ case "${1:-}" in
     ;;
   minimal)
     install_dependencies
-    # A cluster with a compiler, CMake, MPI and HDF5 (C): the header-only libraries come from
-    # their pinned, hash-checked downloads (SOFTEVO_FETCH_MISSING).
-    configure_timed "$ROOT/build-minimal-mpi" -DCMAKE_DISABLE_FIND_PACKAGE_GTest=ON \
-      -DCMAKE_DISABLE_FIND_PACKAGE_PNG=ON -DCMAKE_DISABLE_FIND_PACKAGE_Eigen3=ON \
-      -DCMAKE_DISABLE_FIND_PACKAGE_CLI11=ON -DCMAKE_DISABLE_FIND_PACKAGE_nlohmann_json=ON \
-      -DCMAKE_DISABLE_FIND_PACKAGE_tomlplusplus=ON \
-      -DSOFTEVO_REQUIRE_MPI=ON -DSOFTEVO_REQUIRE_HDF5=ON
-    build_timed "$ROOT/build-minimal-mpi" softevo-mpi
-    "$ROOT/build-minimal-mpi/bin/softevo-mpi" --help >/dev/null
+    # A cluster: a compiler, CMake, MPI and HDF5 (C) from the system, libraries from module
+    # prefixes on CMAKE_PREFIX_PATH, no root. The prefix is made here from Debian's Eigen and
+    # CLI11 (their CMake package files are relocatable); nlohmann-json and toml++ come from their
+    # pinned, hash-checked downloads (SOFTEVO_FETCH_MISSING); the optional parts are off.
+    modules=/tmp/softevo-minimal-modules
+    rm -rf "$modules"
+    mkdir -p "$modules/include" "$modules/share/cmake" "$modules/share/eigen3"
+    cp -r /usr/include/eigen3 /usr/include/CLI "$modules/include/"
+    cp -r /usr/share/eigen3/cmake "$modules/share/eigen3/"
+    cp -r /usr/share/cmake/CLI11 "$modules/share/cmake/"
+    src=$ROOT
+    builder=()
+    if [ "$(id -u)" -eq 0 ]; then
+      # As root, the build runs as an unprivileged user, on a copy of the tree if that user
+      # cannot read this one (a clone under /root).
+      id softevo-build >/dev/null 2>&1 || useradd --create-home softevo-build
+      builder=(runuser -u softevo-build --)
+      if ! "${builder[@]}" test -r "$ROOT/CMakeLists.txt"; then
+        src=/tmp/softevo-minimal-src
+        rm -rf "$src"
+        mkdir -p "$src"
+        tar -C "$ROOT" --exclude='./build*' --exclude=./.git -cf - . | tar -C "$src" -xf -
+        chown -R softevo-build "$src"
+      fi
+    fi
+    dir=/tmp/softevo-build-minimal-mpi
+    rm -rf "$dir"
+    mkdir -p "$dir"
+    [ ${#builder[@]} -eq 0 ] || chown softevo-build "$dir"
+    t0=$SECONDS
+    "${builder[@]}" cmake -S "$src" -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+      -DSOFTEVO_WERROR=ON -DCMAKE_PREFIX_PATH="$modules" \
+      -DCMAKE_DISABLE_FIND_PACKAGE_GTest=ON -DCMAKE_DISABLE_FIND_PACKAGE_PNG=ON \
+      -DCMAKE_DISABLE_FIND_PACKAGE_Python=ON \
+      -DCMAKE_DISABLE_FIND_PACKAGE_nlohmann_json=ON -DCMAKE_DISABLE_FIND_PACKAGE_tomlplusplus=ON \
+      -DSOFTEVO_REQUIRE_MPI=ON -DSOFTEVO_REQUIRE_HDF5=ON | sed -n '/softevo configuration:/,/builds /p'
+    echo "== configured the minimal build as $("${builder[@]}" id -un) in $((SECONDS - t0)) s"
+    for package in Eigen3 CLI11; do
+      found=$(sed -n "s/^${package}_DIR:PATH=//p" "$dir/CMakeCache.txt")
+      case "$found" in
+        "$modules"/*) echo "== $package from CMAKE_PREFIX_PATH: $found" ;;
+        *) echo "minimal: $package was not found through CMAKE_PREFIX_PATH ($found)" >&2; exit 1 ;;
+      esac
+    done
+    t0=$SECONDS
+    "${builder[@]}" cmake --build "$dir" -j"$JOBS" --target softevo-mpi
+    echo "== built softevo-mpi in $((SECONDS - t0)) s"
+    "${builder[@]}" "$dir/bin/softevo-mpi" --version
     # The core without MPI and HDF5 is built (and its bit tests run) by the aarch64 mode, whose
     # cross toolchain has neither.
     ;;

@@ -4,11 +4,13 @@
 //
 // Evaluates one robot file (docs/model.md §10) and prints fitness, the task's named components
 // per work unit, status, simulated time, steps, voxel and chamber counts and wall/CPU time.
-// Without --config the built-in thesis defaults of softevo::Config are used, with task.control
-// taken from the robot's controller. The task: --task, else the --config file's, else the one
-// the controller's inputs fit (tasks::default_task_for: directed for a directed controller,
-// else gait). Fitness is printed
-// with full double precision (%.17g). --direction D evaluates the target direction D alone
+// Without --config the robot file's evaluation block (the config of the run it was exported
+// from) is used, and the archived fitness is compared bit for bit; a file without one gets the
+// built-in thesis defaults of softevo::Config, with task.control taken from the robot's
+// controller. --set overrides apply to either; the output says which config was used. The task:
+// --task, else the --config file's, else the one the controller's inputs fit
+// (tasks::default_task_for: directed for a directed controller, else gait). Fitness is printed with
+// full double precision (%.17g). --direction D evaluates the target direction D alone
 // (task.directions = [D]).
 //
 // --seconds, --direction and --timeout set task.eval_seconds, task.directions and
@@ -68,14 +70,6 @@ nlohmann::ordered_json json_number(double v) {
   return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json();
 }
 
-// The value of component `name` of a unit, 0 when the task has no such component.
-double component(const std::vector<tasks::ComponentName>& names, const UnitFitness& unit,
-                 const char* name) {
-  for (std::size_t i = 0; i < names.size() && i < unit.values.size(); ++i)
-    if (names[i].name == name) return unit.values[i];
-  return 0.0;
-}
-
 int run_eval(const EvalArgs& a) {
   const RobotFile robot = read_robot_file(a.robot);
   // --seconds, --direction and --timeout go in as text, so that the config's range checks see
@@ -88,7 +82,8 @@ int run_eval(const EvalArgs& a) {
   if (!a.timeout.empty()) settings.overrides.push_back("run.eval_timeout_seconds=" + a.timeout);
   settings.task = a.task;
   settings.integrator = a.integrator;
-  const Config config = worker::robot_eval_config(robot.controller, settings);
+  const Config config = worker::robot_eval_config(robot, settings);
+  const std::string config_source = worker::describe_config_source(robot, settings);
   const Overwrite overwrite = a.force ? Overwrite::replace : Overwrite::refuse;
   if (!a.trace.empty()) {
     check_output_target(a.trace, overwrite);  // before minutes of simulation, not after
@@ -137,6 +132,14 @@ int run_eval(const EvalArgs& a) {
                                : opts.ablate_oscillator                      ? "oscillator"
                                : opts.ablate_sensors                         ? "sensors"
                                                                              : "none";
+  // The fitness the run archived, when the file carries its run's settings unchanged: a
+  // re-evaluation must give it bit for bit (anything else is a bug or another config).
+  std::optional<double> archived;
+  if (robot.evaluation && robot.evaluation->fitness &&
+      worker::robot_config_source(robot, settings) == worker::RobotConfigSource::robot_file &&
+      settings.overrides.empty() && a.task.empty() && a.integrator.empty() && a.ablate.empty() &&
+      a.trace.empty())
+    archived = robot.evaluation->fitness;
   if (a.json) {
     nlohmann::ordered_json j;
     j["robot"] = robot.name.empty() ? a.robot : robot.name;
@@ -146,24 +149,26 @@ int run_eval(const EvalArgs& a) {
     j["fitness"] = json_number(result.fitness);
     j["status"] = to_string(result.status);
     j["killed"] = is_killed(result.status);
+    j["config_source"] = worker::to_string(worker::robot_config_source(robot, settings));
+    j["config"] = config_source;
+    j["config_hash"] = hash_hex(config_hash(config));
+    if (archived) {
+      j["archived_fitness"] = json_number(*archived);
+      j["reproduces_archived_fitness"] = same_bits(*archived, result.fitness);
+    }
     nlohmann::ordered_json names_json = nlohmann::ordered_json::array();
     for (const tasks::ComponentName& n : names)
       names_json.push_back({{"name", n.name}, {"unit", n.unit}});
     j["component_names"] = names_json;
     nlohmann::ordered_json units = nlohmann::ordered_json::array();
     for (const UnitFitness& u : result.components) {
-      // The fields of the thesis' directed components first (0 where the task has none), then
-      // every named component of the task.
+      // The archive's component columns, by the same names (docs/archive.md): fitness, the
+      // task's named components, status.
       nlohmann::ordered_json c;
-      c["direction_deg"] = json_number(component(names, u, "direction_deg"));
       c["fitness"] = json_number(u.fitness);
-      c["D"] = json_number(component(names, u, "distance"));
-      c["L"] = json_number(component(names, u, "path_length"));
-      c["delta"] = json_number(component(names, u, "angle_error"));
-      c["P"] = json_number(component(names, u, "perpendicular_penalty"));
-      c["status"] = to_string(u.status);
       for (std::size_t i = 0; i < names.size() && i < u.values.size(); ++i)
         c[names[i].name] = json_number(u.values[i]);
+      c["status"] = to_string(u.status);
       units.push_back(c);
     }
     j["components"] = units;
@@ -183,7 +188,12 @@ int run_eval(const EvalArgs& a) {
                 to_string(config.task.kind), robot.controller.closed_loop ? "closed" : "open",
                 robot.controller.directed ? ", directed controller" : "",
                 config.physics.integrator.c_str(), ablation.c_str());
+    std::printf("config       %s\n", printable(config_source).c_str());
     std::printf("fitness      %.17g\n", result.fitness);
+    if (archived)
+      std::printf("archived     %.17g (%s)\n", *archived,
+                  same_bits(*archived, result.fitness) ? "reproduced bit for bit"
+                                                       : "DIFFERS from this evaluation");
     std::printf("status       %s%s%s\n", to_string(result.status),
                 result.message.empty() ? "" : ": ", result.message.c_str());
     for (std::size_t k = 0; k < result.components.size(); ++k) {
@@ -231,7 +241,9 @@ void register_eval(CLI::App& app, int& exit_code) {
   cmd->add_flag("--force", a->force, "replace an existing --trace file");
   cmd->add_flag("--json", a->json, "print one JSON object");
   cmd->add_option("--trace", a->trace, "record voxel poses, pressures and valves (HDF5)");
-  cmd->add_option("--config", a->config_file, "TOML config (default: built-in thesis values)");
+  cmd->add_option("--config", a->config_file,
+                  "TOML config (default: the robot file's run config, else the built-in thesis "
+                  "values)");
   cmd->add_option("--set", a->overrides, "override a config key: section.key=value");
   cmd->add_option("--simd", a->simd,
                   "SIMD width of the physics: best (default), sse2, avx2 or avx512 (the fitness "

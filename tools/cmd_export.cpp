@@ -1,12 +1,19 @@
-// `softevo export RUN.h5 --generation G --best -o robot.json` (or --id ID): one archived
-// individual as a `softevo.robot/1` file. The body is re-developed from the archived genome with
-// the archived config (record inputs, not outputs: ARCHITECTURE.md section 1). --best takes the
-// highest fitness of the generation, the lowest id winning ties (§8.1 step 5: first wins).
+// `softevo export RUN.h5 [--generation G] [--best | --id ID] -o robot.json [--json]`: one
+// archived individual as a `softevo.robot/1` file. The body is re-developed from the archived
+// genome with the archived config (record inputs, not outputs: ARCHITECTURE.md section 1). The
+// default (and --best) is the highest fitness of the generation, the lowest id winning ties
+// (§8.1 step 5: first wins), as for render and replay. The file's `evaluation` block carries the
+// run's config, its hashes and the archived fitness and status, so that `softevo eval` gives the
+// archived fitness back bit for bit (docs/model.md §10).
 #include <cstdio>
 #include <memory>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "common/config.hpp"
+#include "common/config_identity.hpp"
+#include "common/eval_types.hpp"
 #include "common/robot.hpp"
 #include "evo/genome.hpp"
 #include "io/archive.hpp"
@@ -24,22 +31,21 @@ void register_export(CLI::App& app, int& exit_code) {
     std::int64_t id = -1;
     std::string out;
     bool force = false;
+    bool json = false;
   };
   auto a = std::make_shared<Args>();
   cmd->add_option("RUN", a->path, "run archive (.h5)")->required();
   cmd->add_option("--generation,-g", a->generation,
                   "generation (default: the last archived generation)");
-  auto* best = cmd->add_flag("--best", a->best, "the best individual of the generation");
+  auto* best =
+      cmd->add_flag("--best", a->best, "the best individual of the generation (the default)");
   auto* id = cmd->add_option("--id", a->id, "the individual with this genome id");
   best->excludes(id);
-  cmd->add_option("-o,--out", a->out, "output robot file (.json)")->required();
+  cmd->add_option("-o,--output,--out", a->out, "output robot file (.json)")->required();
   cmd->add_flag("--force", a->force, "replace an existing output file");
+  cmd->add_flag("--json", a->json, "print one JSON object");
   cmd->callback([&exit_code, a] {
-    if (!a->best && a->id < 0) {
-      std::fprintf(stderr, "softevo export: give --best or --id ID\n");
-      exit_code = kExitUsage;
-      return;
-    }
+    a->best = a->id < 0;
     const io::Archive archive(a->path);
     const std::vector<std::int64_t> gens = archive.generations();
     if (gens.empty()) throw io::ArchiveError(a->path + ": no evaluated generation");
@@ -52,17 +58,37 @@ void register_export(CLI::App& app, int& exit_code) {
     }
     if (row == rec.size())
       throw io::ArchiveError(a->path + ": generation " + std::to_string(g) +
-                                 " has no individual with id " + std::to_string(a->id));
+                             " has no individual with id " + std::to_string(a->id));
     const Config config = parse_config(archive.config_text(), a->path + ":/config");
     const evo::Genome genome = evo::decode_genome(rec.genome[row]);
     const std::string name = archive.info().experiment + "_seed" +
                              std::to_string(archive.info().seed) + "_gen" + std::to_string(g) +
                              "_id" + std::to_string(rec.id[row]);
-    write_robot_file(worker::robot_file_of(config, genome, name), a->out,
-                     a->force ? Overwrite::replace : Overwrite::refuse);
-    std::printf("%s: generation %lld, id %lld, fitness %.17g -> %s\n", a->path.c_str(),
-                static_cast<long long>(g), static_cast<long long>(rec.id[row]), rec.fitness[row],
-                a->out.c_str());
+    RobotFile robot = worker::robot_file_of(config, genome, name);
+    RobotEvaluation& evaluation = robot.evaluation.emplace();
+    evaluation.config = archive.config_text();
+    evaluation.run = a->path;
+    evaluation.generation = g;
+    evaluation.id = rec.id[row];
+    evaluation.fitness = rec.fitness[row];
+    evaluation.status = to_string(static_cast<EvalStatus>(rec.status[row]));
+    write_robot_file(robot, a->out, a->force ? Overwrite::replace : Overwrite::refuse);
+    if (a->json) {
+      nlohmann::ordered_json j;
+      j["run"] = a->path;
+      j["generation"] = g;
+      j["id"] = rec.id[row];
+      j["fitness"] = rec.fitness[row];
+      j["status"] = evaluation.status;
+      j["config_hash"] = hash_hex(text_hash(evaluation.config));
+      j["experiment_hash"] = hash_hex(experiment_hash_of_text(evaluation.config));
+      j["output"] = a->out;
+      std::printf("%s\n", j.dump().c_str());
+    } else {
+      std::printf("%s: generation %lld, id %lld, fitness %.17g (%s) -> %s\n", a->path.c_str(),
+                  static_cast<long long>(g), static_cast<long long>(rec.id[row]), rec.fitness[row],
+                  evaluation.status.c_str(), a->out.c_str());
+    }
     exit_code = kExitOk;
   });
 }

@@ -2,14 +2,20 @@
 // per-generation best/mean, the resolved config, and two digests for one-line comparisons:
 // fitness_digest (every archived generation, id, status, fitness bits) and content_digest
 // (everything deterministic, see io/archive.hpp). It also runs the integrity checks --resume
-// requires (master/archive_check.hpp) and exits 1 when one fails.
+// requires (master/archive_check.hpp) and exits 1 when one fails. It counts the robots of each
+// status (all generations, and the last) and names the champion (best of the last generation)
+// with its status: a killed champion is flagged, not passed off as a result.
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "common/config.hpp"
+#include "common/eval_types.hpp"
 #include "common/printable.hpp"
 #include "io/archive.hpp"
 #include "io/run_lock.hpp"
@@ -18,14 +24,53 @@
 #include "tools/commands.hpp"
 
 namespace softevo::cli {
+namespace {
+
+struct Champion {
+  std::int64_t generation = 0;
+  std::int64_t id = 0;
+  double fitness = 0.0;
+  std::string status;
+};
+
+// Every status in EvalStatus order, with its count (0 included: "no killed robot" is news too).
+std::vector<std::pair<std::string, std::int64_t>> status_rows(
+    const std::map<std::string, std::int64_t>& counts) {
+  std::vector<std::pair<std::string, std::int64_t>> rows;
+  for (int code = 0; code <= static_cast<int>(EvalStatus::invalid_body); ++code) {
+    const std::string name = to_string(static_cast<EvalStatus>(code));
+    const auto it = counts.find(name);
+    rows.emplace_back(name, it == counts.end() ? 0 : it->second);
+  }
+  for (const auto& [name, n] : counts)  // a status code this build does not know
+    if (name == "unknown") rows.emplace_back(name, n);
+  return rows;
+}
+
+nlohmann::ordered_json status_json(const std::map<std::string, std::int64_t>& counts) {
+  nlohmann::ordered_json j = nlohmann::ordered_json::object();
+  for (const auto& [name, n] : status_rows(counts)) j[name] = n;
+  return j;
+}
+
+std::string status_text(const std::map<std::string, std::int64_t>& counts) {
+  std::string text;
+  for (const auto& [name, n] : status_rows(counts))
+    text += (text.empty() ? "" : ", ") + name + " " + std::to_string(n);
+  return text;
+}
+
+}  // namespace
 
 void register_info(CLI::App& app, int& exit_code) {
   auto* cmd = app.add_subcommand("info", "summarise a run archive (softevo.run/1)");
   auto path = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
+  auto verbose = std::make_shared<bool>(false);
   cmd->add_option("RUN", *path, "run archive (.h5)")->required();
   cmd->add_flag("--json", *json, "machine-readable output");
-  cmd->callback([&exit_code, path, json] {
+  cmd->add_flag("-v,--verbose", *verbose, "print the resolved config too");
+  cmd->callback([&exit_code, path, json, verbose] {
     const io::Archive archive(*path);
     const io::RunInfo info = archive.info();
     const master::ArchiveCheck check = master::check_archive(archive);
@@ -61,6 +106,28 @@ void register_info(CLI::App& app, int& exit_code) {
     } catch (const io::ArchiveError&) {
     }
     const std::string config_text = or_unreadable([&] { return archive.config_text(); });
+    // Robots per status, over every generation and in the last; the last generation's best.
+    std::map<std::string, std::int64_t> all_statuses, last_statuses;
+    std::optional<Champion> champion;
+    try {
+      const std::vector<std::int64_t> gens = archive.generations();
+      for (const std::int64_t g : gens) {
+        const io::GenerationRecord r = archive.generation(g);
+        for (const std::uint8_t code : r.status) {
+          const std::string name = to_string(static_cast<EvalStatus>(code));
+          ++all_statuses[name];
+          if (g == gens.back()) ++last_statuses[name];
+        }
+        if (g == gens.back() && r.size() > 0) {
+          std::size_t best = 0;
+          for (std::size_t i = 1; i < r.size(); ++i)
+            if (r.fitness[i] > r.fitness[best]) best = i;
+          champion = Champion{g, r.id[best], r.fitness[best],
+                              to_string(static_cast<EvalStatus>(r.status[best]))};
+        }
+      }
+    } catch (const io::ArchiveError&) {
+    }
     if (*json) {
       nlohmann::ordered_json j;
       j["path"] = *path;
@@ -81,8 +148,16 @@ void register_info(CLI::App& app, int& exit_code) {
       j["generations_done"] = info.generations_done;
       j["checkpoint_generation"] =
           checkpoint ? nlohmann::ordered_json(checkpoint->generation) : nlohmann::ordered_json();
+      j["experiment_hash"] = info.experiment_hash;
       j["fitness_digest"] = fitness;
       j["content_digest"] = content;
+      j["status_counts"] = status_json(all_statuses);
+      j["last_generation_status_counts"] = status_json(last_statuses);
+      j["champion"] = champion ? nlohmann::ordered_json{{"generation", champion->generation},
+                                                        {"id", champion->id},
+                                                        {"fitness", champion->fitness},
+                                                        {"status", champion->status}}
+                               : nlohmann::ordered_json();
       auto& gens = j["generations"] = nlohmann::ordered_json::array();
       for (const auto& s : stats)
         gens.push_back({{"generation", static_cast<std::int64_t>(s.generation)},
@@ -106,9 +181,9 @@ void register_info(CLI::App& app, int& exit_code) {
       // Archive strings are shown escaped: a file may carry terminal control sequences.
       const auto shown = [](const std::string& text) { return printable(text); };
       std::printf("archive          %s (%s)\n", shown(*path).c_str(), shown(info.format).c_str());
-      std::printf("experiment       %s, seed %lld, config hash %s\n",
-                  shown(info.experiment).c_str(), static_cast<long long>(info.seed),
-                  shown(info.config_hash).c_str());
+      std::printf("experiment       %s (hash %s), seed %lld, config hash %s\n",
+                  shown(info.experiment).c_str(), shown(info.experiment_hash).c_str(),
+                  static_cast<long long>(info.seed), shown(info.config_hash).c_str());
       std::printf("state            %s, %lld generations done%s\n", shown(info.state).c_str(),
                   static_cast<long long>(info.generations_done),
                   holder ? (" (written now by " + shown(*holder) + ")").c_str() : "");
@@ -119,6 +194,14 @@ void register_info(CLI::App& app, int& exit_code) {
       std::printf("physics revision %d\n", info.physics_revision);
       std::printf("time             %s .. %s\n", shown(info.start_time).c_str(),
                   info.end_time.empty() ? "(running)" : shown(info.end_time).c_str());
+      std::printf("robots           %s (all generations)\n", status_text(all_statuses).c_str());
+      std::printf("                 %s (last generation)\n", status_text(last_statuses).c_str());
+      if (champion)
+        std::printf("champion         generation %lld id %lld, fitness %.6g, status %s%s\n",
+                    static_cast<long long>(champion->generation),
+                    static_cast<long long>(champion->id), champion->fitness,
+                    champion->status.c_str(),
+                    champion->status == "ok" ? "" : "  <- NOT ok: its fitness is 0 by rule");
       std::printf("fitness_digest   %s\n", fitness.c_str());
       std::printf("content_digest   %s\n", content.c_str());
       if (check.ok())
@@ -138,7 +221,10 @@ void register_info(CLI::App& app, int& exit_code) {
         std::printf("%10lld %12.6g %12.6g %12.6g %8lld %10.3g\n",
                     static_cast<long long>(s.generation), s.best, s.mean, s.sd,
                     static_cast<long long>(s.species_count), s.evaluations_per_second);
-      std::printf("\n# resolved config\n%s", printable(config_text, Newlines::keep).c_str());
+      if (*verbose)
+        std::printf("\n# resolved config\n%s", printable(config_text, Newlines::keep).c_str());
+      else
+        std::printf("\n(-v prints the resolved config, --json everything)\n");
     }
     exit_code = check.ok() ? kExitOk : kExitMismatch;
   });

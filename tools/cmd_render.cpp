@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "common/config.hpp"
 #include "common/robot.hpp"
 #include "common/safe_write.hpp"
@@ -33,9 +35,6 @@ namespace {
 namespace fs = std::filesystem;
 using render::Image;
 using render::View;
-
-// Exit code when video output is asked for but ffmpeg is not installed.
-constexpr int kExitNoEncoder = 3;
 
 struct RenderArgs {
   std::string input;
@@ -60,11 +59,61 @@ struct RenderArgs {
   std::string robot_file;    // traces: body for the chamber cells
   bool static_pose = false;  // robot/archive: draw the rest pose, never simulate
   bool force = false;        // replace an existing output file
+  bool json = false;         // one JSON object instead of the line
 };
 
 std::string lower(std::string s) {
   for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return s;
+}
+
+void print_written_json(const RenderArgs& args, const char* kind, int width, int height, int frames,
+                        const std::string& summary) {
+  nlohmann::ordered_json j;
+  j["input"] = args.input;
+  j["output"] = args.output;
+  j["kind"] = kind;
+  j["width"] = width;
+  j["height"] = height;
+  j["frames"] = frames;
+  j["summary"] = summary;
+  std::printf("%s\n", j.dump().c_str());
+}
+
+// Without ffmpeg a video is written as its frames: OUT-frames/frame-000000.png, ... (what
+// ffmpeg would have encoded), with the command that makes the video of them.
+int write_frame_sequence(const RenderArgs& args, const render::Clip& clip, View view,
+                         const render::SceneOptions& scene, Overwrite overwrite) {
+  render::require_png_support(args.output);
+  const fs::path out(args.output);
+  const fs::path dir = out.parent_path() / (out.stem().string() + "-frames");
+  std::error_code ec;
+  if (fs::exists(dir, ec) && overwrite == Overwrite::refuse)
+    throw std::runtime_error("render: " + dir.string() +
+                             " exists (the frames of a video without ffmpeg); --force replaces "
+                             "its frames");
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error("render: cannot create " + dir.string() + ": " + ec.message());
+  int width = 0, height = 0, index = 0;
+  const int frames = render::render_frames(
+      clip, view, {args.fps, args.width, args.height}, scene, [&](const Image& image) {
+        char name[32];
+        std::snprintf(name, sizeof name, "frame-%06d.png", index++);
+        render::write_png(image, (dir / name).string(), Overwrite::replace);
+        width = image.width;
+        height = image.height;
+        return true;
+      });
+  const std::string pattern = (dir / "frame-%06d.png").string();
+  if (args.json) {
+    print_written_json(args, "frames", width, height, frames, pattern);
+  } else {
+    std::printf("wrote %d frames to %s (%dx%d): ffmpeg is not on PATH, so no %s\n", frames,
+                dir.string().c_str(), width, height, args.output.c_str());
+    std::printf("make the video with: ffmpeg -framerate %g -i %s -pix_fmt yuv420p %s\n", args.fps,
+                pattern.c_str(), args.output.c_str());
+  }
+  return kExitOk;
 }
 
 int run_render(const RenderArgs& args) {
@@ -78,9 +127,6 @@ int run_render(const RenderArgs& args) {
   if (!video) render::require_png_support(args.output);
   const Overwrite overwrite = args.force ? Overwrite::replace : Overwrite::refuse;
   check_output_target(args.output, overwrite);  // before the simulation, not after
-  if (args.timelapse < 0 || args.timelapse > 64) {
-    throw std::invalid_argument("render: --timelapse must be between 0 and 64");
-  }
   if (video && args.timelapse > 0) {
     throw std::invalid_argument("render: --timelapse makes a PNG; video output shows every frame");
   }
@@ -124,9 +170,28 @@ int run_render(const RenderArgs& args) {
   if (request.needs_motion && motion.poses.size() < 2 && !args.static_pose) {
     throw std::runtime_error("render " + args.input + ": no motion to show (single pose)");
   }
+  // Checks that need the motion: times within it, a direction only for a directed robot.
+  const double end_time = motion.poses.back().time;
+  const auto within = [&](const char* option, std::optional<double> t) {
+    if (t && *t > end_time + 1e-9) {
+      char text[200];
+      std::snprintf(text, sizeof text, "render: %s %g is beyond the end of the motion (%.3f s%s)",
+                    option, *t, end_time,
+                    request.needs_motion ? "; --seconds simulates longer" : "");
+      throw std::invalid_argument(text);
+    }
+  };
+  within("--at", args.at > 0.0 ? std::optional<double>(args.at) : std::nullopt);
+  within("--start", args.start);
+  if (args.direction && !motion.direction_deg)
+    throw std::invalid_argument("render: --direction " + toml_number(*args.direction) + ": " +
+                                args.input +
+                                " is not a directed robot (its controller has no direction "
+                                "input), so it has no target direction");
 
   render::SceneOptions scene;
   scene.supersample = args.supersample;
+  scene.legend = true;
   scene.floor_z = -0.5 * motion.body.voxel_size;
   if (motion.terrain.kind != physics::TerrainKind::flat) {
     // The surface half a voxel below the height a voxel centre rests at (docs/model.md §2.8a),
@@ -155,19 +220,20 @@ int run_render(const RenderArgs& args) {
     scene.target_direction_deg = direction;
     scene.target_origin = render::centroid(motion.poses.front());
   }
-  const render::Clip clip{motion.body, motion.poses, motion.name};
+  // The title names the status: a killed robot is not to pass for a result.
+  const render::Clip clip{
+      motion.body, motion.poses,
+      motion.status.empty() ? motion.name : motion.name + " (" + motion.status + ")"};
   if (video) {
     const auto ffmpeg = render::find_on_path("ffmpeg");
-    if (!ffmpeg) {
-      std::fprintf(stderr,
-                   "softevo render: video output needs ffmpeg, which is not on PATH (install "
-                   "it, e.g. apt-get install ffmpeg), or render a PNG instead\n");
-      return kExitNoEncoder;
-    }
+    if (!ffmpeg) return write_frame_sequence(args, clip, view, scene, overwrite);
     const render::VideoWritten v = render::write_video(
         clip, view, {args.fps, args.width, args.height}, scene, *ffmpeg, args.output, overwrite);
-    std::printf("wrote %s (%d frames at %.0f fps, %dx%d)\n", args.output.c_str(), v.frames,
-                args.fps, v.width, v.height);
+    if (args.json)
+      print_written_json(args, "video", v.width, v.height, v.frames, motion.summary);
+    else
+      std::printf("wrote %s (%d frames at %.0f fps, %dx%d)\n", args.output.c_str(), v.frames,
+                  args.fps, v.width, v.height);
     return kExitOk;
   }
   const Image image =
@@ -175,8 +241,11 @@ int run_render(const RenderArgs& args) {
           ? render::render_still(clip, view, args.at, args.width, args.height, scene)
           : render::render_timelapse(clip, view, timelapse, args.width, args.height, scene);
   render::write_png(image, args.output, overwrite);
-  std::printf("wrote %s (%dx%d)%s\n", args.output.c_str(), image.width, image.height,
-              motion.summary.empty() ? "" : ("; " + motion.summary).c_str());
+  if (args.json)
+    print_written_json(args, "image", image.width, image.height, 1, motion.summary);
+  else
+    std::printf("wrote %s (%dx%d)%s\n", args.output.c_str(), image.width, image.height,
+                motion.summary.empty() ? "" : ("; " + motion.summary).c_str());
   return kExitOk;
 }
 
@@ -190,9 +259,12 @@ void register_render(CLI::App& app, int& exit_code) {
   auto args = std::make_shared<RenderArgs>();
   cmd->add_option("INPUT", args->input, "ROBOT.json, TRACE.h5 or RUN.h5")->required();
   cmd->add_option("-o,--output", args->output, "OUT.png or OUT.mp4")->required();
-  cmd->add_option("--view", args->view, "side | top | iso (default side)");
+  cmd->add_option("--view", args->view, "side | top | iso (default side)")
+      ->check(CLI::IsMember({"side", "top", "iso"}));
   cmd->add_option("--timelapse", args->timelapse,
-                  "N snapshots over --span seconds from --start (thesis figures 4.3 and 4.4)");
+                  "N snapshots (1-64) over --span seconds from --start (thesis figures 4.3 and "
+                  "4.4); without it a single image or a video")
+      ->check(CLI::Range(1, 64));
   cmd->add_option("--span", args->span,
                   "seconds covered by the time-lapse (default 0.5 s side/iso, whole run top)")
       ->check(finite_in(0.0, 3600.0));
@@ -201,7 +273,8 @@ void register_render(CLI::App& app, int& exit_code) {
       ->check(finite_in(0.0, 3600.0));
   cmd->add_option("--layout", args->layout,
                   "strip (panels side by side) | overlay (one scene, earlier poses fainter); "
-                  "default strip for side/iso, overlay for top");
+                  "default strip for side/iso, overlay for top")
+      ->check(CLI::IsMember({"strip", "overlay"}));
   cmd->add_option("--at", args->at, "time of a single image [s] (default 0 = start pose)")
       ->check(finite_in(0.0, 3600.0));
   cmd->add_option("--direction", args->direction,
@@ -209,9 +282,11 @@ void register_render(CLI::App& app, int& exit_code) {
                   "it, red target line in top/iso views")
       ->check(finite_in(-180.0, 180.0));
   // Images are held in memory: 8192 x 8192 at supersample 4 is 2.4 GB of pixels.
-  cmd->add_option("--width", args->width, "image width [pixel] (strip: per panel)")
-      ->check(CLI::Range(0, 8192));
-  cmd->add_option("--height", args->height, "image height [pixel]")->check(CLI::Range(0, 8192));
+  // Below 32 pixels nothing is recognisable.
+  cmd->add_option("--width", args->width, "image width [pixel] (32-8192; strip: per panel)")
+      ->check(CLI::Range(32, 8192));
+  cmd->add_option("--height", args->height, "image height [pixel] (32-8192)")
+      ->check(CLI::Range(32, 8192));
   cmd->add_option("--supersample", args->supersample, "anti-aliasing samples per axis (1-4)")
       ->check(CLI::Range(1, 4));
   cmd->add_option("--fps", args->fps, "video frame rate (default 30)")
@@ -224,12 +299,14 @@ void register_render(CLI::App& app, int& exit_code) {
   cmd->add_flag("--best", args->best, "archive: the generation's best individual (default)")
       ->excludes(id_opt);
   cmd->add_option("--config", args->config_file,
-                  "robot file: config to simulate with (default: thesis defaults)");
+                  "robot file: config to simulate with (default: the robot file's run config, "
+                  "else the thesis defaults)");
   cmd->add_option("--set", args->overrides, "robot file: config override section.key=value");
   cmd->add_option("--robot", args->robot_file,
                   "trace: robot file giving the chamber cells when the trace has none");
   cmd->add_flag("--static", args->static_pose, "draw the start pose, never simulate");
   cmd->add_flag("--force", args->force, "replace an existing output file");
+  cmd->add_flag("--json", args->json, "print one JSON object describing what was written");
   cmd->callback([&exit_code, args] { exit_code = run_render(*args); });
 }
 

@@ -96,7 +96,7 @@ void register_repair(CLI::App& app, int& exit_code) {
   auto path = std::make_shared<std::string>();
   auto out = std::make_shared<std::string>();
   cmd->add_option("RUN", *path, "damaged run archive (.h5); only read")->required();
-  cmd->add_option("-o,--out", *out, "new archive to write (must not exist)")->required();
+  cmd->add_option("-o,--output,--out", *out, "new archive to write (must not exist)")->required();
   cmd->callback([&exit_code, path, out] {
     const io::Archive archive(*path);
     const master::ArchiveCheck check = master::check_archive(archive);

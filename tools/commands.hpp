@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -39,6 +40,11 @@ inline CLI::Validator finite_in(double lo, double hi) {
       },
       "FINITE in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
 }
+
+// The subcommand `word` is closest to (common/closest_word.hpp), "" when none is: what
+// "unknown command 'infoo', did you mean info?" suggests.
+std::string closest_subcommand(const CLI::App& app, const std::string& word);
+bool is_subcommand(const CLI::App& app, const std::string& word);
 
 void register_version(CLI::App& app, int& exit_code);
 void register_config(CLI::App& app, int& exit_code);

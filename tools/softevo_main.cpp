@@ -1,8 +1,30 @@
 // `softevo`: single-process command line for everything that is not the distributed run.
+// Every error is printed as "softevo: error: <what>" (exit 2); --version and `softevo version`
+// print the version.
 #include <cstdio>
 #include <exception>
+#include <string>
+#include <vector>
 
+#include "common/closest_word.hpp"
 #include "tools/commands.hpp"
+
+namespace softevo::cli {
+
+bool is_subcommand(const CLI::App& app, const std::string& word) {
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
+    if (sub->check_name(word)) return true;
+  return false;
+}
+
+std::string closest_subcommand(const CLI::App& app, const std::string& word) {
+  std::vector<std::string> names;
+  for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
+    names.push_back(sub->get_name());
+  return closest_word(word, names);
+}
+
+}  // namespace softevo::cli
 
 int main(int argc, char** argv) {
   CLI::App app{"softevo: co-evolution of pneumatic soft robot bodies and brains (single process)"};
@@ -24,10 +46,31 @@ int main(int argc, char** argv) {
 #ifdef SOFTEVO_HAVE_VIEW
   softevo::cli::register_view(app, exit_code);
 #endif
+  // A first word that is no option and no command is a mistyped command: CLI11 would only say
+  // that a subcommand is required.
+  if (argc > 1 && argv[1][0] != '-' && !softevo::cli::is_subcommand(app, argv[1])) {
+    const std::string guess = softevo::cli::closest_subcommand(app, argv[1]);
+    std::fprintf(stderr, "softevo: error: unknown command '%s'%s (softevo --help lists them)\n",
+                 argv[1], guess.empty() ? "" : (", did you mean " + guess + "?").c_str());
+    return softevo::cli::kExitUsage;
+  }
   try {
     app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : softevo::cli::kExitUsage;
+    // One prefix for every error: CLI11's own messages get it too.
+    std::fprintf(stderr, "softevo: error: %s\n", e.what());
+    const CLI::App* failing = &app;
+    for (const CLI::App* sub : app.get_subcommands())
+      if (sub->parsed()) failing = sub;
+    std::fprintf(stderr, "run with --help for more information (softevo %s--help)\n",
+                 failing == &app ? "" : (failing->get_name() + " ").c_str());
+    return softevo::cli::kExitUsage;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "softevo: error: %s\n", e.what());
     return softevo::cli::kExitUsage;

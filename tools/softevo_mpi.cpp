@@ -12,6 +12,7 @@
 
 #include "common/config.hpp"
 #include "common/launcher_watch.hpp"
+#include "common/version.hpp"
 #include "master/mpi_driver.hpp"
 #include "master/run.hpp"
 #include "master/signals.hpp"
@@ -37,10 +38,13 @@ struct Options {
   std::string out_path;
   bool resume = false;
   bool overwrite = false;
+  std::string progress = "auto";
+  bool quiet = false;
+  bool verbose = false;
 };
 
 [[noreturn]] void abort_run(const mpi::Communicator& comm, const std::string& message) {
-  std::fprintf(stderr, "softevo-mpi: rank %d: error: %s\n", comm.rank(), message.c_str());
+  std::fprintf(stderr, "softevo-mpi: error: rank %d: %s\n", comm.rank(), message.c_str());
   std::fflush(stderr);
   comm.abort(1);
 }
@@ -51,8 +55,12 @@ std::string resolve_config_path(const std::string& path) {
   return fs::exists(baked) ? baked : path;
 }
 
+// The one archive naming scheme (configs' comments, slurm/grid.sbatch, the README):
+// runs/<config name>-<seed, at least 2 digits>.h5.
 std::string default_out_path(const std::string& config_path, std::int64_t seed) {
-  return "runs/" + fs::path(config_path).stem().string() + "-seed" + std::to_string(seed) + ".h5";
+  char seed_text[32];
+  std::snprintf(seed_text, sizeof seed_text, "%02lld", static_cast<long long>(seed));
+  return "runs/" + fs::path(config_path).stem().string() + "-" + seed_text + ".h5";
 }
 
 // Rank 0's start-up: the resolved config and the prepared run. Throws ConfigError, StartupError.
@@ -64,11 +72,13 @@ master::PreparedRun prepare(Options& o, int ranks) {
   if (o.population >= 0) overrides.push_back("neat.pop_size=" + std::to_string(o.population));
   const Config config = load_config(o.config_path, overrides);
   master::RunOptions ro;
-  ro.out_path = o.out_path;
-  if (ro.out_path.empty()) {
-    ro.out_path = default_out_path(o.config_path, config.run.seed);
+  ro.out_path = o.out_path.empty() ? default_out_path(o.config_path, config.run.seed) : o.out_path;
+  // The archive's folder is created, whether the default runs/ or the one --out names (the
+  // output checks then say why, should that fail).
+  const fs::path parent = fs::path(ro.out_path).parent_path();
+  if (!parent.empty()) {
     std::error_code ec;
-    fs::create_directories("runs", ec);
+    fs::create_directories(parent, ec);
   }
   ro.resume = o.resume;
   ro.overwrite = o.overwrite;
@@ -103,19 +113,35 @@ int softevo_mpi_main(int argc, char** argv, MPI_Comm parent, const MpiMainHooks&
   CLI::App app{"softevo-mpi: distributed co-evolution of soft robot bodies and brains"};
   app.add_option("--config", o.config_path, "TOML config file")->capture_default_str();
   app.add_option("--seed", o.seed, "run seed (sets run.seed)");
-  app.add_option("--out", o.out_path, "run archive (default runs/<config>-seed<S>.h5)");
+  app.set_version_flag("--version",
+                       std::string("softevo-mpi ") + kVersion + " (commit " + kGitCommit + ")");
+  app.add_option("-o,--output,--out", o.out_path,
+                 "run archive (default runs/<config>-<seed, 2 digits>.h5; its folder is created)");
   app.add_option("--generations", o.generations, "generations to evaluate (run.generations)");
   app.add_option("--population", o.population, "population size (neat.pop_size)");
   app.add_option("--set", o.overrides, "override a key: section.key=value (repeatable)");
   app.add_flag("--resume", o.resume,
                "continue the archive from its newest checkpoint (a new run if it does not exist)");
   app.add_flag("--overwrite", o.overwrite, "replace an existing archive");
+  app.add_option("--progress", o.progress,
+                 "the live line within a generation: auto (a terminal, or an interactive "
+                 "mpirun/srun), always or never")
+      ->check(CLI::IsMember({"auto", "always", "never"}))
+      ->capture_default_str();
+  auto* quiet = app.add_flag("-q,--quiet", o.quiet, "warnings and errors only");
+  app.add_flag("-v,--verbose", o.verbose, "print the resolved config at the start too")
+      ->excludes(quiet);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     // Only rank 0 prints help or the usage error; every rank exits with the same code.
-    const int code = comm.rank() == 0 ? app.exit(e) : e.get_exit_code();
-    return code == 0 ? 0 : 2;
+    if (e.get_exit_code() == 0) return comm.rank() == 0 ? app.exit(e) : 0;
+    if (comm.rank() == 0)
+      std::fprintf(stderr,
+                   "softevo-mpi: error: %s\nrun with --help for more information (softevo-mpi "
+                   "--help)\n",
+                   e.what());
+    return 2;
   }
   master::install_stop_handlers();
   // A rank whose launcher died writes its output into a pipe nobody reads: that must fail with
@@ -132,7 +158,7 @@ int softevo_mpi_main(int argc, char** argv, MPI_Comm parent, const MpiMainHooks&
       text = run->config_text;
     } catch (const ConfigError& e) {
       status = 1;
-      text = std::string("config error: ") + e.what();
+      text = std::string("config: ") + e.what();
     } catch (const std::exception& e) {
       status = 1;
       text = e.what();
@@ -145,7 +171,7 @@ int softevo_mpi_main(int argc, char** argv, MPI_Comm parent, const MpiMainHooks&
     abort_run(comm, e.what());
   }
   if (status != 0) {
-    if (comm.rank() == 0) std::fprintf(stderr, "softevo-mpi: %s\n", text.c_str());
+    if (comm.rank() == 0) std::fprintf(stderr, "softevo-mpi: error: %s\n", text.c_str());
     return 2;
   }
 
@@ -163,6 +189,9 @@ int softevo_mpi_main(int argc, char** argv, MPI_Comm parent, const MpiMainHooks&
     master::MasterOptions mo;
     mo.config_path = o.config_path;
     mo.quiet = hooks.quiet;
+    mo.terse = o.quiet;
+    mo.verbose = o.verbose;
+    mo.progress = master::parse_progress_mode(o.progress).value();  // checked by IsMember
     for (const std::string& p : processes) mo.processes.push_back(master::parse_rank_process(p));
     const std::unique_ptr<tasks::Task> task = tasks::make_task(r.config);
     const worker::EvaluateOptions alone = abandoning_on_stop(hooks.unit_options);

@@ -7,7 +7,7 @@
 // Rank 0 parses options, resolves the config and prepares the run; the start-up status and the
 // config text are broadcast, so a start-up error ends every rank with exit 2 and one message
 // from rank 0, nothing touched. An unrecoverable error on any rank prints
-// "softevo-mpi: rank R: error: ..." and aborts the job: no rank hangs.
+// "softevo-mpi: error: rank R: ..." and aborts the job: no rank hangs.
 //
 // Exit codes (the same on every rank): 0 complete (or nothing to resume), 2 usage / config /
 // start-up error, 75 (kExitRequeue) stopped after a checkpoint by SIGTERM/SIGINT/SIGUSR1, a

@@ -130,7 +130,57 @@ EvalResult evaluate_all_units(const Config& config, const tasks::Task& task, con
   return tasks::combine_units(task, units);
 }
 
-Config robot_eval_config(const ControllerSpec& controller, const RobotEvalSettings& settings) {
+RobotConfigSource robot_config_source(const RobotFile& robot, const RobotEvalSettings& settings) {
+  if (!settings.config_path.empty()) return RobotConfigSource::config_file;
+  if (settings.config_text) return RobotConfigSource::config_text;
+  if (robot.evaluation) return RobotConfigSource::robot_file;
+  return RobotConfigSource::built_in;
+}
+
+const char* to_string(RobotConfigSource source) {
+  switch (source) {
+    case RobotConfigSource::config_file:
+      return "file";
+    case RobotConfigSource::config_text:
+      return "text";
+    case RobotConfigSource::robot_file:
+      return "robot";
+    case RobotConfigSource::built_in:
+      return "defaults";
+  }
+  return "defaults";
+}
+
+std::string describe_config_source(const RobotFile& robot, const RobotEvalSettings& settings) {
+  std::string text;
+  switch (robot_config_source(robot, settings)) {
+    case RobotConfigSource::config_file:
+      text = "--config " + settings.config_path;
+      break;
+    case RobotConfigSource::config_text:
+      text = "the given config " + settings.source_name;
+      break;
+    case RobotConfigSource::robot_file: {
+      const RobotEvaluation& e = *robot.evaluation;
+      text = "the robot file's run config (hash " + e.config_hash;
+      if (!e.run.empty()) text += ", from " + e.run;
+      if (e.generation) text += " generation " + std::to_string(*e.generation);
+      if (e.id) text += " id " + std::to_string(*e.id);
+      text += ")";
+      break;
+    }
+    case RobotConfigSource::built_in:
+      text = "the built-in thesis defaults (the robot file has no evaluation block)";
+      break;
+  }
+  if (!settings.overrides.empty())
+    text += " with " + std::to_string(settings.overrides.size()) + " --set override" +
+            (settings.overrides.size() == 1 ? "" : "s");
+  return text;
+}
+
+Config robot_eval_config(const RobotFile& robot, const RobotEvalSettings& settings) {
+  const ControllerSpec& controller = robot.controller;
   // Seconds and direction as overrides, so that they pass the config's range checks (a NaN or
   // 1e308 is refused, naming the key); %.17g gives the double back exactly.
   std::vector<std::string> overrides = settings.overrides;
@@ -143,14 +193,26 @@ Config robot_eval_config(const ControllerSpec& controller, const RobotEvalSettin
   if (settings.direction)
     overrides.push_back("task.directions=[" + exact(*settings.direction) + "]");
   if (!settings.task.empty()) overrides.push_back("task.kind=" + settings.task);
-  const bool built_in = settings.config_path.empty() && !settings.config_text;
+  const RobotConfigSource source = robot_config_source(robot, settings);
+  const bool built_in = source == RobotConfigSource::built_in;
   if (settings.task.empty() && built_in)
     overrides.push_back(std::string("task.kind=") +
                         to_string(tasks::default_task_for(controller.task_inputs())));
-  Config config = !settings.config_path.empty() ? load_config(settings.config_path, overrides)
-                  : settings.config_text
-                      ? parse_config(*settings.config_text, settings.source_name, overrides)
-                      : parse_config("", "<built-in defaults>", overrides);
+  Config config;
+  switch (source) {
+    case RobotConfigSource::config_file:
+      config = load_config(settings.config_path, overrides);
+      break;
+    case RobotConfigSource::config_text:
+      config = parse_config(*settings.config_text, settings.source_name, overrides);
+      break;
+    case RobotConfigSource::robot_file:
+      config = parse_config(robot.evaluation->config, "evaluation.config", overrides);
+      break;
+    case RobotConfigSource::built_in:
+      config = parse_config("", "<built-in defaults>", overrides);
+      break;
+  }
   if (built_in) config.task.control = controller.closed_loop ? "closed" : "open";
   if (!settings.integrator.empty()) config.physics.integrator = settings.integrator;
   return config;

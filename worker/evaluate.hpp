@@ -134,7 +134,9 @@ EvalResult evaluate(const Config& config, const tasks::Task& task, std::uint64_t
 // both give the same bits for the same inputs).
 struct RobotEvalSettings {
   // The config: a TOML file, else TOML text (named `source_name` in error messages), else the
-  // built-in thesis defaults with task.control taken from the robot's controller.
+  // robot file's evaluation block (the settings of the run it was exported from), else the
+  // built-in thesis defaults with task.control taken from the robot's controller. The overrides
+  // apply to whichever it is.
   std::string config_path;
   std::optional<std::string> config_text;
   std::string source_name = "<config>";
@@ -147,8 +149,16 @@ struct RobotEvalSettings {
   std::optional<double> seconds;    // replaces task.eval_seconds [s] (range-checked)
   std::optional<double> direction;  // replaces task.directions by [direction] [deg]
 };
+// Where the config of a robot evaluation comes from (the order of RobotEvalSettings).
+enum class RobotConfigSource : std::uint8_t { config_file, config_text, robot_file, built_in };
+RobotConfigSource robot_config_source(const RobotFile& robot, const RobotEvalSettings& settings);
+// "robot" (its evaluation block), "file", "text" or "defaults": the JSON spelling.
+const char* to_string(RobotConfigSource source);
+// One line for people: "the robot file's run config (hash ..., from RUN.h5 generation G id I)",
+// "--config FILE", ... with the --set overrides counted.
+std::string describe_config_source(const RobotFile& robot, const RobotEvalSettings& settings);
 // The resolved config; throws ConfigError.
-Config robot_eval_config(const ControllerSpec& controller, const RobotEvalSettings& settings);
+Config robot_eval_config(const RobotFile& robot, const RobotEvalSettings& settings);
 
 // The controller gets the inputs of config's task.
 BuiltRobot build_robot(const Config& config, const evo::Genome& genome);

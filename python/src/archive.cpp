@@ -33,6 +33,7 @@ py::dict info_dict(const io::RunInfo& i) {
   d["start_time"] = i.start_time;
   d["end_time"] = i.end_time;
   d["config_hash"] = i.config_hash;
+  d["experiment_hash"] = i.experiment_hash;
   d["experiment"] = i.experiment;
   d["state"] = i.state;
   d["generations_done"] = i.generations_done;

@@ -32,6 +32,7 @@ namespace {
 struct Result {
   EvalResult result;
   std::string task;
+  std::string config_source;  // worker::to_string(RobotConfigSource): robot, text or defaults
   std::vector<tasks::ComponentName> names;
 };
 
@@ -71,7 +72,8 @@ Ablation parse_ablation(const py::object& ablate) {
 }
 
 // How evaluate() and Simulation() resolve their config: as `softevo eval` does
-// (worker::robot_eval_config); `config` None = the built-in defaults.
+// (worker::robot_eval_config); `config` None = the robot file's evaluation block (its run's
+// config), else the built-in defaults.
 worker::RobotEvalSettings eval_settings(const std::optional<Config>& config,
                                         const std::optional<std::string>& task,
                                         const std::optional<double>& seconds,
@@ -101,8 +103,9 @@ Result evaluate_robot(const RobotFile& robot, const std::optional<Config>& confi
                       const std::optional<std::string>& task, const std::optional<double>& seconds,
                       const std::optional<std::string>& integrator, const py::object& ablate,
                       const std::optional<double>& direction) {
-  const Config resolved = worker::robot_eval_config(
-      robot.controller, eval_settings(config, task, seconds, integrator, direction));
+  const worker::RobotEvalSettings settings =
+      eval_settings(config, task, seconds, integrator, direction);
+  const Config resolved = worker::robot_eval_config(robot, settings);
   const std::unique_ptr<tasks::Task> t = tasks::make_task(resolved);
   worker::EvaluateOptions opts;  // as `softevo eval`: the config's deadline, the best SIMD width
   opts.deadline = worker::deadline_after(resolved.run.eval_timeout_seconds);
@@ -111,6 +114,7 @@ Result evaluate_robot(const RobotFile& robot, const std::optional<Config>& confi
   opts.ablate_sensors = a.sensors;
   Result r;
   r.task = to_string(resolved.task.kind);
+  r.config_source = worker::to_string(worker::robot_config_source(robot, settings));
   r.names = t->component_names();
   {
     const py::gil_scoped_release unlocked;
@@ -137,7 +141,7 @@ class PySimulation {
                const std::optional<std::string>& integrator, const std::optional<double>& direction,
                int unit, bool observe_voxels)
       : config_(worker::robot_eval_config(
-            robot.controller, eval_settings(config, task, seconds, integrator, direction))),
+            robot, eval_settings(config, task, seconds, integrator, direction))),
         task_(tasks::make_task(config_)),
         body_(robot.body),
         unit_(unit),
@@ -324,6 +328,10 @@ void bind_evaluation(py::module_& m) {
       .def_property_readonly(
           "task", [](const Result& r) { return r.task; }, "The task evaluated.")
       .def_property_readonly(
+          "config_source", [](const Result& r) { return r.config_source; },
+          "Which config was used: 'text' (the config argument), 'robot' (the robot file's "
+          "evaluation block: its run's config) or 'defaults' (the built-in thesis values).")
+      .def_property_readonly(
           "component_names",
           [](const Result& r) {
             py::list l;
@@ -363,8 +371,10 @@ void bind_evaluation(py::module_& m) {
         R"(Evaluate a robot and return an EvalResult (fitness, status, components, steps, ...).
 
 The same code path as `softevo eval --json`, so the fitness bits are equal for equal inputs:
-  config      a softevo.Config; None = the built-in thesis defaults with task.control from
-              the robot's controller and no wall-clock limit
+  config      a softevo.Config; None = the robot's evaluation block (the config of the run
+              it was exported from, robot.evaluation) if it has one, else the built-in thesis
+              defaults with task.control from the robot's controller; result.config_source
+              says which
   task        'gait', 'directed' or 'rotate'; None = the config's, or (no config) the task the
               controller's inputs fit
   seconds     simulated seconds (None = task.eval_seconds)

@@ -158,6 +158,25 @@ Load one with softevo.load_robot(path); run.genome(id) gives one from a run arch
       .def_property_readonly(
           "voxel_size", [](const RobotFile& r) { return r.body.voxel_size; }, "Voxel edge [m].")
       .def_property_readonly(
+          "evaluation",
+          [](const RobotFile& r) -> py::object {
+            if (!r.evaluation) return py::none();
+            const RobotEvaluation& e = *r.evaluation;
+            py::dict d;
+            d["config"] = e.config;
+            d["config_hash"] = e.config_hash;
+            d["experiment_hash"] = e.experiment_hash;
+            d["run"] = e.run;
+            d["generation"] = e.generation ? py::object(py::int_(*e.generation)) : py::none();
+            d["id"] = e.id ? py::object(py::int_(*e.id)) : py::none();
+            d["fitness"] = e.fitness ? py::object(py::float_(*e.fitness)) : py::none();
+            d["status"] = e.status;
+            return d;
+          },
+          "The run settings the robot was exported with (a dict: config text, config_hash, "
+          "experiment_hash, run, generation, id, archived fitness and status), or None. "
+          "evaluate() uses this config when given none.")
+      .def_property_readonly(
           "voxels", [](const RobotFile& r) { return voxel_count(r.body); },
           "Number of voxels (structural cells; chamber cells are air).")
       .def_property_readonly(

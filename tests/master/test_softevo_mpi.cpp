@@ -288,6 +288,44 @@ TEST(SoftevoMpi, IdenticalArchivesForAnyRankCount) {
   }
 }
 
+// Extending a finished run (--resume with a larger --generations) continues its experiment:
+// the archive equals that of one run started with the larger number, on every rank count. The
+// experiment hash is the same; the config hash follows the run length.
+TEST(SoftevoMpi, ExtendingAFinishedRunEqualsOneLongerRun) {
+  TempDir dir;
+  const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
+  const int np = world_size();
+  const std::string longer = dir.file("longer.h5");
+  const std::string extended = dir.file("extended.h5");
+  ASSERT_EQ(run_on(np, {"--config", cfg, "--out", longer, "--generations", "4"}), 0);
+  ASSERT_EQ(run_on(np, {"--config", cfg, "--out", extended, "--generations", "2"}), 0);
+  std::string short_hash;
+  if (world_rank() == 0) short_hash = Archive(extended).info().config_hash;
+  ASSERT_EQ(run_on(np, {"--config", cfg, "--out", extended, "--generations", "4", "--resume"}), 0);
+  const Digests a = digests(longer);
+  const Digests b = digests(extended);
+  EXPECT_EQ(b.generations_done, 4);
+  EXPECT_EQ(b.state, "complete");
+  EXPECT_EQ(b.fitness, a.fitness);
+  EXPECT_EQ(b.content, a.content);
+  if (world_rank() == 0) {
+    const RunInfo x = Archive(extended).info();
+    const RunInfo y = Archive(longer).info();
+    EXPECT_EQ(x.config_hash, y.config_hash);
+    EXPECT_NE(x.config_hash, short_hash);
+    EXPECT_EQ(x.experiment_hash, y.experiment_hash);
+    EXPECT_EQ(Archive(extended).config_text(), Archive(longer).config_text());
+  }
+  // Another seed or another experiment is no extension: refused, nothing touched.
+  EXPECT_EQ(run_on(np, {"--config", cfg, "--out", extended, "--generations", "6", "--resume",
+                        "--seed", "8"}),
+            2);
+  EXPECT_EQ(run_on(np, {"--config", cfg, "--out", extended, "--generations", "6", "--resume",
+                        "--set", "task.eval_seconds=0.2"}),
+            2);
+  EXPECT_EQ(digests(extended).content, a.content);
+}
+
 TEST(SoftevoMpi, ResumeAfterSigkillGivesTheSameArchive) {
   TempDir dir;
   const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
@@ -467,8 +505,11 @@ TEST(SoftevoMpi, StartupErrorsFailFastAndTouchNothing) {
       {{"--config", unknown_key, "--out", out}, "bogus_key"},
       {{"--config", broken, "--out", out}, "broken.toml"},
       {{"--config", cfg, "--out", out}, "exists"},
-      {{"--config", cfg, "--out", out, "--resume", "--seed", "8"}, "config hash"},
-      {{"--config", cfg, "--out", dir.file("no/such/dir/run.h5")}, "does not exist"},
+      {{"--config", cfg, "--out", out, "--resume", "--seed", "8"}, "--seed 8"},
+      {{"--config", cfg, "--out", out, "--resume", "--set", "task.eval_seconds=0.2"},
+       "experiment hash"},
+      // A missing folder of --out is created; one under a file cannot be.
+      {{"--config", cfg, "--out", out + "/no/dir/run.h5"}, "does not exist"},
       {{"--config", cfg, "--out", dir.path}, "directory"},
       // Issue 21 item 6: each of these used to start (a directory read as a config of all
       // defaults started a full-size run; a 1e-6 m voxel ran about a million steps per frame).

@@ -105,3 +105,19 @@ def test_bad_arguments_raise(kwargs, error, words):
 def test_docstring_says_how():
     assert "softevo eval" in softevo.evaluate.__doc__
     assert "GIL" in softevo.evaluate.__doc__
+
+
+def test_an_exported_robot_evaluates_with_its_runs_config_to_the_archived_bits(tiny_run, tmp_path):
+    """Issue 22: `softevo export` writes the run's settings into the robot file; evaluate() uses
+    them when given no config (config_source 'robot') and gives the archived fitness."""
+    out = tmp_path / "best.json"
+    subprocess.run([str(binary("softevo")), "export", str(tiny_run), "-o", str(out)],
+                   check=True, capture_output=True)
+    robot = softevo.load_robot(out)
+    assert robot.evaluation is not None
+    run = softevo.open_run(tiny_run)
+    assert robot.evaluation["config_hash"] == run.info["config_hash"]
+    result = softevo.evaluate(robot)
+    assert result.config_source == "robot"
+    assert bits(result.fitness) == bits(robot.evaluation["fitness"])
+    assert softevo.evaluate(robot, config=softevo.default_config("gait")).config_source == "text"

@@ -36,7 +36,8 @@ EXPERIMENT_CONFIG = {
 
 
 def write_synthetic_archive(path: pathlib.Path, experiment: str, seed: int, generations: int,
-                            pop: int, level: float, with_experiment_attr: bool = True) -> None:
+                            pop: int, level: float, with_experiment_attr: bool = True,
+                            task_keys: str = "") -> None:
     """A complete archive whose population fitness is `level` + noise, best = level + 10 + g.
     Each individual's parent1 is the individual of the previous generation one row below."""
     kind, control = EXPERIMENT_CONFIG[experiment]
@@ -56,7 +57,8 @@ def write_synthetic_archive(path: pathlib.Path, experiment: str, seed: int, gene
             f.attrs["experiment"] = experiment
         f.attrs["state"] = "complete"
         f.attrs["generations_done"] = np.int64(generations)
-        f["config"] = f'[run]\nseed = {seed}\n\n[task]\nkind = "{kind}"\ncontrol = "{control}"\n'
+        f["config"] = (f'[run]\nseed = {seed}\n\n[task]\nkind = "{kind}"\ncontrol = "{control}"\n'
+                       + task_keys)
         stats = []
         for g in range(generations):
             grp = f.create_group(f"generations/{g:06d}")
@@ -103,6 +105,47 @@ EXPECTED_FILES = [
 def run_figures(runs_dir: pathlib.Path, out: pathlib.Path) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, str(ANALYSIS / "figures.py"), str(runs_dir), "-o", str(out)],
                           capture_output=True, text=True, timeout=300)
+
+
+class MixedConfigs(unittest.TestCase):
+    """Two gait-open archives of different configs (3 s and 1.5 s robots) are two experiments:
+    figures.py says so and does not pool them."""
+
+    def test_one_name_over_two_configs_warns_and_keeps_them_apart(self):
+        tmp = pathlib.Path(tempfile.mkdtemp(prefix="softevo_test_mixed_"))
+        try:
+            runs = tmp / "runs"
+            runs.mkdir()
+            for seed, keys in ((1, "eval_seconds = 3.0\n"), (2, "eval_seconds = 3.0\n"),
+                               (3, "eval_seconds = 1.5\n")):
+                write_synthetic_archive(runs / f"gait-open-{seed:02d}.h5", "gait-open", seed,
+                                        generations=3, pop=4, level=10.0, task_keys=keys)
+            result = run_figures(runs, tmp / "figs")
+            self.assertEqual(result.returncode, 0, result.stderr)
+            self.assertIn("experiment gait-open covers 2 different configs", result.stderr)
+            self.assertIn("gait-open-03.h5", result.stderr)
+            runs_line = next(line for line in result.stdout.splitlines()
+                             if line.startswith("runs: "))
+            self.assertEqual(runs_line.count("gait-open ["), 2, runs_line)
+            self.assertIn("x2", runs_line)
+            self.assertIn("x1", runs_line)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+
+    def test_repetitions_of_one_config_are_pooled_without_warning(self):
+        tmp = pathlib.Path(tempfile.mkdtemp(prefix="softevo_test_pooled_"))
+        try:
+            runs = tmp / "runs"
+            runs.mkdir()
+            for seed in (1, 2):
+                write_synthetic_archive(runs / f"gait-open-{seed:02d}.h5", "gait-open", seed,
+                                        generations=3, pop=4, level=10.0)
+            result = run_figures(runs, tmp / "figs")
+            self.assertEqual(result.returncode, 0, result.stderr)
+            self.assertNotIn("different configs", result.stderr)
+            self.assertIn("runs: gait-open x2", result.stdout)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
 
 
 class SyntheticGrid(unittest.TestCase):

@@ -67,7 +67,11 @@ TEST_F(CmdEval, GaitJsonHasTheNamedFields) {
   EXPECT_EQ(j["status"], "ok");
   EXPECT_EQ(j["task"], "gait");
   ASSERT_EQ(j["components"].size(), 1u);
-  EXPECT_TRUE(j["components"][0].contains("D"));
+  // The archive's column names (docs/archive.md), nothing else.
+  std::vector<std::string> keys;
+  const auto ordered = nlohmann::ordered_json::parse(r.output);
+  for (const auto& item : ordered["components"][0].items()) keys.push_back(item.key());
+  EXPECT_EQ(keys, (std::vector<std::string>{"fitness", "distance", "status"}));
   EXPECT_NEAR(j["sim_seconds"].get<double>(), 0.5, 1.0 / 60.0);
   EXPECT_GT(j["steps"].get<long long>(), 0);
   EXPECT_EQ(j["voxels"], 6 * 3 * 3 - 2);
@@ -83,7 +87,8 @@ TEST_F(CmdEval, DirectedJsonReportsFiveDirections) {
   const nlohmann::json j = nlohmann::json::parse(r.output);
   ASSERT_EQ(j["components"].size(), 5u);
   for (const auto& c : j["components"])
-    for (const char* key : {"direction_deg", "fitness", "D", "L", "delta", "P", "status"})
+    for (const char* key : {"fitness", "direction_deg", "distance", "path_length", "angle_error",
+                            "perpendicular_penalty", "status"})
       EXPECT_TRUE(c.contains(key)) << key;
 }
 
@@ -226,6 +231,28 @@ TEST_F(CmdEval, ExistingTraceIsReplacedOnlyWithForce) {
   const auto forced = run_command(eval + " --force");
   EXPECT_EQ(forced.code, 0) << forced.output;
   EXPECT_GT(fs::file_size(trace), 8u);
+}
+
+// Issue 22: one CLI convention: --version, a suggestion for a mistyped command, one error
+// prefix for CLI11's errors and softevo's own.
+TEST(SoftevoCli, VersionTyposAndErrorsFollowOneConvention) {
+  const auto version = run_command(binary("softevo") + " --version");
+  EXPECT_EQ(version.code, 0) << version.output;
+  EXPECT_EQ(version.output.rfind("softevo ", 0), 0u) << version.output;
+  const auto typo = run_command(binary("softevo") + " infoo x.h5");
+  EXPECT_EQ(typo.code, 2) << typo.output;
+  EXPECT_NE(typo.output.find("softevo: error: unknown command 'infoo', did you mean info?"),
+            std::string::npos)
+      << typo.output;
+  const auto far_off = run_command(binary("softevo") + " frobnicate");
+  EXPECT_EQ(far_off.code, 2) << far_off.output;
+  EXPECT_EQ(far_off.output.find("did you mean"), std::string::npos) << far_off.output;
+  const auto missing = run_command(binary("softevo") + " eval");
+  EXPECT_EQ(missing.code, 2) << missing.output;
+  EXPECT_EQ(missing.output.rfind("softevo: error: ", 0), 0u) << missing.output;
+  const auto bad_file = run_command(binary("softevo") + " eval /nonexistent/robot.json");
+  EXPECT_EQ(bad_file.code, 2) << bad_file.output;
+  EXPECT_EQ(bad_file.output.rfind("softevo: error: ", 0), 0u) << bad_file.output;
 }
 
 }  // namespace

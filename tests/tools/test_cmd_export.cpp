@@ -1,14 +1,23 @@
 // `softevo export` end to end on a tiny real run: the robot file is written atomically, an
 // existing output is replaced only with --force, and symlinks or special files are refused with
-// the target left as it was (docs/output-files.md).
+// the target left as it was (docs/output-files.md). Every exported individual re-evaluates with
+// `softevo eval` to its archived fitness, bit for bit (the file carries its run's config).
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
+#include "common/eval_types.hpp"
+#include "io/archive.hpp"
 #include "tests/build_tree.hpp"
 
 namespace softevo {
@@ -16,6 +25,10 @@ namespace {
 
 namespace fs = std::filesystem;
 using test::binary;
+
+std::uint64_t bits_of(double v) {
+  return std::bit_cast<std::uint64_t>(v);
+}
 
 std::string read(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -34,7 +47,7 @@ class CmdExport : public ::testing::Test {
     archive_ = (dir_ / "run.h5").string();
     run_ = test::run_command(binary("softevo-mpi") +
                              " --config configs/quickstart.toml --seed 2 --generations 1 "
-                             "--population 4 --set body.lattice=[4,4,4] "
+                             "--population 5 --set body.lattice=[4,4,4] "
                              "--set task.eval_seconds=0.5 --out " +
                              archive_);
   }
@@ -96,6 +109,107 @@ TEST_F(CmdExport, SymlinkAndSpecialTargetsAreRefused) {
   EXPECT_EQ(to_device.code, 2) << to_device.output;
   EXPECT_NE(to_device.output.find("character device"), std::string::npos) << to_device.output;
   EXPECT_TRUE(fs::is_character_file("/dev/full"));
+}
+
+TEST_F(CmdExport, EveryExportedIndividualReEvaluatesToItsArchivedFitnessBitForBit) {
+  const io::Archive archive(archive_);
+  const io::GenerationRecord generation = archive.generation(archive.generations().back());
+  ASSERT_GE(generation.size(), 4u);
+  for (std::size_t row = 0; row < generation.size(); ++row) {
+    const fs::path out = dir_ / ("id" + std::to_string(generation.id[row]) + ".json");
+    const auto exported = test::run_command(binary("softevo") + " export " + archive_ + " --id " +
+                                            std::to_string(generation.id[row]) + " -o " +
+                                            out.string() + " --force --json");
+    ASSERT_EQ(exported.code, 0) << exported.output;
+    const auto eval = test::run_command(binary("softevo") + " eval " + out.string() + " --json");
+    ASSERT_EQ(eval.code, 0) << eval.output;
+    const nlohmann::json j = nlohmann::json::parse(eval.output);
+    EXPECT_EQ(j["config_source"], "robot") << eval.output;
+    EXPECT_EQ(j["config_hash"], archive.info().config_hash);
+    ASSERT_TRUE(j["fitness"].is_number()) << eval.output;
+    EXPECT_EQ(bits_of(j["fitness"].get<double>()), bits_of(generation.fitness[row]))
+        << "id " << generation.id[row] << ": eval " << j["fitness"] << ", archived "
+        << generation.fitness[row];
+    EXPECT_EQ(j["status"], to_string(static_cast<EvalStatus>(generation.status[row])));
+    EXPECT_EQ(j["reproduces_archived_fitness"], true) << eval.output;
+  }
+  // --set overrides the robot file's config, and the output says so.
+  const fs::path any = dir_ / ("id" + std::to_string(generation.id[0]) + ".json");
+  const auto changed = test::run_command(binary("softevo") + " eval " + any.string() +
+                                         " --set task.eval_seconds=0.25");
+  ASSERT_EQ(changed.code, 0) << changed.output;
+  EXPECT_NE(changed.output.find("run config (hash " + archive.info().config_hash),
+            std::string::npos)
+      << changed.output;
+  EXPECT_NE(changed.output.find("1 --set override"), std::string::npos) << changed.output;
+  EXPECT_EQ(changed.output.find("archived "), std::string::npos) << changed.output;
+}
+
+// `softevo info` (the command a researcher reads a run with) counts the robots of each status and
+// names the champion's.
+TEST_F(CmdExport, InfoCountsRobotsPerStatusAndShowsTheChampionsStatus) {
+  const auto r = test::run_command(binary("softevo") + " info " + archive_ + " --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  const io::Archive archive(archive_);
+  std::map<std::string, std::int64_t> expected;
+  std::int64_t rows = 0;
+  for (const std::int64_t g : archive.generations())
+    for (const std::uint8_t code : archive.generation(g).status) {
+      ++expected[to_string(static_cast<EvalStatus>(code))];
+      ++rows;
+    }
+  std::int64_t counted = 0;
+  for (const auto& [name, n] : j["status_counts"].items()) {
+    counted += n.get<std::int64_t>();
+    EXPECT_EQ(n.get<std::int64_t>(), expected[name]) << name;
+  }
+  EXPECT_EQ(counted, rows);
+  for (const char* name : {"ok", "killed: flipped", "killed: exploded", "diverged", "failed"})
+    EXPECT_TRUE(j["status_counts"].contains(name)) << name;
+  ASSERT_TRUE(j["champion"].is_object()) << r.output;
+  EXPECT_TRUE(j["champion"]["status"].is_string());
+  const auto text = test::run_command(binary("softevo") + " info " + archive_);
+  EXPECT_NE(text.output.find("champion         generation"), std::string::npos) << text.output;
+  EXPECT_NE(text.output.find("robots           ok "), std::string::npos) << text.output;
+}
+
+TEST_F(CmdExport, TheDefaultIsTheBestAndTheOldSpellingStillWorks) {
+  const fs::path out = dir_ / "default.json";
+  const auto r = test::run_command(binary("softevo") + " export " + archive_ + " --out " +
+                                   out.string() + " --force --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  const io::Archive archive(archive_);
+  const io::GenerationRecord generation = archive.generation(archive.generations().back());
+  double best = generation.fitness[0];
+  for (const double f : generation.fitness) best = std::max(best, f);
+  EXPECT_EQ(bits_of(j["fitness"].get<double>()), bits_of(best));
+}
+
+TEST_F(CmdExport, SoftevoMpiHasAVersionAndTheOutputSpellings) {
+  const auto version = test::run_command(binary("softevo-mpi") + " --version");
+  EXPECT_EQ(version.code, 0) << version.output;
+  EXPECT_EQ(version.output.rfind("softevo-mpi ", 0), 0u) << version.output;
+  const auto help = test::run_command(binary("softevo-mpi") + " --help");
+  for (const char* flag : {"-o,--output,--out", "--progress", "-q,--quiet", "-v,--verbose"})
+    EXPECT_NE(help.output.find(flag), std::string::npos) << flag << "\n" << help.output;
+  const auto bad = test::run_command(binary("softevo-mpi") + " --progress sometimes");
+  EXPECT_EQ(bad.code, 2) << bad.output;
+  EXPECT_EQ(bad.output.rfind("softevo-mpi: error: ", 0), 0u) << bad.output;
+}
+
+TEST_F(CmdExport, AnEditedEvaluationConfigIsRefused) {
+  const fs::path out = dir_ / "edited.json";
+  ASSERT_EQ(export_to(out, "--force").code, 0);
+  std::string text = read(out);
+  const std::size_t at = text.find("eval_seconds = ");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 15, "eval_seconds = 9");
+  std::ofstream(out, std::ios::trunc) << text;
+  const auto r = test::run_command(binary("softevo") + " eval " + out.string());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("evaluation.config_hash"), std::string::npos) << r.output;
 }
 
 }  // namespace

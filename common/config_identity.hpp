@@ -1,0 +1,27 @@
+// The identities of a config: FNV-1a 64 hashes of its canonical text (common/config.hpp
+// canonical_text). The config hash covers every key; the experiment hash leaves out the run
+// length and the seed (run.generations, run.seed), so that runs of one experiment are
+// repetitions of each other (other seeds) or extensions (more generations) of one another.
+// `--resume` checks the experiment hash, so a finished run can be continued with a larger
+// --generations; analysis/figures.py groups repetitions by it.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "common/config.hpp"
+
+namespace softevo {
+
+// FNV-1a 64 of any text: config_hash(c) == text_hash(canonical_text(c)). Hashing the stored text
+// (not a re-parse) checks an archive or robot file of an older build, which knew fewer keys,
+// against the hash it was written with.
+std::uint64_t text_hash(const std::string& text);
+
+// Canonical text without the lines of run.generations and run.seed. Works on text, so it also
+// applies to the stored config of an archive written before the experiment hash existed.
+std::string experiment_text(const std::string& canonical_config_text);
+std::uint64_t experiment_hash_of_text(const std::string& canonical_config_text);
+std::uint64_t experiment_hash(const Config& config);
+
+}  // namespace softevo
