@@ -87,7 +87,7 @@ ViewInput load_view_input(const std::string& path, const ViewRequest& request) {
     settings.task = request.task;
     settings.seconds = request.seconds;
     settings.direction = request.direction_deg;
-    in.config = worker::robot_eval_config(in.robot.controller, settings);
+    in.config = worker::robot_eval_config(in.robot, settings);
   } else if (io::is_run_archive(path)) {
     if (!request.task.empty() || !request.config_file.empty() || !request.overrides.empty())
       throw std::invalid_argument(path +
