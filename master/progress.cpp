@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <utility>
 
 namespace softevo::master {
 
@@ -20,8 +21,9 @@ void format_duration(double seconds, char* buf, std::size_t size) {
     std::snprintf(buf, size, "%llds", s);
 }
 
-ProgressReporter::ProgressReporter(std::FILE* out, std::FILE* live, std::int64_t total_generations)
-    : out_(out), live_(live), total_generations_(total_generations) {}
+ProgressReporter::ProgressReporter(std::FILE* out, std::FILE* live, std::int64_t total_generations,
+                                   std::string label)
+    : out_(out), live_(live), label_(std::move(label)), total_generations_(total_generations) {}
 
 ProgressReporter ProgressReporter::console(std::int64_t total_generations) {
   return ProgressReporter(stdout, ::isatty(STDERR_FILENO) != 0 ? stderr : nullptr,
@@ -71,10 +73,14 @@ void ProgressReporter::generation_finished(const GenerationSummary& s) {
   format_duration(static_cast<double>(remaining) * seconds_reported_ /
                       static_cast<double>(generations_reported_),
                   eta, sizeof eta);
-  std::fprintf(out_,
-               "gen %6lld/%lld  best %10.4f  mean %10.4f  species %3lld  eval/s %7.2f  ETA %s\n",
-               static_cast<long long>(s.generation), static_cast<long long>(total_generations_),
-               s.best, s.mean, static_cast<long long>(s.species), rate, eta);
+  char reused[48] = "";
+  if (s.reused > 0)
+    std::snprintf(reused, sizeof reused, "  reused %lld", static_cast<long long>(s.reused));
+  std::fprintf(
+      out_, "%sgen %6lld/%lld  best %10.4f  mean %10.4f  species %3lld  eval/s %7.2f  ETA %s%s\n",
+      label_.c_str(), static_cast<long long>(s.generation),
+      static_cast<long long>(total_generations_), s.best, s.mean, static_cast<long long>(s.species),
+      rate, eta, reused);
   std::fflush(out_);
 }
 

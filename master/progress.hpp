@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <string>
 
 namespace softevo::master {
 
@@ -14,15 +15,18 @@ struct GenerationSummary {
   double best = 0.0;
   double mean = 0.0;
   std::int64_t species = 0;
-  std::int64_t evaluations = 0;     // work units
+  std::int64_t evaluations = 0;     // work units simulated
   double eval_wall_seconds = 0.0;   // [s] evaluation phase
   double generation_seconds = 0.0;  // [s] whole generation incl. reproduction and archive
+  std::int64_t reused = 0;          // work units whose result was reused (not simulated)
 };
 
 class ProgressReporter {
  public:
   // `live` = nullptr disables the live line (not a terminal, or quiet).
-  ProgressReporter(std::FILE* out, std::FILE* live, std::int64_t total_generations);
+  // `label` starts every line (several runs in one job name their archive).
+  ProgressReporter(std::FILE* out, std::FILE* live, std::int64_t total_generations,
+                   std::string label = "");
   // A reporter that prints nothing.
   static ProgressReporter silent() { return ProgressReporter(nullptr, nullptr, 0); }
   // stdout for the lines, stderr for the live line if stderr is a terminal.
@@ -37,6 +41,7 @@ class ProgressReporter {
   void clear_live();
   std::FILE* out_;
   std::FILE* live_;
+  std::string label_;
   std::int64_t total_generations_;
   std::int64_t generation_ = 0;
   std::int64_t generations_reported_ = 0;
