@@ -44,13 +44,16 @@ for b in "$SOFTEVO_MPI" "$SOFTEVO_CLI"; do
 done
 mkdir -p "$SOFTEVO_RUNS"
 if [ -n "${SOFTEVO_NODES:-}" ]; then
-  export SOFTEVO_SEEDS=${SOFTEVO_SEEDS:-1-10}
-  # The aggregation reads the archives of the array tasks these runs stand for (t = 10 e + s - 1).
+  export SOFTEVO_SEEDS=${SOFTEVO_SEEDS:-$SOFTEVO_SEED_FIRST-$(( SOFTEVO_SEED_FIRST + SOFTEVO_REPS - 1 ))}
+  # The aggregation reads the archives of the array tasks these runs stand for
+  # (t = REPS e + seed - SEED_FIRST).
   tasks=()
-  for e in 0 1 2 3; do
-    IFS=, read -r -a items <<<"$SOFTEVO_SEEDS"
+  IFS=, read -r -a items <<<"$SOFTEVO_SEEDS"
+  for (( e = 0; e < ${#EXPS[@]}; e++ )); do
     for item in "${items[@]}"; do
-      for (( s = ${item%-*}; s <= ${item#*-}; s++ )); do tasks+=($(( e * SOFTEVO_REPS + s - 1 ))); done
+      for (( s = ${item%-*}; s <= ${item#*-}; s++ )); do
+        tasks+=($(( e * SOFTEVO_REPS + s - SOFTEVO_SEED_FIRST )))
+      done
     done
   done
   export SOFTEVO_ARRAY=$(IFS=,; echo "${tasks[*]}")
