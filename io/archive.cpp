@@ -183,7 +183,7 @@ void GenerationRecord::check() const {
       parent1.size() == n && parent2.size() == n && species.size() == n && status.size() == n &&
       fitness.size() == n && voxels.size() == n && chambers.size() == n &&
       wall_seconds.size() == n && worker_rank.size() == n && genome.size() == n && units >= 1 &&
-      !component_columns.empty() &&
+      (reused_from.empty() || reused_from.size() == n) && !component_columns.empty() &&
       components.size() == n * static_cast<std::size_t>(units) * component_columns.size();
   if (!same)
     throw ArchiveError("generation " + std::to_string(generation) +
@@ -341,6 +341,10 @@ void write_generation_group(const h5::Group& parent, const std::string& name,
   g.write_dataset<std::int32_t>("chambers", {n}, record.chambers);
   g.write_dataset<double>("wall_seconds", {n}, record.wall_seconds);
   g.write_dataset<std::int32_t>("worker_rank", {n}, record.worker_rank);
+  g.write_dataset<std::int64_t>("reused_from", {n},
+                                record.reused_from.empty()
+                                    ? std::vector<std::int64_t>(record.size(), kNotReused)
+                                    : record.reused_from);
   g.write_byte_rows("genome", record.genome);
   g.write_dataset<double>("components",
                           {n, static_cast<hsize_t>(record.units),
@@ -771,6 +775,9 @@ GenerationRecord Archive::generation(std::int64_t gen) const {
     r.chambers = column("chambers").read<std::int32_t>();
     r.wall_seconds = column("wall_seconds").read<double>();
     r.worker_rank = column("worker_rank").read<std::int32_t>();
+    // Archives written before results were reused have no such column: nothing was reused.
+    r.reused_from = g.has_link("reused_from") ? column("reused_from").read<std::int64_t>()
+                                              : std::vector<std::int64_t>(n, kNotReused);
     r.genome = column("genome").read_byte_rows(n, ArchiveLimits::genome_bytes);
     const h5::Dataset components = g.open_dataset("components");
     r.component_columns =
@@ -927,6 +934,11 @@ std::uint64_t generation_digest(const GenerationRecord& r) {
     h.i64(r.worker_rank[i]);
   }
   h.f64(r.eval_wall_seconds);
+  // Only a generation that reused a result hashes the column, so every digest stored before it
+  // existed (and of a generation without reuse) is unchanged.
+  if (std::any_of(r.reused_from.begin(), r.reused_from.end(),
+                  [](std::int64_t from) { return from != kNotReused; }))
+    for (std::int64_t from : r.reused_from) h.i64(from);
   return h.value();
 }
 

@@ -58,6 +58,9 @@ class ArchiveError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// reused_from of a row whose result was evaluated in its own generation.
+inline constexpr std::int64_t kNotReused = -1;
+
 // Root attributes of the archive.
 struct RunInfo {
   std::string format = kArchiveFormat;
@@ -90,8 +93,13 @@ struct GenerationRecord {
   std::vector<double> fitness;
   std::vector<std::int32_t> voxels;
   std::vector<std::int32_t> chambers;
-  std::vector<double> wall_seconds;               // [s] summed over the genome's work units
-  std::vector<std::int32_t> worker_rank;          // rank that evaluated the first work unit
+  std::vector<double> wall_seconds;       // [s] summed over the genome's work units
+  std::vector<std::int32_t> worker_rank;  // rank that evaluated the first work unit
+  // -1: evaluated in this generation; else the id of the row whose evaluation this row reuses
+  // (same genome bytes, same config: master/result_reuse.hpp). Its wall_seconds are then 0 and
+  // its worker_rank -1. Empty when writing = no row reused; an archive written before the
+  // column existed reads as all -1.
+  std::vector<std::int64_t> reused_from;
   std::vector<std::vector<std::uint8_t>> genome;  // evo::encode_genome bytes
   int units = 1;  // work units per genome (tasks::Task::units(): directed = directions)
   // Names of the components' last axis, in order (the task's: "fitness", its named components,
@@ -233,9 +241,9 @@ bool is_run_archive(const std::string& path);
 // evolutionary outcomes, whatever the rank count or timing.
 std::uint64_t fitness_digest(const Archive& archive);
 // FNV-1a 64 over everything deterministic: config text and hash, seed, experiment, state,
-// generations_done, every generation's columns except wall_seconds/worker_rank (parents,
-// species, status, fitness, voxels, chambers, components, genomes), the deterministic /stats
-// columns and the checkpoint. Excludes version, git commit, host, ranks, times and timings.
+// generations_done, every generation's columns except wall_seconds/worker_rank/reused_from
+// (parents, species, status, fitness, voxels, chambers, components, genomes), the deterministic
+// /stats columns and the checkpoint. Excludes version, git commit, host, ranks, times and timings.
 std::uint64_t content_digest(const Archive& archive);
 
 // FNV-1a 64 over every column and group attribute of one generation (timings included): the

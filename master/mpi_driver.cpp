@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
@@ -72,30 +73,40 @@ class MpiExecutor : public UnitExecutor {
   // Ranks whose process on this host is gone (no stop message is sent to them).
   const std::set<int>& lost() const { return lost_; }
 
-  bool evaluate(GenerationScheduler& scheduler,
-                const std::function<EvalRequest(const WorkUnit&)>& make_request,
-                ProgressReporter& progress) override {
+  std::optional<std::size_t> evaluate_any(
+      const std::vector<ActiveGeneration>& generations) override {
     mpi::PollBackoff backoff;
+    const auto generation_of = [&](std::size_t run) -> const ActiveGeneration* {
+      for (const ActiveGeneration& a : generations)
+        if (a.run == run) return &a;
+      return nullptr;
+    };
     for (;;) {
       if (!stopping()) {
         if (std::string reason = own_stop_reason(); !reason.empty()) begin_stop(reason);
       }
-      while (!stopping() && !idle_.empty() && scheduler.has_next()) {
-        const WorkUnit unit = *scheduler.next();
-        const int dest = idle_.back();
-        idle_.pop_back();
-        busy_.insert(dest);
-        // A send to a worker that died may never complete: a stop request ends the wait.
-        std::string reason;
-        if (!comm_.send_unless(dest, mpi::Tag::request, encode_eval_request(make_request(unit)),
-                               [&reason] { return !(reason = own_stop_reason()).empty(); }))
-          begin_stop(reason);
+      if (!stopping()) {
+        // A generation may be done without a unit (every result reused) or by the last result.
+        for (const ActiveGeneration& a : generations)
+          if (a.scheduler->done()) return a.run;
       }
-      if (!stopping() && busy_.empty() && !scheduler.has_next()) return true;
+      for (const ActiveGeneration& a : generations) {
+        while (!stopping() && !idle_.empty() && a.scheduler->has_next()) {
+          const WorkUnit unit = *a.scheduler->next();
+          const int dest = idle_.back();
+          idle_.pop_back();
+          busy_[dest] = a.run;
+          // A send to a worker that died may never complete: a stop request ends the wait.
+          std::string reason;
+          if (!comm_.send_unless(dest, mpi::Tag::request, encode_eval_request(a.request(unit)),
+                                 [&reason] { return !(reason = own_stop_reason()).empty(); }))
+            begin_stop(reason);
+        }
+      }
       if (stopping() && (left_.size() + 1 == static_cast<std::size_t>(comm_.size()) ||
                          Clock::now() >= roll_call_end_)) {
-        end_stop(scheduler.generation());
-        return false;
+        end_stop(generations.front().scheduler->generation());
+        return std::nullopt;
       }
       const std::optional<mpi::Envelope> pending = comm_.poll();
       if (!pending) {
@@ -120,13 +131,22 @@ class MpiExecutor : public UnitExecutor {
                          std::string(mpi::tag_name(message.tag)) + " from rank " +
                          std::to_string(message.source));
       }
-      busy_.erase(message.source);
+      const auto busy = busy_.find(message.source);
+      if (busy == busy_.end())
+        throw RunError("master: a result from rank " + std::to_string(message.source) +
+                       ", which has no unit");
+      const std::size_t run = busy->second;
+      busy_.erase(busy);
       idle_.push_back(message.source);
-      if (stopping()) continue;  // after a stop-now the partial generation is discarded
+      if (stopping()) continue;  // after a stop-now the partial generations are discarded
+      const ActiveGeneration* a = generation_of(run);
+      if (a == nullptr)
+        throw RunError("master: a result of run " + std::to_string(run) +
+                       ", which has no generation in flight");
       EvalResult result = decode_eval_result(message.bytes);
       result.worker_rank = message.source;
-      scheduler.complete(result);
-      progress.unit_done(scheduler.units_done(), scheduler.units_total());
+      a->scheduler->complete(result);
+      a->progress->unit_done(a->scheduler->units_done(), a->scheduler->units_total());
     }
   }
 
@@ -177,8 +197,8 @@ class MpiExecutor : public UnitExecutor {
   std::vector<RankProcess> processes_;
   bool quiet_;
   std::vector<int> idle_;
-  std::set<int> busy_;  // ranks with a unit in flight
-  std::set<int> left_;  // ranks that sent Tag::leaving
+  std::map<int, std::size_t> busy_;  // ranks with a unit in flight -> the unit's run
+  std::set<int> left_;               // ranks that sent Tag::leaving
   std::set<int> lost_;
   std::string first_reason_;  // what started the stop
   std::string stop_reason_;   // the full reason, once stopped
@@ -207,6 +227,28 @@ void print_header(const PreparedRun& r, const std::string& config_path, int rank
                  r.previous_run->c_str());
     std::fflush(stderr);
   }
+}
+
+// Several runs in one job: one line per run instead of the config (each archive holds its own).
+void print_packed_header(const std::vector<PreparedRun*>& runs, const std::string& config_path,
+                         int ranks) {
+  std::printf("softevo-mpi %s (commit %s), %d rank%s, %zu runs in one pool (%s)\n", kVersion,
+              kGitCommit, ranks, ranks == 1 ? "" : "s", runs.size(), config_path.c_str());
+  for (const PreparedRun* r : runs) {
+    const std::string what =
+        r->already_complete ? "every generation archived"
+        : r->resumed        ? "resuming at generation " + std::to_string(r->info.generations_done)
+                            : std::string("new run");
+    std::printf("# archive %s (seed %lld, config hash %s, experiment %s hash %s): %s\n",
+                r->options.out_path.c_str(), static_cast<long long>(r->config.run.seed),
+                hash_hex(r->config_hash).c_str(), r->info.experiment.c_str(),
+                r->info.experiment_hash.c_str(), what.c_str());
+    if (r->previous_run)
+      std::fprintf(stderr, "softevo-mpi: %s: %s\n", r->options.out_path.c_str(),
+                   r->previous_run->c_str());
+  }
+  std::fflush(stdout);
+  std::fflush(stderr);
 }
 
 void print_summary(const PreparedRun& r, RunOutcome outcome, const std::string& stop_reason,
@@ -274,39 +316,67 @@ std::string format_rank_process(long pid, const std::string& host) {
 }
 
 int run_master(const mpi::Communicator& comm, PreparedRun& run, const MasterOptions& options) {
+  return run_master(comm, std::vector<PreparedRun*>{&run}, options);
+}
+
+int run_master(const mpi::Communicator& comm, const std::vector<PreparedRun*>& runs,
+               const MasterOptions& options) {
+  const bool packed = runs.size() > 1;
   const bool chatty = !options.quiet && !options.terse;
-  if (chatty) print_header(run, options.config_path, comm.size(), options.verbose);
-  ProgressReporter progress =
-      options.quiet
-          ? ProgressReporter::silent()
-          : ProgressReporter::console(run.config.run.generations, options.progress, options.terse);
+  if (chatty) {
+    if (packed)
+      print_packed_header(runs, options.config_path, comm.size());
+    else
+      print_header(*runs.front(), options.config_path, comm.size(), options.verbose);
+  }
+  std::vector<ProgressReporter> reporters;
+  for (const PreparedRun* run : runs) {
+    if (options.quiet)
+      reporters.push_back(ProgressReporter::silent());
+    else if (packed)  // no live line: the runs' lines interleave, each names its archive
+      reporters.push_back(ProgressReporter(options.terse ? nullptr : stdout, nullptr, stderr,
+                                           run->config.run.generations,
+                                           run->options.out_path + ": "));
+    else
+      reporters.push_back(
+          ProgressReporter::console(run->config.run.generations, options.progress, options.terse));
+  }
+  std::vector<ProgressReporter*> progress;
+  for (ProgressReporter& r : reporters) progress.push_back(&r);
   const auto t0 = std::chrono::steady_clock::now();
   const double cpu0 = cpu_seconds();
-  RunOutcome outcome = RunOutcome::complete;
+  std::vector<RunOutcome> outcomes;
   std::string stop_reason;
   std::set<int> lost;
   try {
     if (comm.size() == 1) {
       LocalExecutor local(options.evaluate_alone);
-      outcome = execute_run(run, local, progress);
+      outcomes = execute_runs(runs, local, progress);
     } else {
       MpiExecutor executor(comm, options.processes, options.quiet);
-      outcome = execute_run(run, executor, progress);
+      outcomes = execute_runs(runs, executor, progress);
       stop_reason = executor.stop_reason();
       lost = executor.lost();
     }
   } catch (const RunError& e) {
     // The caller aborts the job with this message: say where --resume continues.
-    throw RunError(std::string(e.what()) + " (" + run.options.out_path + ": " +
-                   resume_note(run.info.generations_done) + ")");
+    std::string where;
+    for (const PreparedRun* run : runs)
+      where += (where.empty() ? "" : "; ") + run->options.out_path + ": " +
+               resume_note(run->info.generations_done);
+    throw RunError(std::string(e.what()) + " (" + where + ")");
   }
-  if (stop_reason.empty() && outcome == RunOutcome::interrupted) stop_reason = rank0_stop_cause();
-  const int code = exit_code_of(outcome);
+  RunOutcome overall = RunOutcome::complete;
+  for (RunOutcome o : outcomes)
+    if (o == RunOutcome::interrupted) overall = o;
+  if (stop_reason.empty() && overall == RunOutcome::interrupted) stop_reason = rank0_stop_cause();
+  const int code = exit_code_of(overall);
   // -q keeps the one line that says how to continue an interrupted run.
-  if (chatty || (!options.quiet && outcome == RunOutcome::interrupted)) {
+  if (chatty || (!options.quiet && overall == RunOutcome::interrupted)) {
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    print_summary(run, outcome, stop_reason, code, wall, cpu_seconds() - cpu0);
+    for (std::size_t r = 0; r < runs.size(); ++r)
+      print_summary(*runs[r], outcomes[r], stop_reason, code, wall, cpu_seconds() - cpu0);
   }
   // An orphan's workers are orphans too and leave by themselves; its MPI may be half gone.
   if (launcher_gone()) return code;

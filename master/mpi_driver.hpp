@@ -53,5 +53,9 @@ struct MasterOptions {
 // Runs `run` (prepared by prepare_run) on rank 0 of `comm` and returns the exit code. Throws on
 // an unrecoverable error (the workers are then still waiting: the caller aborts the job).
 int run_master(const mpi::Communicator& comm, PreparedRun& run, const MasterOptions& options);
+// Several runs in one worker pool (master/run.hpp execute_runs): the exit code is 75 if any run
+// was interrupted, else 0.
+int run_master(const mpi::Communicator& comm, const std::vector<PreparedRun*>& runs,
+               const MasterOptions& options);
 
 }  // namespace softevo::master

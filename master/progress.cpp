@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <map>
+#include <utility>
 
 namespace softevo::master {
 
@@ -63,7 +64,8 @@ std::string generation_line(const GenerationSummary& s, std::int64_t total_gener
   std::snprintf(tail, sizeof tail, "  species %3lld  eval/s %7.2f  elapsed %s  ETA %s",
                 static_cast<long long>(s.species), rate, duration_text(elapsed_seconds).c_str(),
                 duration_text(eta_seconds).c_str());
-  return head + status_counts_text(s.status_counts) + tail;
+  const std::string reused = s.reused > 0 ? "  reused " + std::to_string(s.reused) : "";
+  return head + status_counts_text(s.status_counts) + tail + reused;
 }
 
 std::string generation_warning(const GenerationSummary& s) {
@@ -113,10 +115,11 @@ bool show_live_line(ProgressMode mode, StreamKind stderr_kind,
 }
 
 ProgressReporter::ProgressReporter(std::FILE* out, std::FILE* live, std::FILE* warn,
-                                   std::int64_t total_generations)
+                                   std::int64_t total_generations, std::string label)
     : out_(out),
       live_(live),
       warn_(warn),
+      label_(std::move(label)),
       total_generations_(total_generations),
       start_(std::chrono::steady_clock::now()) {}
 
@@ -137,7 +140,7 @@ const std::map<std::string, std::string> kLaunchEnvironment = launch_environment
 }  // namespace
 
 ProgressReporter ProgressReporter::console(std::int64_t total_generations, ProgressMode mode,
-                                           bool quiet) {
+                                           bool quiet, std::string label) {
   const bool live =
       !quiet &&
       show_live_line(mode, stream_kind(STDERR_FILENO), [](const char* name) -> const char* {
@@ -145,7 +148,7 @@ ProgressReporter ProgressReporter::console(std::int64_t total_generations, Progr
         return it == kLaunchEnvironment.end() ? nullptr : it->second.c_str();
       });
   return ProgressReporter(quiet ? nullptr : stdout, live ? stderr : nullptr, stderr,
-                          total_generations);
+                          total_generations, std::move(label));
 }
 
 void ProgressReporter::clear_live() {
@@ -189,12 +192,13 @@ void ProgressReporter::generation_finished(const GenerationSummary& s) {
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   if (out_ != nullptr) {
-    std::fprintf(out_, "%s\n", generation_line(s, total_generations_, elapsed, eta).c_str());
+    std::fprintf(out_, "%s%s\n", label_.c_str(),
+                 generation_line(s, total_generations_, elapsed, eta).c_str());
     std::fflush(out_);
   }
   const std::string warning = generation_warning(s);
   if (warn_ != nullptr && !warning.empty()) {
-    std::fprintf(warn_, "softevo-mpi: warning: %s\n", warning.c_str());
+    std::fprintf(warn_, "softevo-mpi: warning: %s%s\n", label_.c_str(), warning.c_str());
     std::fflush(warn_);
   }
 }

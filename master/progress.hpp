@@ -26,12 +26,13 @@ struct GenerationSummary {
   double best = 0.0;
   double mean = 0.0;
   std::int64_t species = 0;
-  std::int64_t evaluations = 0;     // work units
+  std::int64_t evaluations = 0;     // work units simulated
   double eval_wall_seconds = 0.0;   // [s] evaluation phase
   double generation_seconds = 0.0;  // [s] whole generation incl. reproduction and archive
   StatusCounts status_counts{};     // the genomes' archived statuses
   double max_abs_ok_fitness = 0.0;  // largest |fitness| of an ok genome: 0 = nothing moved
   std::string fitness_unit;         // the task's ("cm", "rad")
+  std::int64_t reused = 0;          // work units whose result was reused (not simulated)
 };
 
 // The generation's line: "gen 3/10  best 1.6440 cm  mean ... ok 11 flipped 1 ... elapsed 12s
@@ -63,14 +64,15 @@ bool show_live_line(ProgressMode mode, StreamKind stderr_kind,
 class ProgressReporter {
  public:
   // `out` = nullptr: no generation lines (quiet); `live` = nullptr: no live line; `warn` =
-  // nullptr: no warnings.
-  ProgressReporter(std::FILE* out, std::FILE* live, std::FILE* warn,
-                   std::int64_t total_generations);
+  // nullptr: no warnings. `label` starts every line (several runs in one job name their archive).
+  ProgressReporter(std::FILE* out, std::FILE* live, std::FILE* warn, std::int64_t total_generations,
+                   std::string label = "");
   // A reporter that prints nothing.
   static ProgressReporter silent() { return ProgressReporter(nullptr, nullptr, nullptr, 0); }
   // stdout for the lines (none when quiet), stderr for the warnings and, as `mode` decides,
-  // the live line.
-  static ProgressReporter console(std::int64_t total_generations, ProgressMode mode, bool quiet);
+  // the live line. `label` as for the constructor.
+  static ProgressReporter console(std::int64_t total_generations, ProgressMode mode, bool quiet,
+                                  std::string label = "");
 
   void generation_started(std::int64_t generation, std::size_t units_total);
   void unit_done(std::size_t units_done, std::size_t units_total);
@@ -82,6 +84,7 @@ class ProgressReporter {
   std::FILE* out_;
   std::FILE* live_;
   std::FILE* warn_;
+  std::string label_;
   std::int64_t total_generations_;
   std::int64_t generation_ = 0;
   std::int64_t generations_reported_ = 0;

@@ -16,6 +16,7 @@
 #include "master/archive_check.hpp"
 #include "master/run_state.hpp"
 #include "master/signals.hpp"
+#include "master/unit_cost.hpp"
 #include "physics/revision.hpp"
 #include "physics/work_limits.hpp"
 #include "tasks/task.hpp"
@@ -112,19 +113,21 @@ std::string host_name() {
   return buf;
 }
 
-bool LocalExecutor::evaluate(GenerationScheduler& scheduler,
-                             const std::function<EvalRequest(const WorkUnit&)>& make_request,
-                             ProgressReporter& progress) {
+std::optional<std::size_t> LocalExecutor::evaluate_any(
+    const std::vector<ActiveGeneration>& generations) {
+  // One unit at a time: the oldest generation is finished before any other is started.
+  const ActiveGeneration& a = generations.front();
+  GenerationScheduler& scheduler = *a.scheduler;
   while (auto unit = scheduler.next()) {
-    if (stop_requested() == StopRequest::now) return false;
-    EvalResult result = evaluate_(make_request(*unit));
+    if (stop_requested() == StopRequest::now) return std::nullopt;
+    EvalResult result = evaluate_(a.request(*unit));
     // A stop-now during the evaluation may have abandoned it: never archive that result.
-    if (stop_requested() == StopRequest::now) return false;
+    if (stop_requested() == StopRequest::now) return std::nullopt;
     result.worker_rank = 0;
     scheduler.complete(result);
-    progress.unit_done(scheduler.units_done(), scheduler.units_total());
+    a.progress->unit_done(scheduler.units_done(), scheduler.units_total());
   }
-  return true;
+  return a.run;
 }
 
 PreparedRun prepare_run(const Config& config, const RunOptions& options, int ranks) {
@@ -225,6 +228,8 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
           throw StartupError(out + ": cannot resume: checkpoint population is at generation " +
                              std::to_string(run.population->generation()) + ", expected " +
                              std::to_string(cp->generation));
+        // What the uninterrupted run would remember now: its last archived generation.
+        run.memory.remember(archive.generation(old.generations_done - 1));
       }
       run.resumed = true;
     } catch (const ArchiveError& e) {
@@ -245,204 +250,331 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
   return run;
 }
 
-RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporter& progress) {
-  if (run.already_complete) {
-    // Every generation is archived, but a run killed before its end (or a full disk then) left
-    // the state unset or the archive unpacked: the end of the run is done now.
-    const std::string& out = run.options.out_path;
-    try {
-      remove_archive_debris(out);
-      if (run.info.state != "complete" || !Archive(out).self_contained()) {
-        run.info.state = "complete";
-        if (run.info.end_time.empty()) run.info.end_time = iso8601_now();
-        finish_archive(out, run.info, run.options.archive_fault);
-      }
-      remove_archive_debris(out);
-    } catch (const std::exception& e) {
-      throw RunError(std::string("the end of the complete run could not be recorded (the archive "
-                                 "holds every generation and is readable as it is): ") +
-                     e.what());
-    }
-    return RunOutcome::already_complete;
-  }
-  const Config& config = run.config;
+namespace {
+
+// The end of a run whose every generation is archived, but whose end was not recorded (killed
+// before it, or a full disk then): state complete, packed.
+void finish_complete_run(PreparedRun& run) {
   const std::string& out = run.options.out_path;
-  RunInfo& info = run.info;
-  info.ranks = executor.ranks();
-  bool archive_written = false;
-  bool state_recorded = false;
   try {
+    remove_archive_debris(out);
+    if (run.info.state != "complete" || !Archive(out).self_contained()) {
+      run.info.state = "complete";
+      if (run.info.end_time.empty()) run.info.end_time = iso8601_now();
+      finish_archive(out, run.info, run.options.archive_fault);
+    }
+    remove_archive_debris(out);
+  } catch (const std::exception& e) {
+    throw RunError(std::string("the end of the complete run could not be recorded (the archive "
+                               "holds every generation and is readable as it is): ") +
+                   e.what());
+  }
+}
+
+}  // namespace
+
+RunLoop::RunLoop(PreparedRun& run, int ranks, ProgressReporter& progress)
+    : run_(run), progress_(progress), task_(tasks::make_task(run.config)) {
+  run_.info.ranks = ranks;
+}
+
+RunLoop::~RunLoop() = default;
+
+void RunLoop::open() {
+  const std::string& out = run_.options.out_path;
+  RunInfo& info = run_.info;
+  guarded([&] {
     // Debris of a run killed while writing (SIGKILL, crash): its temporaries and the segment it
     // wrote before the root that would have named it. We hold the run lock: no one else writes.
     remove_archive_debris(out);
-    if (run.resumed) {
+    if (run_.resumed) {
       info.state = "running";
       info.end_time.clear();
-      if (run.run_length_changed)
-        io::update_run_config(out, info, run.config_text, run.options.archive_fault);
+      if (run_.run_length_changed)
+        io::update_run_config(out, info, run_.config_text, run_.options.archive_fault);
       else
-        update_run_info(out, info, run.options.archive_fault);
+        update_run_info(out, info, run_.options.archive_fault);
     } else {
-      create_archive(out, info, run.config_text, run.options.archive_fault);
+      create_archive(out, info, run_.config_text, run_.options.archive_fault);
     }
-    archive_written = true;
+    archive_written_ = true;
     remove_archive_debris(out);  // the segments of the archive an --overwrite replaced
+  });
+}
 
-    evo::Population& population = *run.population;
-    const std::unique_ptr<tasks::Task> task = tasks::make_task(config);
-    RunOutcome outcome = RunOutcome::complete;
-    while (population.generation() < config.run.generations) {
-      if (stop_requested() != StopRequest::none) {
-        outcome = RunOutcome::interrupted;
-        break;
-      }
-      const auto t_generation = Clock::now();
-      const std::int64_t g = population.generation();
-      const std::vector<evo::Individual>& members = population.members();
-      std::vector<std::vector<std::uint8_t>> encoded(members.size());
-      std::vector<std::int64_t> ids(members.size());
-      for (std::size_t i = 0; i < members.size(); ++i) {
-        encoded[i] = evo::encode_genome(members[i].genome);
-        ids[i] = members[i].id;
-      }
-      GenerationScheduler scheduler(g, ids, *task);
-      const auto make_request = [&](const WorkUnit& unit) {
-        EvalRequest r;
-        r.config_hash = run.config_hash;
-        r.generation = g;
-        r.genome_id = unit.genome_id;
-        r.unit = unit.unit;
-        r.genome = encoded[unit.member];
-        return r;
-      };
-      progress.generation_started(g, scheduler.units_total());
-      const auto t_eval = Clock::now();
-      if (!executor.evaluate(scheduler, make_request, progress)) {
-        outcome = RunOutcome::interrupted;
-        break;
-      }
-      const double eval_seconds = seconds_since(t_eval);
-      if (config.run.on_failure == "abort") {
-        const auto failures = scheduler.failures();
-        if (!failures.empty()) {
-          const EvalResult& f = *failures.front();
-          throw RunError("genome " + std::to_string(f.genome_id) + " (generation " +
-                         std::to_string(g) + ", unit " + std::to_string(f.unit) +
-                         ") failed on rank " + std::to_string(f.worker_rank) + ": " + f.message +
-                         " (run.on_failure = abort)");
-        }
-      }
-      const std::vector<GenomeOutcome> outcomes = scheduler.outcomes();
+bool RunLoop::finished() const {
+  return run_.population->generation() >= run_.config.run.generations;
+}
 
-      // Archive rows in id order.
-      std::vector<std::size_t> order(members.size());
-      std::iota(order.begin(), order.end(), std::size_t{0});
-      std::sort(order.begin(), order.end(),
-                [&](std::size_t a, std::size_t b) { return members[a].id < members[b].id; });
-      GenerationRecord rec;
-      rec.generation = g;
-      rec.units = task->units();
-      rec.component_columns = tasks::component_columns(*task);
-      std::vector<evo::Evaluation> evaluations;
-      evaluations.reserve(members.size());
-      for (std::size_t i : order) {
-        const evo::Individual& m = members[i];
-        const GenomeOutcome& o = outcomes[i];
-        rec.id.push_back(m.id);
-        rec.parent1.push_back(m.parent1);
-        rec.parent2.push_back(m.parent2);
-        rec.species.push_back(m.species);
+GenerationScheduler& RunLoop::begin_generation() {
+  guarded([&] {
+    const Config& config = run_.config;
+    t_generation_ = Clock::now();
+    const std::vector<evo::Individual>& members = run_.population->members();
+    encoded_.assign(members.size(), {});
+    std::vector<std::int64_t> ids(members.size());
+    for (std::size_t i = 0; i < members.size(); ++i) {
+      encoded_[i] = evo::encode_genome(members[i].genome);
+      ids[i] = members[i].id;
+    }
+    plan_ = plan_reuse(ids, encoded_, run_.options.reuse_results ? &run_.memory : nullptr);
+    std::vector<std::int64_t> evaluated_ids;
+    std::vector<double> costs;
+    for (std::size_t m : plan_.evaluate) {
+      evaluated_ids.push_back(ids[m]);
+      if (run_.options.longest_first)
+        costs.push_back(predicted_unit_cost(members[m].genome, config.body));
+    }
+    scheduler_.emplace(run_.population->generation(), evaluated_ids, *task_, costs);
+    progress_.generation_started(scheduler_->generation(), scheduler_->units_total());
+    t_eval_ = Clock::now();
+  });
+  return *scheduler_;
+}
+
+EvalRequest RunLoop::request(const WorkUnit& unit) const {
+  EvalRequest r;
+  r.config_hash = run_.config_hash;
+  r.generation = scheduler_->generation();
+  r.genome_id = unit.genome_id;
+  r.unit = unit.unit;
+  r.genome = encoded_[plan_.evaluate[unit.member]];
+  return r;
+}
+
+void RunLoop::end_generation() {
+  guarded([&] {
+    const Config& config = run_.config;
+    const std::string& out = run_.options.out_path;
+    const tasks::Task& task = *task_;
+    GenerationScheduler& scheduler = *scheduler_;
+    evo::Population& population = *run_.population;
+    const std::vector<evo::Individual>& members = population.members();
+    const std::int64_t g = scheduler.generation();
+    const double eval_seconds = seconds_since(t_eval_);
+    if (config.run.on_failure == "abort") {
+      const auto failures = scheduler.failures();
+      if (!failures.empty()) {
+        const EvalResult& f = *failures.front();
+        throw RunError("genome " + std::to_string(f.genome_id) + " (generation " +
+                       std::to_string(g) + ", unit " + std::to_string(f.unit) +
+                       ") failed on rank " + std::to_string(f.worker_rank) + ": " + f.message +
+                       " (run.on_failure = abort)");
+      }
+    }
+    const std::vector<GenomeOutcome> evaluated = scheduler.outcomes();  // plan_.evaluate order
+    std::vector<const GenomeOutcome*> outcome_of(members.size(), nullptr);
+    for (std::size_t k = 0; k < plan_.evaluate.size(); ++k)
+      outcome_of[plan_.evaluate[k]] = &evaluated[k];
+
+    // Archive rows in id order.
+    std::vector<std::size_t> order(members.size());
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return members[a].id < members[b].id; });
+    GenerationRecord rec;
+    rec.generation = g;
+    rec.units = task.units();
+    rec.component_columns = tasks::component_columns(task);
+    std::vector<evo::Evaluation> evaluations;
+    evaluations.reserve(members.size());
+    for (std::size_t i : order) {
+      const evo::Individual& m = members[i];
+      const ResultSource& source = plan_.source[i];
+      rec.id.push_back(m.id);
+      rec.parent1.push_back(m.parent1);
+      rec.parent2.push_back(m.parent2);
+      rec.species.push_back(m.species);
+      rec.genome.push_back(encoded_[i]);
+      rec.reused_from.push_back(source.origin_id);
+      if (source.kind == ResultSource::Kind::earlier_generation) {
+        const ReusableResult& r = *source.earlier;
+        rec.status.push_back(r.status);
+        rec.fitness.push_back(r.fitness);
+        rec.voxels.push_back(r.voxels);
+        rec.chambers.push_back(r.chambers);
+        rec.wall_seconds.push_back(0.0);
+        rec.worker_rank.push_back(-1);
+        rec.components.insert(rec.components.end(), r.components.begin(), r.components.end());
+      } else {
+        const bool copy = source.kind == ResultSource::Kind::same_generation;
+        const GenomeOutcome& o = *outcome_of[copy ? source.member : i];
         rec.status.push_back(static_cast<std::uint8_t>(o.status));
         rec.fitness.push_back(o.fitness);
         rec.voxels.push_back(o.voxels);
         rec.chambers.push_back(o.chambers);
-        rec.wall_seconds.push_back(o.wall_seconds);
-        rec.worker_rank.push_back(o.worker_rank);
-        rec.genome.push_back(encoded[i]);
+        rec.wall_seconds.push_back(copy ? 0.0 : o.wall_seconds);
+        rec.worker_rank.push_back(copy ? -1 : o.worker_rank);
         for (const UnitFitness& u : o.components) {
           const std::vector<double> row = tasks::component_row(u);
           rec.components.insert(rec.components.end(), row.begin(), row.end());
         }
-        evaluations.push_back(evo::Evaluation{m.id, o.fitness, o.status != EvalStatus::ok});
       }
-      const FitnessStats fs = fitness_stats(rec.fitness);
-      rec.best = fs.best;
-      rec.mean = fs.mean;
-      rec.sd = fs.sd;
-      rec.species_count = static_cast<std::int64_t>(population.species_count());
-      rec.evaluations = static_cast<std::int64_t>(scheduler.units_total());
-      rec.eval_wall_seconds = eval_seconds;
-
-      try {
-        population.advance(evaluations);
-      } catch (const std::exception& e) {
-        throw RunError("generation " + std::to_string(g) + ": reproduction failed: " + e.what());
-      }
-      StatsRow stats{static_cast<double>(g),
-                     rec.best,
-                     rec.mean,
-                     rec.sd,
-                     static_cast<double>(rec.species_count),
-                     eval_seconds > 0 ? static_cast<double>(rec.evaluations) / eval_seconds : 0.0};
-      commit_generation(out, info, rec, stats,
-                        Checkpoint{population.generation(), population.serialize()},
-                        run.options.archive_fault);
-      GenerationSummary summary{g,
-                                rec.best,
-                                rec.mean,
-                                rec.species_count,
-                                rec.evaluations,
-                                eval_seconds,
-                                seconds_since(t_generation),
-                                {},
-                                0.0,
-                                task->fitness_unit()};
-      for (std::size_t i = 0; i < rec.size(); ++i) {
-        if (rec.status[i] < summary.status_counts.size()) ++summary.status_counts[rec.status[i]];
-        if (rec.status[i] == static_cast<std::uint8_t>(EvalStatus::ok))
-          summary.max_abs_ok_fitness =
-              std::max(summary.max_abs_ok_fitness, std::fabs(rec.fitness[i]));
-      }
-      progress.generation_finished(summary);
-      if (stop_requested() != StopRequest::none &&
-          population.generation() < config.run.generations) {
-        outcome = RunOutcome::interrupted;
-        break;
-      }
+      evaluations.push_back(evo::Evaluation{m.id, rec.fitness.back(), rec.status.back() != 0});
     }
+    const FitnessStats fs = fitness_stats(rec.fitness);
+    rec.best = fs.best;
+    rec.mean = fs.mean;
+    rec.sd = fs.sd;
+    rec.species_count = static_cast<std::int64_t>(population.species_count());
+    // Work units of the generation's results, reused ones too: the attribute is part of
+    // content_digest, which reuse leaves as it was.
+    rec.evaluations = static_cast<std::int64_t>(members.size()) * task.units();
+    rec.eval_wall_seconds = eval_seconds;
+    const auto simulated = static_cast<std::int64_t>(scheduler.units_total());
+
+    try {
+      population.advance(evaluations);
+    } catch (const std::exception& e) {
+      throw RunError("generation " + std::to_string(g) + ": reproduction failed: " + e.what());
+    }
+    StatsRow stats{static_cast<double>(g),
+                   rec.best,
+                   rec.mean,
+                   rec.sd,
+                   static_cast<double>(rec.species_count),
+                   eval_seconds > 0 ? static_cast<double>(simulated) / eval_seconds : 0.0};
+    commit_generation(out, run_.info, rec, stats,
+                      Checkpoint{population.generation(), population.serialize()},
+                      run_.options.archive_fault);
+    run_.memory.remember(rec);
+    GenerationSummary summary{g,
+                              rec.best,
+                              rec.mean,
+                              rec.species_count,
+                              simulated,
+                              eval_seconds,
+                              seconds_since(t_generation_),
+                              {},
+                              0.0,
+                              task.fitness_unit(),
+                              static_cast<std::int64_t>(plan_.reused()) * task.units()};
+    for (std::size_t i = 0; i < rec.size(); ++i) {
+      if (rec.status[i] < summary.status_counts.size()) ++summary.status_counts[rec.status[i]];
+      if (rec.status[i] == static_cast<std::uint8_t>(EvalStatus::ok))
+        summary.max_abs_ok_fitness =
+            std::max(summary.max_abs_ok_fitness, std::fabs(rec.fitness[i]));
+    }
+    progress_.generation_finished(summary);
+    scheduler_.reset();
+  });
+}
+
+RunOutcome RunLoop::close(RunOutcome outcome) {
+  const std::string& out = run_.options.out_path;
+  RunInfo& info = run_.info;
+  guarded([&] {
     info.state = outcome == RunOutcome::complete ? "complete" : "interrupted";
     info.end_time = iso8601_now();
     try {
-      finish_archive(out, info, run.options.archive_fault);
+      finish_archive(out, info, run_.options.archive_fault);
     } catch (const std::exception& e) {
       // Every generation is on disk; only packing them into one file failed (a full disk: the
       // pack needs room for a second copy). The state is still worth recording.
-      update_run_info(out, info, run.options.archive_fault);
-      state_recorded = true;
+      update_run_info(out, info, run_.options.archive_fault);
+      state_recorded_ = true;
       throw RunError(out + ": the run's results are archived (state " + info.state +
                      "), but packing them into one file failed; the archive is readable as it "
                      "is, and --resume packs it: " +
                      e.what());
     }
-    return outcome;
-  } catch (const std::exception& e) {
-    // Leave the archive marked as not running, in one file if possible (best effort: it already
-    // holds the last consistent checkpoint whatever happens here).
-    if (archive_written && !state_recorded) {
-      info.state = "interrupted";
-      info.end_time = iso8601_now();
-      try {
-        finish_archive(out, info, run.options.archive_fault);
-      } catch (...) {
-        try {
-          update_run_info(out, info, run.options.archive_fault);
-        } catch (...) {
-        }
-      }
+  });
+  return outcome;
+}
+
+void RunLoop::mark_interrupted() noexcept {
+  // Leave the archive marked as not running, in one file if possible (best effort: it already
+  // holds the last consistent checkpoint whatever happens here).
+  if (!archive_written_ || state_recorded_) return;
+  state_recorded_ = true;
+  RunInfo& info = run_.info;
+  info.state = "interrupted";
+  try {
+    info.end_time = iso8601_now();
+    finish_archive(run_.options.out_path, info, run_.options.archive_fault);
+  } catch (...) {
+    try {
+      update_run_info(run_.options.out_path, info, run_.options.archive_fault);
+    } catch (...) {
     }
+  }
+}
+
+template <class Step>
+void RunLoop::guarded(const Step& step) {
+  try {
+    step();
+  } catch (const std::exception& e) {
+    mark_interrupted();
     if (dynamic_cast<const RunError*>(&e) != nullptr) throw;
     throw RunError(e.what());
   }
+}
+
+RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporter& progress) {
+  return execute_runs({&run}, executor, {&progress}).front();
+}
+
+std::vector<RunOutcome> execute_runs(const std::vector<PreparedRun*>& runs, UnitExecutor& executor,
+                                     const std::vector<ProgressReporter*>& progress) {
+  if (progress.size() != runs.size())
+    throw std::invalid_argument("execute_runs: " + std::to_string(progress.size()) +
+                                " progress reporters for " + std::to_string(runs.size()) + " runs");
+  std::vector<RunOutcome> outcomes(runs.size(), RunOutcome::complete);
+  std::vector<std::unique_ptr<RunLoop>> loops(runs.size());
+  // The generations in flight, oldest first: units are handed out in that order, so each run
+  // reaches its barrier as early as it can and the others fill the idle workers.
+  std::vector<ActiveGeneration> active;
+  const auto start_next = [&](std::size_t r) {
+    RunLoop& loop = *loops[r];
+    if (loop.finished()) return;
+    if (stop_requested() != StopRequest::none) {
+      outcomes[r] = RunOutcome::interrupted;
+      return;
+    }
+    GenerationScheduler& scheduler = loop.begin_generation();
+    active.push_back(ActiveGeneration{r, &scheduler,
+                                      [&loop](const WorkUnit& unit) { return loop.request(unit); },
+                                      &loop.progress()});
+  };
+  try {
+    for (std::size_t r = 0; r < runs.size(); ++r) {
+      if (runs[r]->already_complete) {
+        finish_complete_run(*runs[r]);
+        outcomes[r] = RunOutcome::already_complete;
+        continue;
+      }
+      loops[r] = std::make_unique<RunLoop>(*runs[r], executor.ranks(), *progress[r]);
+      loops[r]->open();
+    }
+    for (std::size_t r = 0; r < runs.size(); ++r)
+      if (loops[r]) start_next(r);
+    while (!active.empty()) {
+      const std::optional<std::size_t> done = executor.evaluate_any(active);
+      if (!done) {  // a stop-now: every generation in flight is dropped
+        for (const ActiveGeneration& a : active) outcomes[a.run] = RunOutcome::interrupted;
+        active.clear();
+        break;
+      }
+      const auto it = std::find_if(active.begin(), active.end(),
+                                   [&](const ActiveGeneration& a) { return a.run == *done; });
+      if (it == active.end())
+        throw RunError("the executor finished run " + std::to_string(*done) +
+                       ", which has no generation in flight");
+      active.erase(it);
+      loops[*done]->end_generation();
+      start_next(*done);
+    }
+    for (std::size_t r = 0; r < runs.size(); ++r)
+      if (loops[r]) loops[r]->close(outcomes[r]);
+  } catch (...) {
+    // One run's failure ends the job: the other archives keep their last generation and are
+    // marked interrupted, so each --resume continues it.
+    for (const std::unique_ptr<RunLoop>& loop : loops)
+      if (loop) loop->mark_interrupted();
+    throw;
+  }
+  return outcomes;
 }
 
 }  // namespace softevo::master

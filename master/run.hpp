@@ -8,11 +8,14 @@
 // out to worker ranks; everything else is here and is tested without MPI.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "common/config.hpp"
 #include "common/eval_types.hpp"
@@ -20,6 +23,7 @@
 #include "io/archive.hpp"
 #include "io/run_lock.hpp"
 #include "master/progress.hpp"
+#include "master/result_reuse.hpp"
 #include "master/scheduler.hpp"
 
 namespace softevo::master {
@@ -36,17 +40,28 @@ class RunError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Evaluates all work units of one generation.
+// One generation in flight: the run it belongs to (its index in execute_runs), its units and
+// how a unit becomes a request.
+struct ActiveGeneration {
+  std::size_t run = 0;
+  GenerationScheduler* scheduler = nullptr;
+  std::function<EvalRequest(const WorkUnit&)> request;
+  ProgressReporter* progress = nullptr;  // the run's reporter (unit_done)
+};
+
+// Evaluates work units of the generations in flight.
 class UnitExecutor {
  public:
   virtual ~UnitExecutor() = default;
   virtual int ranks() const = 0;
-  // Hands out every unit of `scheduler` (requests built by `make_request`) and stores every
-  // result; reports progress. Returns false if a stop-now request (SIGTERM) interrupted it; the
-  // partial results are then discarded by the caller.
-  virtual bool evaluate(GenerationScheduler& scheduler,
-                        const std::function<EvalRequest(const WorkUnit&)>& make_request,
-                        ProgressReporter& progress) = 0;
+  // Hands out units of `generations` (oldest first: the earlier ones before the later ones) and
+  // stores every result in its scheduler, until one generation is done; returns its run. Units
+  // of other generations may stay in flight across calls (the caller then passes those
+  // generations again, the finished one replaced by its run's next one at the end). Returns
+  // nothing if a stop-now request (SIGTERM) interrupted it; the partial results are then
+  // discarded by the caller. Reports progress.
+  virtual std::optional<std::size_t> evaluate_any(
+      const std::vector<ActiveGeneration>& generations) = 0;
 };
 
 // Single-rank executor: the master evaluates by itself (also the test stand-in).
@@ -55,9 +70,8 @@ class LocalExecutor : public UnitExecutor {
   using EvaluateFn = std::function<EvalResult(const EvalRequest&)>;
   explicit LocalExecutor(EvaluateFn evaluate) : evaluate_(std::move(evaluate)) {}
   int ranks() const override { return 1; }
-  bool evaluate(GenerationScheduler& scheduler,
-                const std::function<EvalRequest(const WorkUnit&)>& make_request,
-                ProgressReporter& progress) override;
+  std::optional<std::size_t> evaluate_any(
+      const std::vector<ActiveGeneration>& generations) override;
 
  private:
   EvaluateFn evaluate_;
@@ -68,6 +82,10 @@ struct RunOptions {
   bool resume = false;     // continue `out_path` if it exists (a new run otherwise)
   bool overwrite = false;  // replace an existing `out_path` (at the first archive write)
   std::string host;        // "" = gethostname()
+  // Throughput (docs/scaling.md); neither changes a result bit. Off = the schedule of earlier
+  // builds, for measuring against it.
+  bool reuse_results = true;  // a genome evaluated before takes that result (result_reuse.hpp)
+  bool longest_first = true;  // hand out the units predicted to take longest first
   // Fault injection for tests only (io/archive.hpp): passed to every archive write of the run.
   io::WriteStepHook archive_fault;
 };
@@ -96,6 +114,8 @@ struct PreparedRun {
   std::optional<std::string> previous_run;
   // Held from start-up to the end of the run (io/run_lock.hpp): no other run writes the archive.
   std::optional<io::RunLock> lock;
+  // The results of the latest archived generation (rebuilt from the archive on --resume).
+  ResultMemory memory;
 };
 
 // Start-up: validates the output path, takes the run lock (a second run on the same archive
@@ -107,6 +127,55 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
 // The loop. Creates or updates the archive; throws RunError (the archive then holds the last
 // consistent checkpoint; its state is set to "interrupted" when possible).
 RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporter& progress);
+// Several runs in one worker pool (softevo-mpi --seeds): each run's generation loop as in
+// execute_run, their generations in flight at once, so the pool stays busy across each run's
+// barrier. Each archive is the one execute_run writes for that run alone (results are stored
+// by id, and nothing of a run depends on another). A stop-now drops every generation in
+// flight; one run's error marks every archive interrupted and is thrown. One outcome per run;
+// `progress`: one reporter per run.
+std::vector<RunOutcome> execute_runs(const std::vector<PreparedRun*>& runs, UnitExecutor& executor,
+                                     const std::vector<ProgressReporter*>& progress);
+
+// One run's generation loop in steps (execute_runs drives several). Every step that fails marks
+// the archive interrupted (best effort) and throws RunError.
+class RunLoop {
+ public:
+  RunLoop(PreparedRun& run, int ranks, ProgressReporter& progress);
+  ~RunLoop();
+  RunLoop(const RunLoop&) = delete;
+  RunLoop& operator=(const RunLoop&) = delete;
+
+  // Creates the archive (a new run) or marks it running again (--resume).
+  void open();
+  bool finished() const;  // every generation of run.generations evaluated
+  // The next generation's units (members whose result is reused are not among them), handed
+  // out longest first unless RunOptions::longest_first is off. Requires !finished().
+  GenerationScheduler& begin_generation();
+  EvalRequest request(const WorkUnit& unit) const;
+  ProgressReporter& progress() const { return progress_; }
+  // After every unit of the generation has its result: archives it, reproduces, checkpoints.
+  void end_generation();
+  // Records the final state (complete or interrupted) and packs the archive.
+  RunOutcome close(RunOutcome outcome);
+  // Marks the archive interrupted, best effort (after an error elsewhere).
+  void mark_interrupted() noexcept;
+
+ private:
+  template <class Step>
+  void guarded(const Step& step);
+
+  using Clock = std::chrono::steady_clock;
+  PreparedRun& run_;
+  ProgressReporter& progress_;
+  std::unique_ptr<tasks::Task> task_;
+  std::vector<std::vector<std::uint8_t>> encoded_;  // members' genomes, member order
+  ReusePlan plan_;
+  std::optional<GenerationScheduler> scheduler_;
+  Clock::time_point t_generation_;
+  Clock::time_point t_eval_;
+  bool archive_written_ = false;
+  bool state_recorded_ = false;
+};
 
 // Helpers shared with the tools.
 std::string iso8601_now();  // "2026-11-22T05:02:53Z"

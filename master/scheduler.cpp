@@ -1,6 +1,8 @@
 #include "master/scheduler.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <numeric>
 #include <span>
 #include <unordered_set>
 #include <utility>
@@ -9,7 +11,8 @@ namespace softevo::master {
 
 GenerationScheduler::GenerationScheduler(std::int64_t generation,
                                          std::vector<std::int64_t> genome_ids,
-                                         const tasks::Task& task)
+                                         const tasks::Task& task,
+                                         const std::vector<double>& predicted_cost)
     : generation_(generation),
       ids_(std::move(genome_ids)),
       task_(task),
@@ -26,12 +29,28 @@ GenerationScheduler::GenerationScheduler(std::int64_t generation,
     for (int u = 0; u < units_per_genome_; ++u) units_.push_back(WorkUnit{m, ids_[m], u});
   results_.resize(units_.size());
   handed_out_.assign(units_.size(), false);
+  hand_out_.resize(units_.size());
+  std::iota(hand_out_.begin(), hand_out_.end(), std::size_t{0});
+  if (predicted_cost.empty()) return;
+  if (predicted_cost.size() != ids_.size())
+    throw SchedulerError("generation " + std::to_string(generation) + ": " +
+                         std::to_string(predicted_cost.size()) + " predicted costs for " +
+                         std::to_string(ids_.size()) + " genomes");
+  for (double c : predicted_cost)
+    if (!std::isfinite(c))
+      throw SchedulerError("generation " + std::to_string(generation) +
+                           ": a predicted cost is not finite");
+  // Stable: equal costs keep member order, so the order is a function of the inputs alone.
+  std::stable_sort(hand_out_.begin(), hand_out_.end(), [&](std::size_t a, std::size_t b) {
+    return predicted_cost[units_[a].member] > predicted_cost[units_[b].member];
+  });
 }
 
 std::optional<WorkUnit> GenerationScheduler::next() {
   if (next_ >= units_.size()) return std::nullopt;
-  handed_out_[next_] = true;
-  return units_[next_++];
+  const std::size_t s = hand_out_[next_++];
+  handed_out_[s] = true;
+  return units_[s];
 }
 
 std::size_t GenerationScheduler::slot(std::int64_t genome_id, std::int32_t unit) const {

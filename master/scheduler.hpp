@@ -1,9 +1,10 @@
 // Self-scheduling of one generation's work units (MPI-free; the MPI master and the single-rank
 // executor both drive it). A work unit is a (genome, unit) pair; the task says how many units a
 // genome has (one for gait, one per direction for directed, §7.4) and how they combine. Units
-// are handed out in a fixed order to whoever asks next; results are stored by (genome id, unit),
-// never by arrival order, so the combined outcome is the same for any number of workers and any
-// timing (ARCHITECTURE.md section 4).
+// are handed out to whoever asks next, the ones predicted to take longest first (so the slowest
+// robots do not start last and leave the other workers idle at the generation's end); results
+// are stored by (genome id, unit), never by arrival or hand-out order, so the combined outcome
+// is the same for any order, any number of workers and any timing (ARCHITECTURE.md section 4).
 #pragma once
 
 #include <cstdint>
@@ -44,9 +45,11 @@ class SchedulerError : public std::runtime_error {
 class GenerationScheduler {
  public:
   // `genome_ids` in member order (need not be sorted, must be unique); `task` gives the units
-  // per genome and combines them (it must outlive the scheduler).
+  // per genome and combines them (it must outlive the scheduler). `predicted_cost`: one value
+  // per genome (any unit, e.g. master/unit_cost.hpp), handed out highest first, ties in member
+  // order; empty = member order (genome-major, units in task order).
   GenerationScheduler(std::int64_t generation, std::vector<std::int64_t> genome_ids,
-                      const tasks::Task& task);
+                      const tasks::Task& task, const std::vector<double>& predicted_cost = {});
 
   std::int64_t generation() const { return generation_; }
   std::size_t units_total() const { return units_.size(); }
@@ -55,7 +58,8 @@ class GenerationScheduler {
   bool has_next() const { return next_ < units_.size(); }
   bool done() const { return done_count_ == units_.size(); }
 
-  // Next unit to hand out (genome-major, units in task order), or nullopt.
+  // Next unit to hand out (highest predicted cost first, units of a genome in task order), or
+  // nullopt.
   std::optional<WorkUnit> next();
   // Stores a result; throws SchedulerError for an unknown (id, unit), a unit that was not
   // handed out or a duplicate result.
@@ -74,7 +78,8 @@ class GenerationScheduler {
   std::vector<std::int64_t> ids_;
   const tasks::Task& task_;
   int units_per_genome_;
-  std::vector<WorkUnit> units_;
+  std::vector<WorkUnit> units_;        // by unit slot: genome-major, units in task order
+  std::vector<std::size_t> hand_out_;  // unit slots in hand-out order
   std::vector<std::optional<EvalResult>> results_;  // by unit slot
   std::vector<bool> handed_out_;
   std::size_t next_ = 0;

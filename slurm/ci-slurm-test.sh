@@ -7,7 +7,9 @@
 #   3. waits (1 s polling, hard timeout), then checks every task and the aggregation job
 #      (COMPLETED, exit 0), every archive (`softevo info --json`: complete, 2 generations) and
 #      the aggregation table (4 runs, 4 experiments);
-#   4. tears the cluster down (trap: also on failure or timeout).
+#   4. submits the same 4 runs packed into one job (slurm/packed.sbatch, 2 ranks, one worker
+#      pool) and checks that each archive equals the array task's (fitness and content digest);
+#   5. tears the cluster down (trap: also on failure or timeout).
 # Usage: slurm/ci-slurm-test.sh [BUILD_DIR]   (default: build; softevo and softevo-mpi built)
 # Exit 0 = pass. Debian's Open MPI launches under Slurm with pmix, not pmi2; an afterok
 # dependency on a failed array needs DependencyParameters=kill_invalid_depend; root needs the
@@ -168,6 +170,29 @@ if [ -f "$summary" ]; then
 else
   log "FAIL: no $summary"; fail=1
 fi
-[ "$fail" = 0 ] || show_logs
+# The same four runs packed into one job: the archives of the array tasks, bit for bit.
+PACKED=$STATE/packed
+read -r JOB PAGG < <(SOFTEVO_BUILD=$BUILD SOFTEVO_RUNS=$PACKED SOFTEVO_NODES=1 \
+  SOFTEVO_TASKS_PER_NODE=2 SOFTEVO_SEEDS=1 SOFTEVO_TIME=00:30:00 \
+  SOFTEVO_ARGS="--generations 2 --population 4 --set body.lattice=[5,5,5] --set task.eval_seconds=0.1" \
+  "$ROOT/slurm/submit.sh")
+log "submitted packed job $JOB, aggregation $PAGG"
+while [ -n "$(squeue -h -j "$JOB,$PAGG" 2>/dev/null)" ]; do
+  if [ "$(date +%s)" -gt "$deadline" ]; then
+    log "TIMEOUT after $TIMEOUT s"; squeue || true; exit 1
+  fi
+  sleep 1
+done
+check jobs_ok "$JOB"
+check jobs_ok "$PAGG"
+digests() { "$BUILD/bin/softevo" info "$1" --json |
+  python3 -c 'import json,sys; d=json.load(sys.stdin); print(d["fitness_digest"], d["content_digest"])'; }
+for exp in gait-open gait-closed dir-open dir-closed; do
+  a=$(digests "$RUNS/$exp-01.h5" || echo "unreadable array archive")
+  p=$(digests "$PACKED/$exp-01.h5" || echo "unreadable packed archive")
+  [ "$a" = "$p" ] && log "ok: packed $exp-01.h5 = array task ($p)" ||
+    { log "FAIL: packed $exp-01.h5: $p, array task: $a"; fail=1; }
+done
+[ "$fail" = 0 ] || { show_logs; for f in "$PACKED"/*.out; do echo "--- $f"; tail -n 20 "$f"; done; }
 if [ "$fail" = 0 ]; then log "1 passed, 0 failed"; else log "0 passed, 1 failed"; fi
 exit "$fail"

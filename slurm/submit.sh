@@ -2,6 +2,12 @@
 # Submit the 4x10 grid and its aggregation job (runs only if every array task succeeded).
 #   slurm/submit.sh                      # the full grid: 40 tasks, 5 ranks each
 #   SOFTEVO_ARRAY=0,10,20,30 SOFTEVO_NTASKS=2 SOFTEVO_ARGS="--generations 2" slurm/submit.sh
+#   SOFTEVO_NODES=4 SOFTEVO_TASKS_PER_NODE=128 slurm/submit.sh
+#                                        # packed: all 40 runs in one job on 4 nodes, one
+#                                        # worker pool (slurm/packed.sbatch)
+# Packed mode (SOFTEVO_NODES set): SOFTEVO_SEEDS (default 1-10, the seeds of every experiment)
+# and SOFTEVO_TASKS_PER_NODE (ranks per node, default: Slurm's, one per core) replace
+# SOFTEVO_ARRAY and SOFTEVO_NTASKS.
 # Prints "ARRAY_JOB_ID AGGREGATION_JOB_ID". Environment: see slurm/grid.sbatch, plus
 #   SOFTEVO_ARRAY (array spec, default 0-39), SOFTEVO_NTASKS (ranks per task, default 5),
 #   SOFTEVO_TIME (time limit per task, default 7-00:00:00), SOFTEVO_BUILD (default build), and
@@ -44,6 +50,31 @@ for b in "$SOFTEVO_MPI" "$SOFTEVO_CLI"; do
   [ -x "$b" ] || { echo "submit.sh: $b not built (cmake --build $BUILD)" >&2; exit 2; }
 done
 mkdir -p "$SOFTEVO_RUNS"
+if [ -n "${SOFTEVO_NODES:-}" ]; then
+  export SOFTEVO_SEEDS=${SOFTEVO_SEEDS:-$SOFTEVO_SEED_FIRST-$(( SOFTEVO_SEED_FIRST + SOFTEVO_REPS - 1 ))}
+  # The aggregation reads the archives of the array tasks these runs stand for
+  # (t = REPS e + seed - SEED_FIRST).
+  tasks=()
+  IFS=, read -r -a items <<<"$SOFTEVO_SEEDS"
+  for (( e = 0; e < ${#EXPS[@]}; e++ )); do
+    for item in "${items[@]}"; do
+      for (( s = ${item%-*}; s <= ${item#*-}; s++ )); do
+        tasks+=($(( e * SOFTEVO_REPS + s - SOFTEVO_SEED_FIRST )))
+      done
+    done
+  done
+  export SOFTEVO_ARRAY=$(IFS=,; echo "${tasks[*]}")
+  per_node=()
+  [ -n "${SOFTEVO_TASKS_PER_NODE:-}" ] && per_node=(--ntasks-per-node="$SOFTEVO_TASKS_PER_NODE")
+  JOB=$(sbatch --parsable "${SITE_ARGS[@]}" --nodes="$SOFTEVO_NODES" "${per_node[@]}" \
+    --time="${SOFTEVO_TIME:-7-00:00:00}" --chdir="$SOFTEVO_RUNS" \
+    --output="$SOFTEVO_RUNS/softevo-packed-%j.out" "$ROOT/slurm/packed.sbatch")
+  JOB=${JOB%%;*}
+  AGG=$(sbatch --parsable "${SITE_ARGS[@]}" --dependency="afterok:$JOB" --chdir="$SOFTEVO_RUNS" \
+    --output="$SOFTEVO_RUNS/softevo-grid-aggregate-%j.out" "$ROOT/slurm/aggregate.sbatch")
+  echo "$JOB ${AGG%%;*}"
+  exit 0
+fi
 ARRAY=$(sbatch --parsable "${SITE_ARGS[@]}" --array="$SOFTEVO_ARRAY" --ntasks="${SOFTEVO_NTASKS:-5}" \
   --time="${SOFTEVO_TIME:-7-00:00:00}" --chdir="$SOFTEVO_RUNS" \
   --output="$SOFTEVO_RUNS/softevo-grid-%A_%a.out" "$ROOT/slurm/grid.sbatch")

@@ -1,7 +1,9 @@
 #include "worker/worker_loop.hpp"
 
 #include <chrono>
+#include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -10,12 +12,20 @@
 
 namespace softevo::worker {
 
-WorkerOutcome run_worker_loop(const mpi::Communicator& comm, const Config& config,
-                              std::uint64_t config_hash, const EvaluateOptions& options,
-                              const std::function<std::string()>& stop_signal) {
+namespace {
+
+// A config of the job and its task.
+struct RunConfig {
+  Config config;
+  std::uint64_t hash = 0;
+  std::unique_ptr<tasks::Task> task;
+};
+
+WorkerOutcome serve(const mpi::Communicator& comm, const std::vector<RunConfig>& runs,
+                    const EvaluateOptions& options,
+                    const std::function<std::string()>& stop_signal) {
   constexpr int kMaster = 0;
   WorkerOutcome outcome;
-  const std::unique_ptr<tasks::Task> task = tasks::make_task(config);
   const std::string rank = "rank " + std::to_string(comm.rank());
 
   // Why this worker must stop; "" while it serves. Asked once per control frame: a getppid()
@@ -63,9 +73,13 @@ WorkerOutcome run_worker_loop(const mpi::Communicator& comm, const Config& confi
     leave_if_stopping();
     if (left) continue;  // sent before the master read Tag::leaving: it is dropped there too
     const EvalRequest request = decode_eval_request(message.bytes);
+    // The run of the request; a hash of none of them is the first one's mismatch (rejected).
+    const RunConfig* run = &runs.front();
+    for (const RunConfig& r : runs)
+      if (r.hash == request.config_hash) run = &r;
     EvalResult result;
     try {
-      result = evaluate(config, *task, config_hash, request, unit_options);
+      result = evaluate(run->config, *run->task, run->hash, request, unit_options);
     } catch (const ConfigMismatch& e) {
       comm.send(kMaster, mpi::Tag::error, rank + " rejected a request: " + e.what());
       continue;  // the master ends the run; keep serving until it does
@@ -76,6 +90,25 @@ WorkerOutcome run_worker_loop(const mpi::Communicator& comm, const Config& confi
     comm.send(kMaster, mpi::Tag::result, encode_eval_result(result));
     ++outcome.units_evaluated;
   }
+}
+
+}  // namespace
+
+WorkerOutcome run_worker_loop(const mpi::Communicator& comm, const Config& config,
+                              std::uint64_t config_hash, const EvaluateOptions& options,
+                              const std::function<std::string()>& stop_signal) {
+  std::vector<RunConfig> runs;
+  runs.push_back(RunConfig{config, config_hash, tasks::make_task(config)});
+  return serve(comm, runs, options, stop_signal);
+}
+
+WorkerOutcome run_worker_loop(const mpi::Communicator& comm, const std::vector<Config>& configs,
+                              const EvaluateOptions& options,
+                              const std::function<std::string()>& stop_signal) {
+  if (configs.empty()) throw std::invalid_argument("run_worker_loop: no config");
+  std::vector<RunConfig> runs;
+  for (const Config& c : configs) runs.push_back(RunConfig{c, config_hash(c), tasks::make_task(c)});
+  return serve(comm, runs, options, stop_signal);
 }
 
 }  // namespace softevo::worker

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "common/config.hpp"
 #include "mpi/communicator.hpp"
@@ -40,6 +41,11 @@ struct WorkerOutcome {
 // message and aborts the job).
 WorkerOutcome run_worker_loop(const mpi::Communicator& comm, const Config& config,
                               std::uint64_t config_hash, const EvaluateOptions& options = {},
+                              const std::function<std::string()>& stop_signal = {});
+// The worker of several runs in one job (softevo-mpi --seeds): each request is evaluated with
+// the config whose hash it carries; a hash none of `configs` has is rejected as above.
+WorkerOutcome run_worker_loop(const mpi::Communicator& comm, const std::vector<Config>& configs,
+                              const EvaluateOptions& options = {},
                               const std::function<std::string()>& stop_signal = {});
 
 }  // namespace softevo::worker

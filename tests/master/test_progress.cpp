@@ -43,6 +43,14 @@ TEST(Progress, TheGenerationLineCountsEveryStatusAndNamesTheFitnessUnit) {
   EXPECT_NE(line.find("eval/s    3.00"), std::string::npos) << line;
 }
 
+TEST(Progress, ReusedUnitsAreCountedWhenThereAreAny) {
+  GenerationSummary s = summary_of(counts(12, 0, 0, 0, 0), 1.5);
+  EXPECT_EQ(generation_line(s, 10, 1.0, 1.0).find("reused"), std::string::npos);
+  s.reused = 4;
+  const std::string line = generation_line(s, 10, 1.0, 1.0);
+  EXPECT_NE(line.find("  reused 4"), std::string::npos) << line;
+}
+
 TEST(Progress, RareStatusesAreCountedWhenTheyOccur) {
   EXPECT_EQ(status_counts_text(counts(1, 0, 0, 0, 0, 2, 3)),
             "ok 1, flipped 0, exploded 0, diverged 0, failed 0, timeout 2, invalid body 3");

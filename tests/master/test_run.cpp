@@ -416,6 +416,7 @@ TEST(RunArchive, AStopDuringTheLastEvaluationOfAGenerationArchivesNothingOfIt) {
   ASSERT_EQ(run_once(config, ref, false), RunOutcome::complete);
   RunOptions options;
   options.out_path = out;
+  options.reuse_results = false;  // every member is a unit: the count below finds the last one
   PreparedRun run = prepare_run(config, options, 1);
   std::size_t evaluated = 0;
   const std::size_t first_generation = run.population->members().size();

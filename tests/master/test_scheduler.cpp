@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 
 namespace softevo::master {
@@ -44,6 +45,36 @@ TEST(Scheduler, GaitHasOneUnitPerGenome) {
   }
   EXPECT_EQ(ids, (std::vector<std::int64_t>{5, 3, 9}));
   EXPECT_FALSE(s.done());
+}
+
+TEST(Scheduler, PredictedCostsHandOutTheLongestFirstAndKeepTheOutcomes) {
+  const std::vector<std::int64_t> ids = {4, 1, 7, 2};
+  const TaskOf directed(TaskKind::directed, 2);
+  const auto run = [&](const std::vector<double>& costs, std::vector<std::int64_t>* order) {
+    GenerationScheduler s(0, ids, *directed.task, costs);
+    std::vector<WorkUnit> units;
+    while (auto u = s.next()) units.push_back(*u);
+    for (const WorkUnit& u : units) {
+      order->push_back(u.genome_id);
+      s.complete(result(u.genome_id, u.unit, 0.25 * static_cast<double>(u.genome_id + u.unit)));
+    }
+    return s.outcomes();
+  };
+  std::vector<std::int64_t> fixed, longest_first;
+  const std::vector<GenomeOutcome> a = run({}, &fixed);
+  // Ties (4 and 2 cost 5) keep member order; a genome's units stay in task order.
+  const std::vector<GenomeOutcome> b = run({5.0, 1.0, 9.0, 5.0}, &longest_first);
+  EXPECT_EQ(fixed, (std::vector<std::int64_t>{4, 4, 1, 1, 7, 7, 2, 2}));
+  EXPECT_EQ(longest_first, (std::vector<std::int64_t>{7, 7, 4, 4, 2, 2, 1, 1}));
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t m = 0; m < a.size(); ++m) {  // member order, whatever the hand-out order
+    EXPECT_EQ(a[m].genome_id, ids[m]);
+    EXPECT_EQ(b[m].genome_id, ids[m]);
+    EXPECT_EQ(a[m].fitness, b[m].fitness);
+  }
+  EXPECT_THROW(GenerationScheduler(0, ids, *directed.task, {1.0, 2.0}), SchedulerError);
+  EXPECT_THROW(GenerationScheduler(0, ids, *directed.task, {1.0, 2.0, 3.0, std::nan("")}),
+               SchedulerError);
 }
 
 TEST(Scheduler, OutcomesDoNotDependOnArrivalOrder) {

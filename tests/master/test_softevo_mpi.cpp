@@ -231,7 +231,9 @@ TEST(SoftevoMpi, TinyRunWritesValidArchive) {
     for (std::size_t i = 0; i < r.size(); ++i) {
       EXPECT_FALSE(r.genome[i].empty());
       EXPECT_GT(r.voxels[i], 0);
-      if (world_size() > 1) {
+      if (r.reused_from[i] != io::kNotReused) {
+        EXPECT_EQ(r.worker_rank[i], -1);  // an elite carried over: not simulated again
+      } else if (world_size() > 1) {
         EXPECT_GE(r.worker_rank[i], 1);  // the master does not evaluate when it has workers
       }
     }
@@ -324,6 +326,89 @@ TEST(SoftevoMpi, ExtendingAFinishedRunEqualsOneLongerRun) {
                         "--set", "task.eval_seconds=0.2"}),
             2);
   EXPECT_EQ(digests(extended).content, a.content);
+}
+
+// The reuse marks of every generation (not part of the digests).
+std::vector<std::vector<std::int64_t>> reused_columns(const std::string& path) {
+  const Archive a(path);
+  std::vector<std::vector<std::int64_t>> out;
+  for (std::int64_t g : a.generations()) out.push_back(a.generation(g).reused_from);
+  return out;
+}
+
+// Rank 0: each archive of `packed_dir` (<config name>-<seed>.h5) equals the run alone in
+// `alone_dir` (same names): digests and reuse marks.
+void expect_same_runs(const std::string& packed_dir, const std::string& alone_dir,
+                      const std::vector<std::string>& names) {
+  for (const std::string& name : names) {
+    const std::string packed = packed_dir + "/" + name, alone = alone_dir + "/" + name;
+    const Archive p(packed), a(alone);
+    EXPECT_EQ(p.info().state, "complete") << packed;
+    EXPECT_EQ(hash_hex(fitness_digest(p)), hash_hex(fitness_digest(a))) << packed;
+    EXPECT_EQ(hash_hex(content_digest(p)), hash_hex(content_digest(a))) << packed;
+    EXPECT_EQ(reused_columns(packed), reused_columns(alone)) << packed;
+  }
+}
+
+const std::vector<std::string> kPackedNames = {"tiny-01.h5", "tiny-02.h5", "tiny-03.h5"};
+
+// Three seeds in one job share the workers: each archive is the one of its run alone, bit for
+// bit, for any rank count.
+TEST(SoftevoMpi, SeveralRunsInOneJobWriteTheArchivesOfTheRunsAlone) {
+  TempDir dir;
+  const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
+  if (world_rank() == 0) {
+    fs::create_directories(dir.file("alone"));
+  }
+  for (int seed = 1; seed <= 3; ++seed) {
+    const std::string out = dir.file("alone/tiny-0" + std::to_string(seed) + ".h5");
+    ASSERT_EQ(run_on(1, {"--config", cfg, "--seed", std::to_string(seed), "--out", out}), 0);
+  }
+  // One rank (the master evaluates, run by run) and every rank (units of the runs interleaved).
+  for (int np : world_size() > 1 ? std::vector<int>{1, world_size()} : std::vector<int>{1}) {
+    const std::string packed = dir.file("packed-np" + std::to_string(np));
+    ASSERT_EQ(run_on(np, {"--config", cfg, "--seeds", "1-3", "--out-dir", packed}), 0)
+        << "np=" << np;
+    if (world_rank() == 0) expect_same_runs(packed, dir.file("alone"), kPackedNames);
+  }
+  // Wrong combinations are refused before anything is written.
+  EXPECT_EQ(run_on(world_size(), {"--config", cfg, "--seeds", "1-3", "--out", dir.file("x.h5")}),
+            2);
+  EXPECT_EQ(run_on(world_size(), {"--config", cfg, "--seeds", "3-1"}), 2);
+  EXPECT_EQ(run_on(world_size(), {"--config", cfg, "--config", cfg, "--out", dir.file("y.h5")}), 2);
+}
+
+// kill -9 of a job of three runs, then --resume of the job: the archives of the uninterrupted
+// runs.
+TEST(SoftevoMpi, SeveralRunsInOneJobResumeAfterSigkill) {
+  TempDir dir;
+  const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
+  const std::vector<std::string> common = {"--config", cfg, "--seeds", "1-3", "--generations", "5"};
+  std::vector<std::string> args = common;
+  args.insert(args.end(), {"--out-dir", dir.file("ref")});
+  ASSERT_EQ(run_on(world_size(), args), 0);
+  const std::string killed = dir.file("killed");
+  int ok = 1;
+  if (world_rank() == 0) {
+    std::vector<std::string> cargs = common;
+    cargs.insert(cargs.end(), {"--out-dir", killed});
+    const pid_t child = spawn_child(cargs, dir.file("child.log"));
+    ok = child > 0 && wait_for_generations(killed + "/tiny-01.h5", 2, child) ? 1 : 0;
+    if (child > 0) {
+      kill(child, SIGKILL);
+      bool signalled = false;
+      wait_exit(child, &signalled);
+      EXPECT_TRUE(signalled) << "the child finished before it could be killed";
+    }
+    EXPECT_EQ(ok, 1) << file_bytes(dir.file("child.log"));
+    EXPECT_LT(Archive(killed + "/tiny-01.h5").info().generations_done, 5);
+  }
+  MPI_Bcast(&ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  ASSERT_EQ(ok, 1);
+  args = common;
+  args.insert(args.end(), {"--out-dir", killed, "--resume"});
+  ASSERT_EQ(run_on(world_size(), args), 0);
+  if (world_rank() == 0) expect_same_runs(killed, dir.file("ref"), kPackedNames);
 }
 
 TEST(SoftevoMpi, ResumeAfterSigkillGivesTheSameArchive) {
