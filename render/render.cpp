@@ -301,7 +301,8 @@ void draw_floor(Raster& r, std::vector<Colour>& base, const SceneOptions& option
     const double beta = *options.target_direction_deg * kPi / 180.0;
     target_dir = Eigen::Vector2d(std::cos(beta), std::sin(beta));
   }
-  // A bounded stage starts at y_lo: the ground in front of it (a row's near end) is not drawn.
+  // A bounded stage starts at y_lo: the terrain in front of it (a row's near end) is not drawn;
+  // the plane floor is (below).
   const auto stage_front = [&](const Eigen::Vector3d& p) {
     return bounded && cam.forward.y() > 1e-9 ? (y_lo - p.y()) / cam.forward.y()
                                              : -std::numeric_limits<double>::infinity();
@@ -320,15 +321,27 @@ void draw_floor(Raster& r, std::vector<Colour>& base, const SceneOptions& option
                                 cam.up * ((0.5 * r.height - (py + 0.5)) / r.scale);
       double t = (options.floor_z - p.z()) / cam.forward.z();
       float shade = 1.0F;
+      bool ground_seen = true;
       if (options.ground) {
         const auto hit = ground_hit(options, p, cam.forward, std::max(0.25 / output_scale, 1e-3),
                                     stage_front(p));
-        if (!hit) continue;
-        t = hit->first;
-        shade = hit->second;
+        ground_seen = hit.has_value();
+        if (!ground_seen && !bounded) continue;
+        if (ground_seen) {
+          t = hit->first;
+          shade = hit->second;
+        }
       }
-      const Eigen::Vector3d q = p + t * cam.forward;
-      if (bounded && (q.y() < y_lo || q.y() > y_hi)) continue;
+      Eigen::Vector3d q = p + t * cam.forward;
+      // In front of a bounded stage the plane floor goes on to the frame's lower edge, so that
+      // the picture has no empty band below the stage (its far edge stays the horizon).
+      if (bounded && (!ground_seen || q.y() < y_lo)) {
+        t = (options.floor_z - p.z()) / cam.forward.z();
+        q = p + t * cam.forward;
+        shade = 1.0F;
+        if (q.y() >= y_lo) continue;  // a ray under a raised stage's cut face: background
+      }
+      if (bounded && q.y() > y_hi) continue;
       Colour c = floor_colour;
       if (near_grid_line(q.x(), spacing * 10.0, line_half) ||
           near_grid_line(q.y(), spacing * 10.0, line_half)) {
@@ -540,13 +553,44 @@ Eigen::AlignedBox3d pose_bounds(const Body& body, const Pose& pose) {
   return box;
 }
 
+namespace {
+
+// CIELAB (D65 white) to 8-bit sRGB, clamped to the gamut (docs/rendering.md, "Stiffness colours").
+std::array<std::uint8_t, 3> lab_to_srgb(double lightness, double a, double b) {
+  const double fy = (lightness + 16.0) / 116.0;
+  const double fx = fy + a / 500.0, fz = fy - b / 200.0;
+  // The inverse of CIELAB's cube-root compression, linear below (6/29)^3.
+  const auto expand = [](double t) {
+    return t > 6.0 / 29.0 ? t * t * t : 3.0 * (6.0 / 29.0) * (6.0 / 29.0) * (t - 4.0 / 29.0);
+  };
+  const double x = 0.95047 * expand(fx), y = expand(fy), z = 1.08883 * expand(fz);
+  const double linear[3] = {3.2406 * x - 1.5372 * y - 0.4986 * z,
+                            -0.9689 * x + 1.8758 * y + 0.0415 * z,
+                            0.0557 * x - 0.2040 * y + 1.0570 * z};
+  std::array<std::uint8_t, 3> out{};
+  for (int c = 0; c < 3; ++c) {
+    const double v = std::clamp(linear[c], 0.0, 1.0);
+    const double encoded = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
+    out[static_cast<std::size_t>(c)] = static_cast<std::uint8_t>(std::lround(255.0 * encoded));
+  }
+  return out;
+}
+
+}  // namespace
+
 std::array<std::uint8_t, 3> material_colour(int material, int material_count) {
+  // f = 0 softest (material 1) ... 1 stiffest. A helix in CIELCh: lightness and hue linear in f
+  // at constant chroma, so every step of f is the same colour difference (CIE76 dE) and
+  // lightness orders the materials (docs/rendering.md, "Stiffness colours"): soft is a light
+  // red (L* 58, h 40 deg), stiff a dark blue (L* 32, h 302 deg), through magenta.
   const double f =
       material_count > 1
           ? std::clamp(static_cast<double>(material - 1) / (material_count - 1), 0.0, 1.0)
           : 1.0;
-  return {static_cast<std::uint8_t>(std::lround(255.0 - 255.0 * f)), 0,
-          static_cast<std::uint8_t>(std::lround(255.0 * f))};
+  const double lightness = kSoftLightness + (kStiffLightness - kSoftLightness) * f;
+  const double hue_rad = (kSoftHueDeg + (kStiffHueDeg - kSoftHueDeg) * f) * kPi / 180.0;
+  return lab_to_srgb(lightness, kMaterialChroma * std::cos(hue_rad),
+                     kMaterialChroma * std::sin(hue_rad));
 }
 
 namespace {

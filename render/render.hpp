@@ -143,9 +143,13 @@ Image hstack(const std::vector<Image>& panels, int gap,
 long count_pixels_unlike(const Image& image, std::array<std::uint8_t, 3> background,
                          int tolerance = 8);
 
-// Stiffness colour of the thesis: material k of n goes from red (k = 1, softest) to blue
-// (k = n, stiffest): red = 255 - 255 (k-1)/(n-1), blue = 255 (k-1)/(n-1).
+// Stiffness colour: material k of n from a light red (k = 1, softest) to a dark blue (k = n,
+// stiffest) in equal perceived steps with falling lightness (docs/rendering.md).
 std::array<std::uint8_t, 3> material_colour(int material, int material_count);
+// The map's ends in CIELCh (lightness L*, hue [deg], one chroma).
+inline constexpr double kSoftLightness = 58.0, kStiffLightness = 32.0;
+inline constexpr double kSoftHueDeg = 400.0, kStiffHueDeg = 302.0;  // 400 = 40 past a turn
+inline constexpr double kMaterialChroma = 70.0;
 
 // Text with its top-left corner at pixel (x, y), cap height 7 `size` pixels: in DejaVu Sans
 // when the build has stb_truetype and the font (render/font.hpp), else in a small built-in

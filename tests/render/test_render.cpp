@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace softevo::render {
 namespace {
@@ -68,11 +69,47 @@ long red_line_pixels(const Image& img, int x_from, int x_to) {
   return n;
 }
 
-TEST(RenderColour, ThesisScaleRedSoftestToBlueStiffest) {
-  // 255 - 255 (k-1)/9 red, 255 (k-1)/9 blue (thesis figure 3.1 colour map).
-  EXPECT_EQ(material_colour(1, 10), (std::array<std::uint8_t, 3>{255, 0, 0}));
-  EXPECT_EQ(material_colour(10, 10), (std::array<std::uint8_t, 3>{0, 0, 255}));
-  EXPECT_EQ(material_colour(4, 10), (std::array<std::uint8_t, 3>{170, 0, 85}));
+// 8-bit sRGB to CIELAB (D65), written out here independently of the renderer's inverse.
+std::array<double, 3> srgb_to_lab(std::array<std::uint8_t, 3> c) {
+  double lin[3];
+  for (int i = 0; i < 3; ++i) {
+    const double v = c[static_cast<std::size_t>(i)] / 255.0;
+    lin[i] = v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+  }
+  const double x = (0.4124 * lin[0] + 0.3576 * lin[1] + 0.1805 * lin[2]) / 0.95047;
+  const double y = 0.2126 * lin[0] + 0.7152 * lin[1] + 0.0722 * lin[2];
+  const double z = (0.0193 * lin[0] + 0.1192 * lin[1] + 0.9505 * lin[2]) / 1.08883;
+  const auto f = [](double t) {
+    return t > 216.0 / 24389.0 ? std::cbrt(t) : (24389.0 / 27.0 * t + 16.0) / 116.0;
+  };
+  return {116.0 * f(y) - 16.0, 500.0 * (f(x) - f(y)), 200.0 * (f(y) - f(z))};
+}
+
+TEST(RenderColour, SoftRedToStiffBlueInEqualPerceivedSteps) {
+  constexpr int kMaterials = 10;
+  std::vector<std::array<double, 3>> lab;
+  for (int k = 1; k <= kMaterials; ++k) lab.push_back(srgb_to_lab(material_colour(k, kMaterials)));
+  // Ends at the documented lightness (within the 8-bit rounding, ~0.5 L*).
+  EXPECT_NEAR(lab.front()[0], kSoftLightness, 0.6);
+  EXPECT_NEAR(lab.back()[0], kStiffLightness, 0.6);
+  // The softest is red, the stiffest blue.
+  const auto soft = material_colour(1, kMaterials), stiff = material_colour(kMaterials, kMaterials);
+  EXPECT_GT(soft[0], soft[2] + 100);
+  EXPECT_GT(soft[0], soft[1] + 100);
+  EXPECT_GT(stiff[2], stiff[0] + 80);
+  EXPECT_GT(stiff[2], stiff[1] + 80);
+  // Lightness falls with stiffness, and every step is the same colour difference: on the helix
+  // dE = sqrt(dL^2 + (C dh)^2) = sqrt((26/9)^2 + (70 x 98 deg / 9 in rad)^2) = 13.62.
+  const double expected_step =
+      std::hypot(26.0 / 9.0, 70.0 * (98.0 * 3.14159265358979 / 180.0) / 9.0);
+  for (std::size_t k = 1; k < lab.size(); ++k) {
+    EXPECT_LT(lab[k][0], lab[k - 1][0]) << "material " << k + 1;
+    const double step =
+        std::hypot(lab[k][0] - lab[k - 1][0], lab[k][1] - lab[k - 1][1], lab[k][2] - lab[k - 1][2]);
+    EXPECT_NEAR(step, expected_step, 0.05 * expected_step) << "material " << k + 1;
+  }
+  // One material only: the stiff end.
+  EXPECT_EQ(material_colour(1, 1), stiff);
 }
 
 TEST(RenderPng, RoundTripKeepsSizeAndPixels) {
@@ -273,6 +310,31 @@ TEST(RenderImage, GroundIsDrawnAsItIs) {
       }
     EXPECT_GT(differ_ramp, 500) << "view " << static_cast<int>(view);
     EXPECT_LT(differ_elsewhere, differ_ramp / 4) << "view " << static_cast<int>(view);
+  }
+}
+
+TEST(RenderImage, SideViewFloorFillsTheFrameBelowTheStage) {
+  // A side view framed with room below the floor: every pixel of the bottom row is floor (the
+  // floor's grey), none is the pale background, with and without a terrain.
+  const Body body = body_from_plan(bar(3, 10));
+  const Pose pose = rest_pose(body);
+  Camera cam = view_camera(View::side, 200, 150);
+  cam.scale = 2000.0;
+  cam.center = Eigen::Vector3d(kS, 0.0, 0.02);  // the floor (z = -s/2) sits low in the frame
+  SceneOptions flat;
+  flat.supersample = 1;
+  SceneOptions bumps = flat;
+  bumps.ground = [](double x, double) { return -0.005 + 0.003 * std::sin(200.0 * x); };
+  bumps.ground_min = -0.008;
+  bumps.ground_max = -0.002;
+  for (const SceneOptions* opt : {&flat, &bumps}) {
+    const Image img = render_poses(body, {pose}, cam, *opt);
+    int background = 0;
+    for (int x = 0; x < img.width; ++x) {
+      const auto p = img.pixel(x, img.height - 1);
+      background += p[2] > 225;  // the background is bluish white; the floor is at most 214
+    }
+    EXPECT_EQ(background, 0) << (opt == &flat ? "flat" : "bumps");
   }
 }
 
