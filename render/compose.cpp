@@ -100,17 +100,15 @@ void draw_path(Image& image, const Camera& cam, const std::vector<Eigen::Vector3
 
 }  // namespace
 
-std::size_t pose_at(const std::vector<Pose>& poses, double t) {
-  std::size_t best = 0;
-  double best_gap = std::abs(poses[0].time - t);
-  for (std::size_t i = 1; i < poses.size(); ++i) {
-    const double gap = std::abs(poses[i].time - t);
-    if (gap < best_gap) {
-      best = i;
-      best_gap = gap;
-    }
-  }
-  return best;
+std::size_t pose_at(const std::vector<Pose>& poses, double t, std::size_t from) {
+  // |time - t| never rises and then never falls along ascending times (poses may share a
+  // time): walk to the end of the nearest run, then back to its first pose.
+  const auto gap = [&](std::size_t i) { return std::abs(poses[i].time - t); };
+  const std::size_t start = std::min(from, poses.size() - 1);
+  std::size_t nearest = start;
+  while (nearest + 1 < poses.size() && gap(nearest + 1) <= gap(nearest)) ++nearest;
+  while (nearest > start && gap(nearest - 1) == gap(nearest)) --nearest;
+  return nearest;
 }
 
 Eigen::AlignedBox3d scene_box(const Body& body, const std::vector<Pose>& poses, double floor_z) {
@@ -253,10 +251,9 @@ int render_frames(const Clip& clip, View view, const VideoOptions& options,
   const std::vector<double> times = video_frame_times(options.fps, clip.poses.back().time);
   std::size_t nearest = 0;
   for (std::size_t f = 0; f < times.size(); ++f) {
-    // pose_at's choice, found by walking on: times and poses both ascend (a search from the
-    // start for every frame made a long video quadratic in its length).
-    const auto gap = [&](std::size_t i) { return std::abs(clip.poses[i].time - times[f]); };
-    while (nearest + 1 < clip.poses.size() && gap(nearest + 1) < gap(nearest)) ++nearest;
+    // Walking on from the last frame's pose: a search from the start for every frame made a
+    // long video quadratic in its length.
+    nearest = pose_at(clip.poses, times[f], nearest);
     const Pose& pose = clip.poses[nearest];
     Eigen::Vector3d follow = centroid(pose) - start_centroid;
     follow.z() = 0.0;

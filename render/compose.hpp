@@ -21,8 +21,10 @@ struct Clip {
   std::string name;
 };
 
-// Index of the pose nearest to time t [s].
-std::size_t pose_at(const std::vector<Pose>& poses, double t);
+// Index of the pose nearest to time t [s], the earlier of two equally near. Poses ascend in
+// time, so the search walks on from `from` (a caller asking for ascending times passes its last
+// answer: a whole video is then one pass).
+std::size_t pose_at(const std::vector<Pose>& poses, double t, std::size_t from = 0);
 // Box around the poses' cubes and the floor at `floor_z` [m] under them.
 Eigen::AlignedBox3d scene_box(const Body& body, const std::vector<Pose>& poses, double floor_z);
 

@@ -45,6 +45,20 @@ TEST(Compose, PoseAtIsTheNearestInTime) {
   EXPECT_EQ(pose_at(bar.poses, 0.34), 3u);
   EXPECT_EQ(pose_at(bar.poses, 0.36), 4u);
   EXPECT_EQ(pose_at(bar.poses, 99.0), 10u);
+  // Walking on from an earlier answer gives the same choice.
+  EXPECT_EQ(pose_at(bar.poses, 0.36, 2), 4u);
+  EXPECT_EQ(pose_at(bar.poses, 0.36, 4), 4u);
+}
+
+TEST(Compose, PoseAtTakesTheEarlierOfEquallyNearAndWalksOverSharedTimes) {
+  std::vector<Pose> poses(6);
+  const double times[] = {0.0, 0.1, 0.1, 0.2, 0.3, 0.3};
+  for (std::size_t i = 0; i < poses.size(); ++i) poses[i].time = times[i];
+  EXPECT_EQ(pose_at(poses, 0.25), 3u);  // 0.2 and 0.3 equally near: the earlier
+  EXPECT_EQ(pose_at(poses, 0.1), 1u);   // the first of the poses at 0.1
+  EXPECT_EQ(pose_at(poses, 0.2), 3u);   // past the shared time 0.1
+  EXPECT_EQ(pose_at(poses, 0.4), 4u);   // the first of the last two
+  EXPECT_EQ(pose_at(poses, 0.2, 1), 3u);
 }
 
 TEST(Compose, SceneBoxReachesDownToTheFloor) {
