@@ -83,6 +83,37 @@ async function robotPixels(page) {
   });
 }
 
+// Pixels the chambers darken: the canvas with the chambers shown against the same frame with
+// them hidden (the page's "chambers" box), then shown again.
+async function chamberPixels(page) {
+  return page.evaluate(async () => {
+    const grab = () => {
+      const src = document.querySelector('#scene canvas');
+      const c = document.createElement('canvas');
+      c.width = src.width; c.height = src.height;
+      const g = c.getContext('2d');
+      g.drawImage(src, 0, 0);
+      return g.getImageData(0, 0, c.width, c.height).data;
+    };
+    const redrawn = async (toggle) => {
+      const r0 = window.softevo.renders;
+      toggle.click();
+      while (window.softevo.renders === r0) await new Promise((r) => requestAnimationFrame(r));
+    };
+    const box = document.getElementById('chambers');
+    const shown = grab();
+    await redrawn(box);
+    const hidden = grab();
+    await redrawn(box);
+    let darker = 0;
+    for (let i = 0; i < shown.length; i += 4) {
+      const a = shown[i] + shown[i + 1] + shown[i + 2], b = hidden[i] + hidden[i + 1] + hidden[i + 2];
+      if (a + 30 < b) darker++;
+    }
+    return darker;
+  });
+}
+
 const browser = await puppeteer.launch({
   executablePath: chromium,
   headless: true,
@@ -115,12 +146,17 @@ try {
   await send(page, { type: 'pause' });
   await send(page, { type: 'seek', frame: still });
   await waitFor(page, (i) => window.softevo.last.index === i, still);
-  const drawn = (await probe(page)).renders;
-  await waitFor(page, (r) => window.softevo.renders > r + 2, drawn);
+  await waitFor(page, (i) => window.softevo.renderedIndex === i, still);
   const px = await robotPixels(page);
+  // Paused, nothing changes: the page draws nothing (it renders on change only).
+  const idle0 = (await probe(page)).renders;
+  await sleep(1000);
+  const idle = (await probe(page)).renders - idle0;
+  check(idle === 0, `a paused page does not redraw (${idle} renders in 1 s)`);
   console.log(`pixels: ${JSON.stringify(px)}`);
   check(px.coloured > 2000 && px.blue + px.red > 1500, 'the robot is drawn in stiffness colours');
-  check(px.dark > 100, 'dark chambers show through');
+  const darkened = await chamberPixels(page);
+  check(darkened > 1000, `dark chambers show through (${darkened} pixels darker than without them)`);
   if (shots) await page.screenshot({ path: path.join(shots, 'gait-side.png') });
   await send(page, { type: 'play' });
   // WebM recording of the canvas (MediaRecorder): a second of video.

@@ -11,7 +11,7 @@ THREE.Object3D.DEFAULT_UP.set(0, 0, 1);  // softevo's z is up
 const $ = (id) => document.getElementById(id);
 // What tests and scripts read: counts and the last frame.
 const probe = { frames: 0, renders: 0, fps: 0, bytes: 0, hello: null, ended: null, errors: [],
-  saved: null, last: null, mode: '' };
+  saved: null, last: null, mode: '', renderedIndex: -1 };
 window.softevo = probe;
 
 // ---------------------------------------------------------------- scene
@@ -24,6 +24,11 @@ scene.background = new THREE.Color(0xffffff);
 const camera = new THREE.PerspectiveCamera(35, 1, 0.002, 200);
 const controls = new OrbitControls(camera, renderer.domElement);
 controls.enableDamping = false;
+// The scene is drawn only when something in it changed (a frame, the camera, the size, the
+// target) or while recording: a paused or finished page costs no CPU or GPU time.
+let redraw = true;
+const changed = () => { redraw = true; };
+controls.addEventListener('change', changed);
 scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8a80, 2.2));
 const sun = new THREE.DirectionalLight(0xffffff, 1.4);
 sun.position.set(-1, -2, 3);
@@ -42,6 +47,7 @@ let lastFrame = null;  // the frame shown
 let duration = 10;
 
 function resize() {
+  changed();
   const w = sceneEl.clientWidth, h = sceneEl.clientHeight;
   renderer.setSize(w, h, false);
   camera.aspect = w / Math.max(h, 1);
@@ -93,6 +99,7 @@ function buildFloor(center) {
 }
 
 function setTarget(deg) {
+  changed();
   if (!hello.directed) return;
   if (!targetLine) {
     const geo = new THREE.BufferGeometry().setFromPoints([new THREE.Vector3(), new THREE.Vector3(1, 0, 0)]);
@@ -112,6 +119,7 @@ function setTarget(deg) {
 }
 
 function setup(h) {
+  changed();
   hello = h;
   probe.hello = h;
   duration = (h.planned_records - 1) / h.control_rate;
@@ -135,6 +143,7 @@ function setup(h) {
     for (let j = 0; j < h.chamber_cells; j++) chamberMesh.setColorAt(j, new THREE.Color(0.2, 0.2, 0.22));
     chamberMesh.renderOrder = 1;
     chamberMesh.frustumCulled = false;
+    chamberMesh.visible = $('chambers').checked;
     scene.add(chamberMesh);
   }
   const n = h.planned_records;
@@ -169,6 +178,7 @@ function centroidOf(positions, count) {
 }
 
 function setView(name) {
+  changed();
   const c = lastCentroid || start;
   const d = 0.45;
   const offsets = { side: [0, -d, 0.06], top: [0, -0.001, d], iso: [-0.6 * d, -0.6 * d, 0.45 * d] };
@@ -177,11 +187,14 @@ function setView(name) {
   camera.position.set(c.x + o[0], c.y + o[1], c.z + o[2]);
   controls.update();
 }
+// The chambers can be hidden to see the body alone (and shown again).
+$('chambers').addEventListener('change', () => { if (chamberMesh) chamberMesh.visible = $('chambers').checked; changed(); });
 document.querySelectorAll('[data-view]').forEach((b) => b.addEventListener('click', () => setView(b.dataset.view)));
 
 // Draws a frame: {index, time, items, positions (Float32Array), quats (Float32Array w,x,y,z),
 // pressures, valves, components, fitness, cx, cy, heading, target, last}.
 function showFrame(f) {
+  changed();
   probe.frames++;
   lastFrame = f;
   probe.last = { index: f.index, time: f.time, fitness: f.fitness, cx: f.cx, cy: f.cy, heading: f.heading,
@@ -460,10 +473,13 @@ $('record').onclick = () => {
 let fpsCount = 0, fpsStart = performance.now(), plotsDrawn = 0;
 function animate(now) {
   requestAnimationFrame(animate);
-  controls.update();
-  renderer.render(scene, camera);
-  probe.renders++;
-  fpsCount++;
+  if (redraw || recorder) {
+    redraw = false;
+    renderer.render(scene, camera);
+    probe.renders++;
+    probe.renderedIndex = lastFrame ? lastFrame.index : -1;
+    fpsCount++;
+  }
   if (now - fpsStart >= 1000) { probe.fps = (fpsCount * 1000) / (now - fpsStart); fpsCount = 0; fpsStart = now; }
   // The plots at 5 Hz: hundreds of series points are not worth redrawing every frame.
   if (charts && now - plotsDrawn > 200) {
