@@ -72,9 +72,17 @@ TEST(ViewClientSession, MalformedMessagesAreAnsweredAndChangeNothing) {
   EXPECT_EQ(c.shown(), 1);
 }
 
+// The wall-clock budget of a tick (and of a seek) unbounded: what is simulated then depends on
+// the messages only, not on how fast this machine (or an instrumented build) simulates.
+static view::ClientOptions unbounded() {
+  view::ClientOptions o;
+  o.max_simulation_seconds_per_tick = 1e9;
+  return o;
+}
+
 TEST(ViewClientSession, PlaysPausesSeeksAndResets) {
   const view::ViewInput in = test::block_input(TaskKind::gait, 0.5);
-  view::ClientSession c(in, {});
+  view::ClientSession c(in, unbounded());
   c.start();
   c.handle(R"({"type":"speed","value":2})", true);
   EXPECT_EQ(frames_in(c.tick(0.05)), 1);  // 0.1 s simulated at 2x
@@ -92,6 +100,23 @@ TEST(ViewClientSession, PlaysPausesSeeksAndResets) {
   EXPECT_EQ(c.session().records(), 1);
 }
 
+TEST(ViewClientSession, PlaybackWaitsForASimulationOutOfBudget) {
+  // A zero budget: a tick simulates nothing, so the page is shown no new frame, and the
+  // playback clock does not run ahead of the simulation (it holds one control step past the
+  // last record); once the budget allows, playback goes on from there.
+  const view::ViewInput in = test::block_input(TaskKind::gait, 0.5);
+  view::ClientOptions starved;
+  starved.max_simulation_seconds_per_tick = 0.0;
+  view::ClientSession c(in, starved);
+  c.start();
+  for (int i = 0; i < 10; ++i) EXPECT_EQ(frames_in(c.tick(0.1)), 0);
+  EXPECT_EQ(c.shown(), 0);
+  EXPECT_EQ(c.session().records(), 1);
+  // A step is a message, not playback: it simulates its one frame whatever the budget.
+  EXPECT_EQ(frames_in(c.handle(R"({"type":"step"})", true)), 1);
+  EXPECT_EQ(c.shown(), 1);
+}
+
 TEST(ViewClientSession, RefusesSteeringAGaitRobotAndSavingEarly) {
   const view::ViewInput in = test::block_input(TaskKind::gait, 0.2);
   view::ClientSession c(in, {});
@@ -104,7 +129,7 @@ TEST(ViewClientSession, RefusesSteeringAGaitRobotAndSavingEarly) {
 TEST(ViewClientSession, SavesIntoTheSaveDirectoryAndTellsOnlyTheNames) {
   const test::TmpDir dir;
   const view::ViewInput in = test::block_input(TaskKind::directed, 0.2);
-  view::ClientOptions options;
+  view::ClientOptions options = unbounded();
   options.save_dir = dir.path;
   view::ClientSession c(in, options);
   c.start();
