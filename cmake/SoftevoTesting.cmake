@@ -9,6 +9,14 @@ include(GoogleTest)
 
 set(SOFTEVO_MPI_ENV "OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1;OMPI_MCA_rmaps_base_oversubscribe=1")
 
+# An instrumented build (SOFTEVO_SANITIZE) runs 2-5x slower: its tests get 3x the time, so that
+# a test near its limit in the release build does not time out there.
+macro(softevo_sanitized_timeout var)
+  if(SOFTEVO_SANITIZE)
+    math(EXPR ${var} "${${var}} * 3")
+  endif()
+endmacro()
+
 function(softevo_add_test)
   cmake_parse_arguments(T "" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
   add_executable(${T_NAME} ${T_SOURCES})
@@ -19,6 +27,7 @@ function(softevo_add_test)
   if(NOT T_TIMEOUT)
     set(T_TIMEOUT 300)
   endif()
+  softevo_sanitized_timeout(T_TIMEOUT)
   if(NOT T_LABELS)
     set(T_LABELS unit)
   endif()
@@ -40,6 +49,7 @@ function(softevo_add_mpi_test)
   if(NOT T_TIMEOUT)
     set(T_TIMEOUT 300)
   endif()
+  softevo_sanitized_timeout(T_TIMEOUT)
   foreach(np 2 3)
     add_test(NAME ${T_NAME}.np${np}
       COMMAND ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} ${np} --oversubscribe
