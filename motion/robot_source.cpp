@@ -92,6 +92,15 @@ void check_motion_memory(const std::string& name, double poses, std::size_t voxe
   throw std::invalid_argument(message);
 }
 
+// The one direction a directed robot is shown walking towards: the request's, else the task's
+// first; none for a gait controller.
+std::optional<double> shown_direction(const Config& config, const ControllerSpec& controller,
+                                      const MotionRequest& request) {
+  if (!controller.directed) return std::nullopt;
+  if (request.direction_deg) return request.direction_deg;
+  return config.task.directions.empty() ? 0.0 : config.task.directions[0];
+}
+
 // Re-simulates and keeps the control frames (60 Hz) the output shows as poses.
 Motion simulate_motion(Config config, const BodyPlan& plan, const ControllerSpec& controller,
                        const MotionRequest& request, const std::string& name,
@@ -103,12 +112,9 @@ Motion simulate_motion(Config config, const BodyPlan& plan, const ControllerSpec
   // would otherwise run 10 s or fail deep inside the simulation).
   std::vector<std::string> overrides;
   if (request.seconds) overrides.push_back("task.eval_seconds=" + toml_number(*request.seconds));
-  if (controller.directed) {
+  if (const auto deg = shown_direction(config, controller, request)) {
     // One direction only (any direction can be shown; the fitness then belongs to it alone).
-    const double deg = request.direction_deg
-                           ? *request.direction_deg
-                           : (config.task.directions.empty() ? 0.0 : config.task.directions[0]);
-    overrides.push_back("task.directions=[" + toml_number(deg) + "]");
+    overrides.push_back("task.directions=[" + toml_number(*deg) + "]");
     motion.direction_deg = deg;
   }
   if (!overrides.empty()) config = apply_overrides(config, overrides);
@@ -389,6 +395,7 @@ Motion load_motion(const std::string& input, const MotionRequest& request) {
       Motion still =
           static_motion(robot.body, static_cast<int>(config.physics.material_count), name);
       still.terrain = ground_of(config, robot.body, {});
+      still.direction_deg = shown_direction(config, robot.controller, request);
       return still;
     }
     Motion motion = simulate_motion(config, robot.body, robot.controller, request, name);
@@ -403,6 +410,7 @@ Motion load_motion(const std::string& input, const MotionRequest& request) {
       Motion still = static_motion(robot.body, static_cast<int>(ind.config.physics.material_count),
                                    robot.name);
       still.terrain = ground_of(ind.config, robot.body, ids);
+      still.direction_deg = shown_direction(ind.config, robot.controller, request);
       return still;
     }
     Motion motion =

@@ -20,19 +20,21 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// A 3x1x3 open-loop robot of 8 voxels around one chamber cell.
-std::string write_robot(const fs::path& dir) {
+// A 3x1x3 open-loop robot of 8 voxels around one chamber cell; `directed`: with the direction
+// input (a third input of the hidden layer).
+std::string write_robot(const fs::path& dir, bool directed = false) {
   const auto numbers = [](int n, const char* value) {
     std::string s = "[";
     for (int i = 0; i < n; ++i) s += (i > 0 ? ", " : "") + std::string(value);
     return s + "]";
   };
-  const std::string path = (dir / "robot.json").string();
+  const std::string path = (dir / (directed ? "directed.json" : "robot.json")).string();
   std::ofstream(path) << "{\"format\": \"softevo.robot/1\", \"name\": \"r\", \"voxel_size\": 0.01,"
                       << " \"lattice\": [3, 1, 3], \"cells\": [10, 10, 10, 10, 11, 10, 10, 10, 10],"
                       << " \"controller\": {\"kind\": \"elman\", \"control\": \"open\","
-                      << " \"directed\": false, \"hidden\": 4, \"outputs\": 20, \"frequency\": 2.0,"
-                      << " \"weights_hidden\": " << numbers(8, "1.5")
+                      << " \"directed\": " << (directed ? "true" : "false")
+                      << ", \"hidden\": 4, \"outputs\": 20, \"frequency\": 2.0,"
+                      << " \"weights_hidden\": " << numbers(directed ? 12 : 8, "1.5")
                       << ", \"bias_hidden\": " << numbers(4, "0.1")
                       << ", \"weights_out\": " << numbers(80, "2.0")
                       << ", \"bias_out\": " << numbers(20, "0.0")
@@ -90,6 +92,25 @@ TEST_F(RobotSource, AStillOfALongReSimulationKeepsAFewPoses) {
   const Motion m = load_motion(robot_, still);
   EXPECT_LE(m.poses.size(), 3u);
   EXPECT_NEAR(m.poses[render::pose_at(m.poses, 60.0)].time, 60.0, 1.0 / 60.0);  // a frame away
+}
+
+TEST_F(RobotSource, AStillOfADirectedRobotHasItsTargetDirection) {
+  // The start pose alone (nothing simulated) still carries the direction a directed robot is
+  // shown walking towards, so a still draws its target line; a gait robot has none.
+  const std::string directed = write_robot(dir_, true);
+  MotionRequest still;
+  still.direction_deg = 30.0;
+  const Motion towards = load_motion(directed, still);
+  ASSERT_EQ(towards.poses.size(), 1u);
+  ASSERT_TRUE(towards.direction_deg.has_value());
+  EXPECT_EQ(*towards.direction_deg, 30.0);
+  // Without a request: the task's first direction, as a simulated motion has it.
+  const Motion first = load_motion(directed, MotionRequest{});
+  MotionRequest simulated = request(0.1);
+  const Motion moving = load_motion(directed, simulated);
+  ASSERT_TRUE(first.direction_deg.has_value());
+  EXPECT_EQ(first.direction_deg, moving.direction_deg);
+  EXPECT_FALSE(load_motion(robot_, still).direction_deg.has_value());
 }
 
 TEST_F(RobotSource, AMotionBeyondTheMemoryLimitIsRefusedBeforeItIsSimulated) {
