@@ -122,14 +122,13 @@ TEST(RoughWalk, GaitChampionOnOneCentimetreBumpsNeverSinksIntoTheGround) {
     // Tolerance: a quarter voxel (2.5 mm). The contact is a penalty spring (§2.8): a centre
     // sinks by its load over the penetration stiffness, more in the impacts of a gait, and the
     // depth is measured vertically, which under a slanted bump is more than along the normal.
-    // On flat ground the same gait sinks about as deep (printed for comparison); a centre that
-    // fell through a bump would sink by up to the 1 cm amplitude.
-    Config flat = config;
-    flat.terrain = TerrainConfig{};
-    const Walk on_flat = walk(flat, robot);
-    std::printf("[%s] %.1f s on 1 cm bumps: travelled %.3f m, deepest centre %.3e m below "
-                "the local ground (flat ground: %.3f m, %.3e m)\n",
-                integrator, kSeconds, w.travelled, w.deepest, on_flat.travelled, on_flat.deepest);
+    // Measured: 1.46 mm (pneuvox) and 1.22 mm (symplectic), against 1.16 mm and 0.66 mm for the
+    // same gait on flat ground; a centre that fell through a bump would sink by up to the 1 cm
+    // amplitude.
+    std::printf(
+        "[%s] %.1f s on 1 cm bumps: travelled %.3f m, deepest centre %.3e m below "
+        "the local ground\n",
+        integrator, kSeconds, w.travelled, w.deepest);
     EXPECT_LT(w.deepest, 0.25 * w.voxel_size) << integrator;
     EXPECT_GT(w.travelled, 0.1) << integrator << ": it must walk over several bumps";
     if (std::string(integrator) == "pneuvox") {
