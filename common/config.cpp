@@ -620,6 +620,13 @@ void check_consistency(const Config& c, const std::string& source) {
                  format_double(c.pneumatics.supply_pressure / kPascalPerBar) +
                  " bar (the reference chamber keeps supply_pressure)");
   }
+  // Below ambient the scaled gauge would be negative and grow without bound for small chambers.
+  if (c.pneumatics.supply_pressure_scaling != "none" &&
+      !(c.pneumatics.supply_pressure > c.pneumatics.ambient_pressure)) {
+    fail(at, "pneumatics.supply_pressure_scaling = " + quote(c.pneumatics.supply_pressure_scaling) +
+                 " needs pneumatics.supply_pressure > pneumatics.ambient_pressure (it scales the "
+                 "gauge pressure above ambient)");
+  }
   // Without pressure sensors the hand-made oscillator has nothing to switch on, and an open-loop
   // controller without oscillator inputs has no input that changes.
   if (c.controller.init == "oscillator" && c.task.control != "closed") {

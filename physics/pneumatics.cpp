@@ -48,10 +48,11 @@ PneumaticsModel build_pneumatics(const BodyPlan& plan, const Model& model,
     throw std::invalid_argument("build_pneumatics: unknown supply_pressure_scaling '" +
                                 cfg.supply_pressure_scaling + "' (none or inverse_volume)");
   if (cfg.supply_pressure_scaling == "inverse_volume" &&
-      (!(cfg.scaling_reference_volume > 0.0) || !(cfg.max_supply_pressure >= cfg.supply_pressure)))
+      (!(cfg.scaling_reference_volume > 0.0) || !(cfg.max_supply_pressure >= cfg.supply_pressure) ||
+       !(cfg.supply_pressure > cfg.ambient_pressure)))
     throw std::invalid_argument(
-        "build_pneumatics: inverse_volume needs scaling_reference_volume > 0 m^3 and "
-        "max_supply_pressure >= supply_pressure");
+        "build_pneumatics: inverse_volume needs scaling_reference_volume > 0 m^3, "
+        "max_supply_pressure >= supply_pressure > ambient_pressure");
   if (!(cfg.conductivity >= 0.0))
     throw std::invalid_argument("build_pneumatics: conductivity must be >= 0");
   if (cfg.valve_filter_stages < 0 || cfg.valve_filter_stages > 16)

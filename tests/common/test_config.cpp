@@ -211,6 +211,9 @@ TEST(Config, ActuatorOptionsEnterTheTextOnlyOffTheirDefaults) {
         {"[pneumatics]\nsupply_pressure_scaling = \"inverse_volume\"\n"
          "scaling_reference_volume = -1e-4\n",
          "pneumatics.scaling_reference_volume = -1e-04 is out of range"},
+        {"[pneumatics]\nsupply_pressure_scaling = \"inverse_volume\"\nsupply_pressure = 0.9\n",
+         "pneumatics.supply_pressure_scaling = \"inverse_volume\" needs "
+         "pneumatics.supply_pressure > pneumatics.ambient_pressure"},
         {closed + "[controller]\ninit = \"oscilator\"\n",
          "controller.init = \"oscilator\" is not allowed (did you mean 'oscillator'?)"},
         {closed + "[controller]\noscillator_inputs = \"no\"\n",
