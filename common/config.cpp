@@ -79,6 +79,15 @@ bool terrain_steps(const Config& c) {
 bool terrain_slope(const Config& c) {
   return terrain_heightfield(c) && c.terrain.heightfield == "slope";
 }
+bool supply_scaled(const Config& c) {
+  return c.pneumatics.supply_pressure_scaling != "none";
+}
+bool oscillator_inputs_removed(const Config& c) {
+  return !c.controller.oscillator_inputs;
+}
+bool controller_init_not_random(const Config& c) {
+  return c.controller.init != "random";
+}
 
 std::vector<std::string> task_kind_names() {
   std::vector<std::string> names;
@@ -193,6 +202,40 @@ std::vector<KeyDef> schema(Config& c) {
        {},
        kPascalPerBar,
        "bar"},
+      {"pneumatics",
+       "supply_pressure_scaling",
+       &pn.supply_pressure_scaling,
+       0,
+       0,
+       {"none", "inverse_volume"},
+       1.0,
+       "",
+       0,
+       false,
+       std::nullopt,
+       supply_scaled},
+      only_when({"pneumatics",
+                 "scaling_reference_volume",
+                 &pn.scaling_reference_volume,
+                 0,
+                 1,
+                 {},
+                 1.0,
+                 "m^3",
+                 0,
+                 true},
+                supply_scaled, "pneumatics.supply_pressure_scaling = \"inverse_volume\""),
+      only_when({"pneumatics",
+                 "max_supply_pressure",
+                 &pn.max_supply_pressure,
+                 0,
+                 100,
+                 {},
+                 kPascalPerBar,
+                 "bar",
+                 0,
+                 true},
+                supply_scaled, "pneumatics.supply_pressure_scaling = \"inverse_volume\""),
 
       {"controller", "hidden", &ct.hidden, 1, 64},
       {"controller",
@@ -206,6 +249,32 @@ std::vector<KeyDef> schema(Config& c) {
       {"controller", "freq_min", &ct.freq_min, 0, 1000, {}, 1.0, "Hz", 0, true},
       {"controller", "freq_max", &ct.freq_max, 0, 1000, {}, 1.0, "Hz", 0, true},
       {"controller", "freq_step_size_init", &ct.freq_step_size_init, 0, 1000, {}, 1.0, "Hz"},
+      {"controller",
+       "oscillator_inputs",
+       &ct.oscillator_inputs,
+       -kInf,
+       kInf,
+       {},
+       1.0,
+       "",
+       0,
+       false,
+       std::nullopt,
+       oscillator_inputs_removed},
+      {"controller",
+       "init",
+       &ct.init,
+       0,
+       0,
+       {"random", "oscillator"},
+       1.0,
+       "",
+       0,
+       false,
+       std::nullopt,
+       controller_init_not_random},
+      only_when({"controller", "init_perturbation_sd", &ct.init_perturbation_sd, 0, 5},
+                controller_init_not_random, "controller.init = \"oscillator\""),
 
       {"body", "lattice", &b.lattice, 2, 64, {}, 1.0, "cells", 3},
       {"body", "distance_input", &b.distance_input, 0, 0, {"center", "pneuvox"}},
@@ -542,6 +611,36 @@ void check_consistency(const Config& c, const std::string& source) {
   }
   if (c.controller.freq_min > c.controller.freq_max) {
     fail(at, "controller.freq_min must be <= controller.freq_max");
+  }
+  if (c.pneumatics.supply_pressure_scaling != "none" &&
+      c.pneumatics.max_supply_pressure < c.pneumatics.supply_pressure) {
+    fail(at, "pneumatics.max_supply_pressure = " +
+                 format_double(c.pneumatics.max_supply_pressure / kPascalPerBar) +
+                 " bar must be >= pneumatics.supply_pressure = " +
+                 format_double(c.pneumatics.supply_pressure / kPascalPerBar) +
+                 " bar (the reference chamber keeps supply_pressure)");
+  }
+  // Below ambient the scaled gauge would be negative and grow without bound for small chambers.
+  if (c.pneumatics.supply_pressure_scaling != "none" &&
+      !(c.pneumatics.supply_pressure > c.pneumatics.ambient_pressure)) {
+    fail(at, "pneumatics.supply_pressure_scaling = " + quote(c.pneumatics.supply_pressure_scaling) +
+                 " needs pneumatics.supply_pressure > pneumatics.ambient_pressure (it scales the "
+                 "gauge pressure above ambient)");
+  }
+  // Without pressure sensors the hand-made oscillator has nothing to switch on, and an open-loop
+  // controller without oscillator inputs has no input that changes.
+  if (c.controller.init == "oscillator" && c.task.control != "closed") {
+    fail(at,
+         "controller.init = \"oscillator\" needs task.control = \"closed\" (it switches on "
+         "the pressure sensors), got task.control = " +
+             quote(c.task.control));
+  }
+  if (!c.controller.oscillator_inputs && c.task.control != "closed") {
+    fail(at,
+         "controller.oscillator_inputs = false needs task.control = \"closed\" (an open-loop "
+         "controller without oscillator inputs gets no input that changes), got "
+         "task.control = " +
+             quote(c.task.control));
   }
   if (c.neat.bias_min_value > c.neat.bias_max_value) {
     fail(at, "neat.bias_min_value must be <= neat.bias_max_value");

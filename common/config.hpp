@@ -91,6 +91,11 @@ struct TerrainConfig {
   std::string resample = "per_run";
 };
 
+// Median rest volume of the 57 chambers of the 40 thesis champions [m^3] (about 133 cm^3;
+// docs/model.md §3.8): the default reference volume of pneumatics.supply_pressure_scaling =
+// "inverse_volume". Recomputed from ../shared/reference by tests/physics/test_pneumatics.cpp.
+inline constexpr double kThesisMedianChamberVolume = 1.3299984857439995e-4;
+
 struct PneumaticsConfig {
   double supply_pressure = 1.2e5;   // inlet reservoir, absolute [Pa] (config: bar)
   double ambient_pressure = 1.0e5;  // outlet reservoir, absolute [Pa] (config: bar)
@@ -100,6 +105,14 @@ struct PneumaticsConfig {
   double valve_filter_q = 0.707;
   // First-frame pressure sensor reading, absolute [Pa] (config: bar; §3.7, default 0.0 bar).
   double initial_sensor_pressure = 0.0;
+  // Thesis 5.3.4: "none" gives every inlet supply_pressure; "inverse_volume" raises the supply's
+  // gauge pressure (above ambient_pressure) of each chamber in inverse proportion to its rest
+  // volume, so small actuators are compensated (docs/model.md §3.8).
+  std::string supply_pressure_scaling = "none";
+  // Rest volume [m^3] whose chamber keeps supply_pressure under "inverse_volume" (§3.8).
+  double scaling_reference_volume = kThesisMedianChamberVolume;
+  // Upper bound of a scaled chamber supply, absolute [Pa] (config: bar; §3.8).
+  double max_supply_pressure = 2.0e5;
 };
 
 struct ControllerConfig {
@@ -110,6 +123,14 @@ struct ControllerConfig {
   double freq_min = 1.0;                      // oscillator frequency range [Hz]
   double freq_max = 5.0;                      // [Hz]
   double freq_step_size_init = 0.2;           // initial step size of the frequency gene [Hz]
+  // Thesis 5.3.4 and 5.1.1: false removes the sin/cos oscillator inputs (closed loop only, §4.1).
+  bool oscillator_inputs = true;
+  // Initial controller genes (§8.2): "random", or "oscillator", a hand-made pressure-driven
+  // oscillator per chamber (closed loop only, §4.8).
+  std::string init = "random";
+  // "oscillator": SD of the Gaussian perturbation of every hand-made gene, and the genes' initial
+  // mutation step size (§4.8).
+  double init_perturbation_sd = 0.1;
 };
 
 struct BodyConfig {

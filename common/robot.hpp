@@ -29,11 +29,14 @@ struct ControllerVectors {
 
 // Controller input layout (§4.1): [sin, cos, task inputs, pressure sensors]; the task inputs
 // are the task's (tasks/task.hpp, e.g. the direction sensor of the directed task), the pressure
-// sensors those of a closed-loop controller (10 slots, one per possible chamber).
+// sensors those of a closed-loop controller (10 slots, one per possible chamber). Without
+// oscillator inputs (controller.oscillator_inputs = false) sin and cos are absent.
 constexpr int kOscillatorInputs = 2;
 constexpr int kPressureSensorInputs = 10;
-constexpr int controller_input_count(int task_inputs, bool closed_loop) {
-  return kOscillatorInputs + task_inputs + (closed_loop ? kPressureSensorInputs : 0);
+constexpr int controller_input_count(int task_inputs, bool closed_loop,
+                                     bool oscillator_inputs = true) {
+  return (oscillator_inputs ? kOscillatorInputs : 0) + task_inputs +
+         (closed_loop ? kPressureSensorInputs : 0);
 }
 
 struct ControllerSpec {
@@ -42,11 +45,16 @@ struct ControllerSpec {
   // Robot file format 1 records the controller's task inputs as this flag: true = one task
   // input (the direction sensor of the directed task, §7.3), false = none.
   bool directed = false;
+  // false: no sin/cos inputs (thesis 5.3.4; the robot file's optional "oscillator_inputs").
+  bool oscillator_inputs = true;
   int hidden = 4;
   int outputs = 20;
   ControllerVectors vectors;  // freq[0] = frequency [Hz]
   int task_inputs() const { return directed ? 1 : 0; }
-  int input_count() const { return controller_input_count(task_inputs(), closed_loop); }
+  int input_count() const {
+    return controller_input_count(task_inputs(), closed_loop, oscillator_inputs);
+  }
+  int oscillator_input_count() const { return oscillator_inputs ? kOscillatorInputs : 0; }
   double frequency() const { return vectors.freq.empty() ? 0.0 : vectors.freq[0]; }
 };
 

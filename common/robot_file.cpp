@@ -1,9 +1,10 @@
 // Strict reader and writer of the robot file `softevo.robot/1` (docs/model.md §10).
 //
 // Strictness rules: every object is checked for unknown keys; every value is type-checked; the
-// controller vector lengths follow from the input count of §4.1 (2 + directed + 10 x closed) and
-// the layouts of §4.4. Any problem is a RobotFileError "<file>: key '<path>': <problem>".
-// `reference` is never interpreted: it is kept as JSON text (key order preserved).
+// controller vector lengths follow from the input count of §4.1 (2 x oscillator_inputs +
+// directed + 10 x closed) and the layouts of §4.4. Any problem is a RobotFileError "<file>: key
+// '<path>': <problem>". `reference` is never interpreted: it is kept as JSON text (key order
+// preserved).
 #include <array>
 #include <cerrno>
 #include <cmath>
@@ -233,9 +234,9 @@ ControllerSpec read_controller(const Reader& r, const Json& j) {
   const std::string key = "controller";
   r.expect_object(j, key);
   r.check_keys(j, key,
-               {"kind", "control", "directed", "hidden", "outputs", "frequency", "weights_hidden",
-                "bias_hidden", "weights_out", "bias_out", "weights_recurrent",
-                "weights_recurrent_self", "weights_context", "bias_context"});
+               {"kind", "control", "directed", "oscillator_inputs", "hidden", "outputs",
+                "frequency", "weights_hidden", "bias_hidden", "weights_out", "bias_out",
+                "weights_recurrent", "weights_recurrent_self", "weights_context", "bias_context"});
   ControllerSpec c;
   if (auto it = j.find("kind"); it != j.end()) {
     c.kind = r.string(*it, "controller.kind");
@@ -246,6 +247,8 @@ ControllerSpec read_controller(const Reader& r, const Json& j) {
     r.fail("controller.control", "expected \"open\" or \"closed\", got \"" + control + "\"");
   c.closed_loop = control == "closed";
   c.directed = r.boolean(r.require(j, key, "directed"), "controller.directed");
+  if (auto it = j.find("oscillator_inputs"); it != j.end())
+    c.oscillator_inputs = r.boolean(*it, "controller.oscillator_inputs");
   if (auto it = j.find("hidden"); it != j.end())
     c.hidden = r.int_in(*it, "controller.hidden", 1, 1000);
   if (auto it = j.find("outputs"); it != j.end())
@@ -526,6 +529,9 @@ std::string robot_to_json(const RobotFile& robot) {
   ctrl["kind"] = c.kind;
   ctrl["control"] = c.closed_loop ? "closed" : "open";
   ctrl["directed"] = c.directed;
+  // Written only when false, so that every file of a controller with oscillator inputs keeps
+  // its bytes.
+  if (!c.oscillator_inputs) ctrl["oscillator_inputs"] = false;
   ctrl["hidden"] = c.hidden;
   ctrl["outputs"] = c.outputs;
   ctrl["frequency"] = c.frequency();

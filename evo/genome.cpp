@@ -42,7 +42,8 @@ std::array<const std::vector<double>*, kControllerVectorCount> vectors_of(
 
 ControllerShape controller_shape(const Config& config, int task_inputs) {
   ControllerShape s;
-  s.inputs = controller_input_count(task_inputs, config.task.control == "closed");
+  s.inputs = controller_input_count(task_inputs, config.task.control == "closed",
+                                    config.controller.oscillator_inputs);
   s.hidden = static_cast<int>(config.controller.hidden);
   s.outputs = static_cast<int>(2 * config.body.max_chambers);  // inlet + outlet per chamber (§4.5)
   return s;
@@ -131,7 +132,77 @@ CppnGenome random_cppn(const EvoParams& p, Rng& rng) {
   return g;
 }
 
+namespace {
+
+// §4.8: the hand-made genes of the pressure-driven oscillator (before the perturbation). Chamber
+// q is served by hidden unit i = q mod H: its sensor drives the unit with gain -kSensorGain, the
+// unit's context copies the unit (kContextCopy) and feeds it back with kHysteresis, and the unit
+// opens the inlet (+kValveGain) and closes the outlet (-kValveGain). The unit switches when the
+// summed sensors of its chambers cross +-kHysteresis c / kSensorGain = +-0.5 (1.025 and 1.075
+// bar, §3.7), in the direction that ends the current stroke.
+constexpr double kSensorGain = 4.0;
+constexpr double kHysteresis = 2.0;
+constexpr double kContextCopy = 3.0;
+constexpr double kValveGain = 3.0;
+
+void oscillator_genes(const ControllerShape& shape, int oscillator_inputs, int task_inputs,
+                      ControllerVectors& v) {
+  const int h = shape.hidden;
+  const int chambers = shape.outputs / 2;
+  for (int q = 0; q < chambers; ++q) {
+    const int unit = q % h;
+    // §4.1: after the oscillator inputs, at most 10 sensor values, the task's first; a chamber
+    // past them (the 10th of a directed robot) has no sensor and follows its unit's others.
+    const int sensor = task_inputs + q;
+    if (sensor < kPressureSensorInputs) {
+      const auto input = static_cast<std::size_t>(oscillator_inputs + sensor);
+      v.weights_hidden[input * h + unit] = -kSensorGain;
+    }
+    v.weights_out[static_cast<std::size_t>(unit * shape.outputs + 2 * q)] = kValveGain;
+    v.weights_out[static_cast<std::size_t>(unit * shape.outputs + 2 * q + 1)] = -kValveGain;
+  }
+  for (int i = 0; i < h; ++i) {
+    v.weights_recurrent[static_cast<std::size_t>(i * h + i)] = kHysteresis;
+    v.weights_context[i] = kContextCopy;
+  }
+}
+
+}  // namespace
+
+void oscillator_controller(const EvoParams& p, Rng& rng, Genome& genome) {
+  const ControllerShape& shape = p.shape;
+  const int oscillator_inputs = p.controller.oscillator_inputs ? kOscillatorInputs : 0;
+  const int task_inputs = shape.inputs - oscillator_inputs - kPressureSensorInputs;
+  if (task_inputs < 0)
+    throw std::invalid_argument(
+        "controller.init = \"oscillator\" needs the pressure sensors of a closed-loop controller");
+  const auto lengths = shape.lengths();
+  auto values = vectors_of(genome.controller);
+  auto steps = vectors_of(genome.step_sizes);
+  for (int v = 0; v < kControllerVectorCount; ++v) values[v]->assign(lengths[v], 0.0);
+  oscillator_genes(shape, oscillator_inputs, task_inputs, genome.controller);
+  // The perturbation in canonical order, one draw per gene as random_controller draws; small
+  // step sizes, because the first mutation with weight_init_sd (3.0) would erase the design.
+  const double sd = p.controller.init_perturbation_sd;
+  const double limit = p.controller.gene_limit;
+  for (int v = 0; v < kControllerVectorCount; ++v) {
+    steps[v]->assign(lengths[v], sd);
+    for (double& x : *values[v]) {
+      if (v == kFreqVector) {
+        x = rng.uniform(p.controller.freq_min, p.controller.freq_max);  // unused without sin/cos
+      } else {
+        x = std::clamp(x + sd * rng.normal(), -limit, limit);
+      }
+    }
+  }
+  genome.step_sizes.freq.assign(1, p.controller.freq_step_size_init);
+}
+
 void random_controller(const EvoParams& p, Rng& rng, Genome& genome) {
+  if (p.controller.init == "oscillator") {
+    oscillator_controller(p, rng, genome);
+    return;
+  }
   const auto lengths = p.shape.lengths();
   auto values = vectors_of(genome.controller);
   auto steps = vectors_of(genome.step_sizes);
@@ -322,6 +393,7 @@ ControllerSpec to_controller_spec(const Genome& genome, const Config& config, in
   spec.kind = "elman";
   spec.closed_loop = config.task.control == "closed";
   spec.directed = task_inputs == 1;
+  spec.oscillator_inputs = config.controller.oscillator_inputs;
   spec.hidden = shape.hidden;
   spec.outputs = shape.outputs;
   spec.vectors = genome.controller;

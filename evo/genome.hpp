@@ -102,7 +102,14 @@ CppnGenome random_cppn(const EvoParams& p, Rng& rng);
 // Controller genes (§8.2): f ~ U(freq_min, freq_max), all others N(0, weight_init_sd) clipped to
 // +-gene_limit, drawn in canonical vector order; step sizes weight_init_sd, frequency step size
 // freq_step_size_init (not random).
+// With controller.init = "oscillator" this is oscillator_controller() instead.
 void random_controller(const EvoParams& p, Rng& rng, Genome& genome);
+// §4.8: the hand-made pressure-driven oscillator of every chamber slot (p.shape.outputs / 2),
+// chamber q on hidden unit q mod H, each gene then perturbed by init_perturbation_sd N(0, 1)
+// (clipped to +-gene_limit) in canonical order, frequency U(freq_min, freq_max); step sizes
+// init_perturbation_sd, the frequency's freq_step_size_init. Needs pressure sensors (closed
+// loop); throws std::invalid_argument otherwise.
+void oscillator_controller(const EvoParams& p, Rng& rng, Genome& genome);
 // Both parts (CPPN first, then the controller when p.with_controller).
 Genome random_genome(const EvoParams& p, Rng& rng);
 

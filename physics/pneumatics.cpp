@@ -10,6 +10,7 @@
 
 #include "common/chamber_quads.hpp"
 #include "physics/pneumatics_triangle.hpp"
+#include "physics/state.hpp"
 #include "physics/step_kernels_table.hpp"
 
 namespace softevo::physics {
@@ -27,12 +28,31 @@ BiquadCoeffs lowpass_biquad(double normalised_cutoff, double q) {
   return c;
 }
 
+double chamber_supply_pressure(const PneumaticsConfig& cfg, double rest_volume) {
+  if (cfg.supply_pressure_scaling == "none") return cfg.supply_pressure;
+  // §3.8: the gauge part scales, because the wall force (§3.4) and the gas a stroke moves are
+  // proportional to it; scaling the absolute pressure would multiply the gauge of a half-size
+  // chamber by 7 instead of 2 at the default 1.2 bar.
+  const double gauge = (cfg.supply_pressure - cfg.ambient_pressure) *
+                       (cfg.scaling_reference_volume / rest_volume);  // [Pa]
+  return std::min(cfg.ambient_pressure + gauge, cfg.max_supply_pressure);
+}
+
 PneumaticsModel build_pneumatics(const BodyPlan& plan, const Model& model,
                                  const PneumaticsConfig& cfg) {
   if (plan.lattice != model.lattice)
     throw std::invalid_argument("build_pneumatics: body plan lattice does not match the model");
   if (!(cfg.supply_pressure > 0.0) || !(cfg.ambient_pressure > 0.0))
     throw std::invalid_argument("build_pneumatics: reservoir pressures must be > 0 Pa");
+  if (cfg.supply_pressure_scaling != "none" && cfg.supply_pressure_scaling != "inverse_volume")
+    throw std::invalid_argument("build_pneumatics: unknown supply_pressure_scaling '" +
+                                cfg.supply_pressure_scaling + "' (none or inverse_volume)");
+  if (cfg.supply_pressure_scaling == "inverse_volume" &&
+      (!(cfg.scaling_reference_volume > 0.0) || !(cfg.max_supply_pressure >= cfg.supply_pressure) ||
+       !(cfg.supply_pressure > cfg.ambient_pressure)))
+    throw std::invalid_argument(
+        "build_pneumatics: inverse_volume needs scaling_reference_volume > 0 m^3, "
+        "max_supply_pressure >= supply_pressure > ambient_pressure");
   if (!(cfg.conductivity >= 0.0))
     throw std::invalid_argument("build_pneumatics: conductivity must be >= 0");
   if (cfg.valve_filter_stages < 0 || cfg.valve_filter_stages > 16)
@@ -103,6 +123,16 @@ PneumaticsModel build_pneumatics(const BodyPlan& plan, const Model& model,
   pm.conductivity = static_cast<float>(cfg.conductivity);
   pm.dt_f = model.dt_f;
   pm.simd = model.simd;
+  // §3.8: rest volumes at the initial positions (the V0 of §3.3) and each chamber's inlet
+  // pressure, fixed for the robot's life.
+  const State rest = initial_state(model);
+  pm.rest_volume.resize(quads.size());
+  pm.chamber_supply_bar.resize(quads.size());
+  for (int q = 0; q < pm.chamber_count; ++q) {
+    pm.rest_volume[q] = chamber_volume(pm, q, rest.pos);
+    pm.chamber_supply_bar[q] = static_cast<float>(
+        chamber_supply_pressure(cfg, static_cast<double>(pm.rest_volume[q])) / kPascalPerBar);
+  }
   // §3.5: normalised cut-off Fc = dt * f_c (f_c Hz sampled at 1/dt).
   pm.filter =
       lowpass_biquad(static_cast<double>(model.dt_f) * cfg.valve_cutoff, cfg.valve_filter_q);

@@ -67,17 +67,23 @@ struct PneumaticsModel {
   int skipped_quads = 0;                 // quads with a corner that is not a voxel (§3.1: skipped)
 
   // ---- gas and conduits (reference units: bar, m^3 "at 1 bar", s) ----------------------------
-  float supply_bar = 1.2f;      // inlet reservoir, absolute [bar]
-  float ambient_bar = 1.0f;     // outlet reservoir, absolute [bar]
-  float conductivity = 0.025f;  // conduit conductivity scale [m^3/(bar s)] (§3.5)
-  float dt_f = 0.0f;            // physics time step as float [s]
-  BiquadCoeffs filter;          // one section of the valve low-pass (f_c = valve_cutoff at 1/dt)
+  float supply_bar = 1.2f;   // configured inlet reservoir, absolute [bar]
+  float ambient_bar = 1.0f;  // outlet reservoir, absolute [bar]
+  // Inlet reservoir of each chamber, absolute [bar] (chambers): supply_bar for every chamber
+  // unless pneumatics.supply_pressure_scaling scales it by the rest volume (§3.8).
+  std::vector<float> chamber_supply_bar;
+  std::vector<float> rest_volume;  // V0 of each chamber at the initial positions [m^3] (chambers)
+  float conductivity = 0.025f;     // conduit conductivity scale [m^3/(bar s)] (§3.5)
+  float dt_f = 0.0f;               // physics time step as float [s]
+  BiquadCoeffs filter;             // one section of the valve low-pass (f_c = valve_cutoff at 1/dt)
   // SIMD width of the mesh passes (volumes, pressure forces): the model's, never `best`.
   // Results do not depend on it.
   Simd simd = Simd::scalar;
 
   // External reservoir pressure of conduit k (even = inlet/supply, odd = outlet/ambient) [bar].
-  float reservoir_bar(int conduit) const { return (conduit & 1) == 0 ? supply_bar : ambient_bar; }
+  float reservoir_bar(int conduit) const {
+    return (conduit & 1) == 0 ? chamber_supply_bar[conduit >> 1] : ambient_bar;
+  }
 };
 
 struct PneumaticsState {
@@ -104,6 +110,13 @@ struct PneumaticsScratch {
 // std::invalid_argument for a plan that does not match the model or bad config values.
 PneumaticsModel build_pneumatics(const BodyPlan& plan, const Model& model,
                                  const PneumaticsConfig& cfg);
+
+// §3.8: inlet pressure of a chamber of rest volume `rest_volume` [m^3], absolute [Pa]. "none":
+// supply_pressure. "inverse_volume": the gauge pressure above ambient scales with V_ref / V0,
+//   p_in = min(p_a + (p_s - p_a) V_ref / V0, p_max),
+// with p_s = supply_pressure, p_a = ambient_pressure, V_ref = scaling_reference_volume and
+// p_max = max_supply_pressure.
+double chamber_supply_pressure(const PneumaticsConfig& cfg, double rest_volume);
 
 // Initial state (§3.3): V0 from `positions` (normally initial_state(model).pos), n0 = V0 so that
 // p = 1 bar; valves and conduits open (1.0), filter memory zero (§3.5).

@@ -121,14 +121,17 @@ void ElmanController::act(std::span<const float> task_inputs, std::span<const fl
                                 " valve commands for " + std::to_string(chambers) + " chambers");
   constexpr int kMaxSensorValues = 10;                     // §4.1: cap after the oscillator inputs
   advance_oscillator(weights_, brain_, control_rate_hz_);  // §4.2: before the inputs are read
-  inputs_[0] = ablate_oscillator_ ? 0.0f : static_cast<float>(std::sin(brain_.phase));
-  inputs_[1] = ablate_oscillator_ ? 0.0f : static_cast<float>(std::cos(brain_.phase));
-  std::fill(inputs_.begin() + kOscillatorInputs, inputs_.end(), 0.0f);
-  const int sensor_slots = weights_.inputs - kOscillatorInputs;
+  const int oscillator_inputs = spec_.oscillator_input_count();  // 2, or 0 without (§4.1)
+  if (oscillator_inputs > 0) {
+    inputs_[0] = ablate_oscillator_ ? 0.0f : static_cast<float>(std::sin(brain_.phase));
+    inputs_[1] = ablate_oscillator_ ? 0.0f : static_cast<float>(std::cos(brain_.phase));
+  }
+  std::fill(inputs_.begin() + oscillator_inputs, inputs_.end(), 0.0f);
+  const int sensor_slots = weights_.inputs - oscillator_inputs;
   int sensor = 0;
   auto push_sensor = [&](float value) {
     if (sensor < kMaxSensorValues && sensor < sensor_slots)
-      inputs_[kOscillatorInputs + sensor] = value;
+      inputs_[oscillator_inputs + sensor] = value;
     ++sensor;
   };
   const int fed_task_inputs = std::min(static_cast<int>(task_inputs.size()), spec_.task_inputs());

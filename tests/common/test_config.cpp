@@ -150,6 +150,89 @@ TEST(Config, TerrainKeysEnterTheTextOnlyOffFlatGround) {
   }
 }
 
+// Thesis 5.3.4 options (docs/model.md §3.8, §4.1, §4.8): at their defaults they leave the
+// canonical text (so every existing config hash) unchanged; other values print their keys; a
+// typo or a value out of range is an error naming the key.
+TEST(Config, ActuatorOptionsEnterTheTextOnlyOffTheirDefaults) {
+  const std::string defaults = canonical_text(Config{});
+  for (const char* key :
+       {"supply_pressure_scaling", "scaling_reference_volume", "max_supply_pressure",
+        "oscillator_inputs", "\ninit =", "init_perturbation_sd"})
+    EXPECT_EQ(defaults.find(key), std::string::npos) << key;
+  EXPECT_EQ(config_hash(parse_config("[pneumatics]\nsupply_pressure_scaling = \"none\"\n"
+                                     "[controller]\noscillator_inputs = true\ninit = \"random\"\n",
+                                     "d.toml")),
+            config_hash(Config{}));
+
+  const Config scaled = parse_config(
+      "[pneumatics]\nsupply_pressure_scaling = \"inverse_volume\"\nmax_supply_pressure = 1.8\n",
+      "s.toml");
+  EXPECT_EQ(scaled.pneumatics.max_supply_pressure, 1.8e5);  // bar -> Pa
+  EXPECT_EQ(scaled.pneumatics.scaling_reference_volume, kThesisMedianChamberVolume);
+  const std::string text = canonical_text(scaled);
+  EXPECT_NE(text.find("supply_pressure_scaling = \"inverse_volume\"\n"
+                      "scaling_reference_volume = 0.00013299984857439995\n"
+                      "max_supply_pressure = 1.8\n"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(canonical_text(parse_config(text, "canonical")), text);
+
+  const Config oscillator = parse_config(
+      "[task]\ncontrol = \"closed\"\n[controller]\noscillator_inputs = false\n"
+      "init = \"oscillator\"\n",
+      "o.toml");
+  EXPECT_FALSE(oscillator.controller.oscillator_inputs);
+  const std::string otext = canonical_text(oscillator);
+  EXPECT_NE(otext.find("oscillator_inputs = false\ninit = \"oscillator\"\n"
+                       "init_perturbation_sd = 0.1\n"),
+            std::string::npos)
+      << otext;
+  EXPECT_EQ(canonical_text(parse_config(otext, "canonical")), otext);
+
+  const std::string closed = "[task]\ncontrol = \"closed\"\n";
+  for (const auto& [text_in, needle] :
+       {std::pair<std::string, std::string>{
+            "[pneumatics]\nsupply_pressure_scaling = \"inverse_volum\"\n",
+            "pneumatics.supply_pressure_scaling = \"inverse_volum\" is not allowed (did you "
+            "mean 'inverse_volume'?)"},
+        {"[pneumatics]\nsupply_pressure_scalng = \"none\"\n",
+         "unknown key 'pneumatics.supply_pressure_scalng' (did you mean "
+         "'supply_pressure_scaling'?)"},
+        {"[pneumatics]\nmax_supply_pressure = 3\n",
+         "pneumatics.max_supply_pressure applies only when "
+         "pneumatics.supply_pressure_scaling = \"inverse_volume\""},
+        {"[pneumatics]\nsupply_pressure_scaling = \"inverse_volume\"\n"
+         "max_supply_pressure = 1.1\n",
+         "pneumatics.max_supply_pressure = 1.1 bar must be >= pneumatics.supply_pressure"},
+        {"[pneumatics]\nsupply_pressure_scaling = \"inverse_volume\"\n"
+         "max_supply_pressure = 0\n",
+         "pneumatics.max_supply_pressure = 0.0 is out of range; allowed: number in (0.0, 100.0] "
+         "bar"},
+        {"[pneumatics]\nsupply_pressure_scaling = \"inverse_volume\"\n"
+         "scaling_reference_volume = -1e-4\n",
+         "pneumatics.scaling_reference_volume = -1e-04 is out of range"},
+        {"[pneumatics]\nsupply_pressure_scaling = \"inverse_volume\"\nsupply_pressure = 0.9\n",
+         "pneumatics.supply_pressure_scaling = \"inverse_volume\" needs "
+         "pneumatics.supply_pressure > pneumatics.ambient_pressure"},
+        {closed + "[controller]\ninit = \"oscilator\"\n",
+         "controller.init = \"oscilator\" is not allowed (did you mean 'oscillator'?)"},
+        {closed + "[controller]\noscillator_inputs = \"no\"\n",
+         "controller.oscillator_inputs must be true or false, got a string"},
+        {closed + "[controller]\ninit_perturbation_sd = 0.2\n",
+         "controller.init_perturbation_sd applies only when controller.init = \"oscillator\""},
+        {"[controller]\ninit = \"oscillator\"\n",
+         "controller.init = \"oscillator\" needs task.control = \"closed\""},
+        {"[controller]\noscillator_inputs = false\n",
+         "controller.oscillator_inputs = false needs task.control = \"closed\""}}) {
+    try {
+      parse_config(text_in, "a.toml");
+      FAIL() << "expected an error for " << text_in;
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(Config, MaterialTableIsNumpyLinspace) {
   const auto table = material_table(PhysicsConfig{});
   ASSERT_EQ(table.size(), 10u);
@@ -179,7 +262,19 @@ TEST(Config, ApplyOverridesChangesOnlyTheOverriddenKeys) {
     expected.task.eval_seconds = 2.5;
     const Config o = apply_overrides(c, {"task.eval_seconds=" + toml_number(2.5)});
     EXPECT_EQ(canonical_text(o), canonical_text(expected)) << entry.path();
-    EXPECT_EQ(std::memcmp(&o.pneumatics, &c.pneumatics, sizeof c.pneumatics), 0) << entry.path();
+    const auto same_bits = [](double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; };
+    const PneumaticsConfig &po = o.pneumatics, &pc = c.pneumatics;
+    EXPECT_TRUE(same_bits(po.supply_pressure, pc.supply_pressure) &&
+                same_bits(po.ambient_pressure, pc.ambient_pressure) &&
+                same_bits(po.conductivity, pc.conductivity) &&
+                same_bits(po.valve_cutoff, pc.valve_cutoff) &&
+                po.valve_filter_stages == pc.valve_filter_stages &&
+                same_bits(po.valve_filter_q, pc.valve_filter_q) &&
+                same_bits(po.initial_sensor_pressure, pc.initial_sensor_pressure) &&
+                po.supply_pressure_scaling == pc.supply_pressure_scaling &&
+                same_bits(po.scaling_reference_volume, pc.scaling_reference_volume) &&
+                same_bits(po.max_supply_pressure, pc.max_supply_pressure))
+        << entry.path();
   }
   EXPECT_THROW(apply_overrides(Config{}, {"task.eval_seconds=" + toml_number(std::nan(""))}),
                ConfigError);

@@ -98,6 +98,35 @@ TEST(RobotFile, RoundTripIsExactAndKeepsReference) {
   EXPECT_EQ(softevo::robot_to_json(back), softevo::robot_to_json(r));
 }
 
+// controller.oscillator_inputs = false (§4.1, §10): vectors sized without sin/cos, written only
+// when false, so a file with oscillator inputs keeps its bytes.
+TEST(RobotFile, ControllerWithoutOscillatorInputsRoundTrips) {
+  auto j = minimal_robot();
+  j["controller"]["control"] = "closed";
+  j["controller"]["oscillator_inputs"] = false;
+  j["controller"]["weights_hidden"] = std::vector<double>(40, 0.25);  // 10 sensors x 4
+  const RobotFile r = softevo::parse_robot_json(j.dump(), "robot.json");
+  EXPECT_FALSE(r.controller.oscillator_inputs);
+  EXPECT_EQ(r.controller.input_count(), 10);
+  const std::string text = softevo::robot_to_json(r);
+  EXPECT_NE(text.find("\"oscillator_inputs\": false"), std::string::npos) << text;
+  EXPECT_EQ(softevo::robot_to_json(softevo::parse_robot_json(text, "again")), text);
+  const RobotFile with = softevo::parse_robot_json(minimal_robot().dump(), "with.json");
+  EXPECT_TRUE(with.controller.oscillator_inputs);
+  EXPECT_EQ(softevo::robot_to_json(with).find("oscillator_inputs"), std::string::npos);
+
+  j["controller"]["weights_hidden"] = std::vector<double>(48, 0.25);  // sized as with sin/cos
+  EXPECT_THROW(softevo::parse_robot_json(j.dump(), "robot.json"), RobotFileError);
+  j["controller"]["oscillator_inputs"] = "no";
+  try {
+    softevo::parse_robot_json(j.dump(), "robot.json");
+    FAIL();
+  } catch (const RobotFileError& e) {
+    EXPECT_NE(std::string(e.what()).find("controller.oscillator_inputs"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(RobotFile, ErrorsNameTheKey) {
   struct Case {
     std::string what;

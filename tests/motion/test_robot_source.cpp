@@ -1,7 +1,9 @@
 // Where a motion comes from (motion/robot_source.hpp), here the bound on what a re-simulation
 // keeps: only the poses the output shows (the first, the last and the nearest to each shown
 // time, the same pose render::pose_at picks from all of them), and a clear refusal, before
-// anything is simulated, of a motion whose kept poses would need more than kMaxMotionBytes.
+// anything is simulated, of a motion whose kept poses would need more than kMaxMotionBytes; and
+// the ground of a trace: the terrain_* attributes of a rough-terrain evaluation's trace rebuild
+// the very ground the evaluation ran on.
 #include "motion/robot_source.hpp"
 
 #include <gtest/gtest.h>
@@ -13,7 +15,15 @@
 #include <string>
 #include <vector>
 
+#include "common/config.hpp"
+#include "common/robot.hpp"
+#include "io/trace.hpp"
+#include "motion/trace_recorder.hpp"
+#include "physics/terrain.hpp"
 #include "render/compose.hpp"
+#include "tasks/task.hpp"
+#include "worker/evaluate.hpp"
+#include "worker/simulation.hpp"
 
 namespace softevo::motion {
 namespace {
@@ -128,6 +138,66 @@ TEST_F(RobotSource, AMotionBeyondTheMemoryLimitIsRefusedBeforeItIsSimulated) {
     const std::string message = e.what();
     EXPECT_NE(message.find("more than the limit of 4 GiB"), std::string::npos) << message;
     EXPECT_NE(message.find("--fps"), std::string::npos) << message;
+  }
+}
+
+// Each kind of ground: a trace of a short evaluation on it, read back through load_motion, gives
+// the ground that the evaluation built (same heights everywhere, same parameters and seed).
+TEST_F(RobotSource, ATracesTerrainAttributesRebuildTheEvaluationsGround) {
+  const RobotFile robot = read_robot_file(robot_);
+  const auto rough = [](const char* heightfield) {
+    Config c;
+    c.task.eval_seconds = 0.2;
+    c.run.eval_timeout_seconds = 0.0;
+    c.terrain.kind = heightfield ? "heightfield" : "rows";
+    c.terrain.seed = 11;
+    if (!heightfield) return c;
+    c.terrain.heightfield = heightfield;
+    const std::string h = heightfield;
+    std::vector<std::string> keys;  // the kind's own keys, checked as a config file's
+    if (h == "bumps") keys = {"terrain.amplitude=0.01", "terrain.correlation_length=0.04"};
+    if (h == "steps") keys = {"terrain.step_height=0.004", "terrain.step_spacing=0.07"};
+    if (h == "slope") keys = {"terrain.slope_angle=8.0", "terrain.slope_direction=30.0"};
+    return apply_overrides(c, keys);
+  };
+  for (const Config& config : {rough("bumps"), rough("steps"), rough("slope"), rough(nullptr)}) {
+    const physics::Terrain built =
+        physics::make_terrain(worker::terrain_params(config, {}, 0), robot.body.lattice,
+                              static_cast<double>(static_cast<float>(robot.body.voxel_size)));
+    const std::string kind = physics::to_string(built.kind);
+    ASSERT_NE(kind, "flat");
+    const auto task = tasks::make_task(config);
+    TraceRecorder recorder;
+    worker::EvaluateOptions options;
+    recorder.attach(options);
+    const EvalResult result =
+        worker::evaluate(config, *task, robot.body, robot.controller, 0, options);
+    ASSERT_EQ(result.status, EvalStatus::ok) << kind << ": " << result.message;
+    const std::string path = (dir_ / (kind + ".trace.h5")).string();
+    recorder.write(path, robot, result, config.task.control_rate, std::nullopt, Overwrite::replace);
+
+    const io::Trace trace = io::read_trace(path);
+    ASSERT_TRUE(trace.terrain.has_value()) << kind;
+    EXPECT_EQ(trace.terrain->kind, kind);
+    const Motion motion = load_motion(path, MotionRequest{});
+    const physics::Terrain& back = motion.terrain;
+    EXPECT_EQ(back.kind, built.kind) << kind;
+    EXPECT_EQ(back.params.seed, built.params.seed) << kind;
+    EXPECT_EQ(back.params.amplitude, built.params.amplitude) << kind;
+    EXPECT_EQ(back.params.correlation_length, built.params.correlation_length) << kind;
+    EXPECT_EQ(back.params.step_height, built.params.step_height) << kind;
+    EXPECT_EQ(back.params.step_spacing, built.params.step_spacing) << kind;
+    EXPECT_EQ(back.params.slope_angle, built.params.slope_angle) << kind;
+    EXPECT_EQ(back.params.slope_direction, built.params.slope_direction) << kind;
+    // The ground itself, on a 1 cm grid over 1 m x 1 m around the robot (rows included).
+    int differing = 0;
+    for (int i = -50; i <= 50; ++i)
+      for (int j = -50; j <= 50; ++j) {
+        const double x = 0.01 * i, y = 0.01 * j;
+        if (physics::terrain_height(back, x, y) != physics::terrain_height(built, x, y))
+          ++differing;
+      }
+    EXPECT_EQ(differing, 0) << kind << ": heights differ at " << differing << " of 10201 points";
   }
 }
 

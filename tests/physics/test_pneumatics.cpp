@@ -7,12 +7,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 #include "common/body_plan.hpp"
 #include "common/config.hpp"
 #include "common/rng.hpp"
+#include "common/robot.hpp"
 #include "physics/model.hpp"
 #include "physics/observables.hpp"
 #include "physics/pneumatics.hpp"
@@ -20,6 +24,7 @@
 #include "physics/state.hpp"
 #include "physics/step.hpp"
 #include "tests/physics/random_vec3.hpp"
+#include "tests/reference_data.hpp"
 
 namespace {
 
@@ -291,7 +296,8 @@ TEST(Pneumatics, MeshPassesGiveTheReferenceBitsAtEverySimdWidth) {
   State st = initial_state(model);
   Rng rng(7);
   for (Vec3& p : st.pos)
-    p += test::random_vec3([&rng] { return rng.normal(); }) * (0.1 * model.voxel_size);
+    p += softevo::physics::test::random_vec3([&rng] { return rng.normal(); }) *
+         (0.1 * model.voxel_size);
   const PneumaticsState start = initial_pneumatics_state(pm, st.pos);
 
   // reference: per chamber, p = n / V with n = 1.15 V0 (gauge > 0), forces triangle by triangle
@@ -374,4 +380,102 @@ TEST(Pneumatics, FreeFloatingInflatingBodyKeepsZeroLinearMomentum) {
     // wall displacement; allow 1e-5 (a real momentum leak would be of order 1).
     EXPECT_LT((centre_of_mass(sc.model, sc.state) - com0).norm(), 1e-5 * max_disp) << integrator;
   }
+}
+
+// ---- §3.8 supply pressure scaling --------------------------------------------------------------
+
+namespace {
+
+PneumaticsConfig inverse_volume(double reference_volume, double max_supply_bar = 2.0) {
+  PneumaticsConfig c;
+  c.supply_pressure_scaling = "inverse_volume";
+  c.scaling_reference_volume = reference_volume;
+  c.max_supply_pressure = max_supply_bar * kPascalPerBar;
+  return c;
+}
+
+}  // namespace
+
+TEST(SupplyScaling, NoneGivesEveryChamberTheConfiguredSupplyBits) {
+  const BodyPlan plan = box_with_cavity({5, 4, 5}, {1, 1, 1}, {3, 2, 3});
+  const Model model = build_model(plan, PhysicsConfig{});
+  const PneumaticsModel pm = build_pneumatics(plan, model, PneumaticsConfig{});
+  ASSERT_EQ(pm.chamber_supply_bar.size(), 1u);
+  EXPECT_EQ(pm.chamber_supply_bar[0], 1.2f);
+  EXPECT_EQ(pm.reservoir_bar(0), 1.2f);
+  EXPECT_EQ(pm.reservoir_bar(1), 1.0f);
+}
+
+TEST(SupplyScaling, HandComputedPressures) {
+  // p_in = min(p_a + (p_s - p_a) V_ref / V0, p_max), §3.8; defaults p_s = 1.2 bar, p_a = 1.0 bar.
+  const double v_ref = kThesisMedianChamberVolume;
+  const PneumaticsConfig c = inverse_volume(v_ref);
+  EXPECT_EQ(chamber_supply_pressure(c, v_ref), 1.2e5);             // the median chamber: 1.2 bar
+  EXPECT_DOUBLE_EQ(chamber_supply_pressure(c, v_ref / 2), 1.4e5);  // half volume: 2 x 0.2 bar gauge
+  EXPECT_DOUBLE_EQ(chamber_supply_pressure(c, 2 * v_ref), 1.1e5);  // double volume: 0.1 bar gauge
+  EXPECT_DOUBLE_EQ(chamber_supply_pressure(c, v_ref / 5), 2.0e5);  // exactly at the 2 bar cap
+  EXPECT_EQ(chamber_supply_pressure(c, v_ref / 50), 2.0e5);        // far below: the cap holds
+  EXPECT_EQ(chamber_supply_pressure(inverse_volume(v_ref, 1.5), v_ref / 4), 1.5e5);
+  PneumaticsConfig none;
+  EXPECT_EQ(chamber_supply_pressure(none, v_ref / 50), 1.2e5);
+}
+
+TEST(SupplyScaling, BuiltChambersGetTheirScaledSupply) {
+  // One 1-cell chamber (8 s^3) and one 2x2x2-cell chamber (27 s^3), reference 27 s^3: the small
+  // chamber gets 1.0 + 0.2 x 27/8 = 1.675 bar, the large one 1.2 bar.
+  BodyPlan plan = box_with_cavity({7, 4, 4}, {1, 1, 1}, {1, 1, 1});
+  for (int x = 3; x <= 4; ++x)
+    for (int y = 1; y <= 2; ++y)
+      for (int z = 1; z <= 2; ++z) plan.cells[plan.cell_index(x, y, z)] = kFirstChamberCell + 1;
+  const Model model = build_model(plan, PhysicsConfig{});
+  const PneumaticsModel probe = build_pneumatics(plan, model, PneumaticsConfig{});
+  ASSERT_EQ(probe.chamber_count, 2);
+  const double large = probe.rest_volume[1];
+  EXPECT_NEAR(large, 27 * s3(), 1e-6 * large);
+  const PneumaticsModel pm = build_pneumatics(plan, model, inverse_volume(large));
+  EXPECT_EQ(pm.chamber_supply_bar[1], 1.2f);
+  EXPECT_FLOAT_EQ(pm.chamber_supply_bar[0],
+                  static_cast<float>(1.0 + 0.2 * large / probe.rest_volume[0]));
+  EXPECT_NEAR(pm.chamber_supply_bar[0], 1.675f, 1e-5f);
+  EXPECT_EQ(pm.reservoir_bar(0), pm.chamber_supply_bar[0]);
+  EXPECT_EQ(pm.reservoir_bar(2), pm.chamber_supply_bar[1]);
+
+  // An open inlet fills the small chamber to its own supply (static walls: fixed volume).
+  Scene scene(plan, free_floating(), inverse_volume(large));
+  scene.valves(1.0f, 0.0f);
+  const std::vector<Vec3> rest = scene.state.pos;
+  for (int i = 0; i < 20000; ++i)
+    pneumatics_update(scene.pm, scene.ps, scene.pscratch, rest, scene.force);
+  EXPECT_NEAR(scene.ps.pressure[0], pm.chamber_supply_bar[0], 1e-4f);
+}
+
+TEST(SupplyScaling, ReferenceVolumeIsTheMedianOfTheThesisChampionsChambers) {
+  // The default scaling_reference_volume: every chamber of the 40 champions, rest volume by the
+  // code of §3.2 at the initial positions, pooled; the median (odd count: the middle one).
+  const std::filesystem::path dir = softevo::test::reference_bestbots();
+  if (!std::filesystem::is_directory(dir))
+    GTEST_SKIP() << "thesis champions not found at " << dir << " (../shared/reference)";
+  std::vector<std::pair<double, float>> volumes;  // rest volume [m^3], scaled supply [bar]
+  int robots = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    if (!entry.path().string().ends_with(".robot.json")) continue;
+    const RobotFile robot = read_robot_file(entry.path().string());
+    const Model model = build_model(robot.body, PhysicsConfig{});
+    const PneumaticsModel pm =
+        build_pneumatics(robot.body, model, inverse_volume(kThesisMedianChamberVolume));
+    for (int q = 0; q < pm.chamber_count; ++q)
+      volumes.emplace_back(pm.rest_volume[q], pm.chamber_supply_bar[q]);
+    ++robots;
+  }
+  ASSERT_EQ(robots, 40);
+  std::sort(volumes.begin(), volumes.end());
+  const std::size_t n = volumes.size();
+  ASSERT_EQ(n % 2, 1u);  // 57 chambers: the median is a chamber
+  const double median = volumes[n / 2].first;
+  std::printf("%zu chambers, %.17g .. %.17g m^3, median %.17g m^3\n", n, volumes.front().first,
+              volumes.back().first, median);
+  EXPECT_EQ(median, kThesisMedianChamberVolume);
+  EXPECT_EQ(volumes[n / 2].second, 1.2f);  // the thesis' median chamber keeps 1.2 bar
+  for (std::size_t i = 0; i < n / 2; ++i) EXPECT_GE(volumes[i].second, 1.2f);
+  for (std::size_t i = n / 2 + 1; i < n; ++i) EXPECT_LT(volumes[i].second, 1.2f);
 }

@@ -7,6 +7,8 @@
 #include <vector>
 
 #include "common/robot.hpp"
+#include "physics/pneumatics.hpp"
+#include "tests/test_controller_spec.hpp"
 #include "worker/controller.hpp"
 
 namespace {
@@ -69,6 +71,25 @@ TEST(Controller, InputCountsFollowControlAndDirected) {
   EXPECT_EQ(numbered_spec(true, false).input_count(), 12);
   EXPECT_EQ(numbered_spec(false, true).input_count(), 3);
   EXPECT_EQ(numbered_spec(true, true).input_count(), 13);
+}
+
+TEST(Controller, WithoutOscillatorInputsTheSensorsComeFirst) {
+  // controller.oscillator_inputs = false (§4.1): [task inputs, pressure sensors], no sin/cos.
+  ControllerSpec spec = softevo::test::make_controller(
+      true, true, [](int i) { return std::sin(0.3 * i); }, 2.0);
+  spec.oscillator_inputs = false;
+  spec.vectors.weights_hidden.resize(static_cast<std::size_t>(11 * spec.hidden));
+  EXPECT_EQ(spec.input_count(), 11);
+  ElmanController brain(spec, 60.0);
+  const std::vector<float> direction = {0.25f};
+  const std::vector<float> sensor_bar = {1.1f, 1.0f, 0.9f};
+  std::vector<float> commands(6);
+  brain.act(direction, sensor_bar, commands);
+  ASSERT_EQ(brain.inputs().size(), 11u);
+  EXPECT_EQ(brain.inputs()[0], 0.25f);
+  for (int q = 0; q < 3; ++q)
+    EXPECT_EQ(brain.inputs()[1 + q], softevo::physics::pressure_sensor_input(sensor_bar[q]));
+  for (std::size_t c = 4; c < 11; ++c) EXPECT_EQ(brain.inputs()[c], 0.0f);
 }
 
 TEST(Controller, ElmanMatchesTheEquationsOverSeveralFrames) {
