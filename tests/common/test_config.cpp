@@ -14,6 +14,17 @@
 namespace softevo {
 namespace fs = std::filesystem;
 
+// Parsing `text` (as file `file`) fails with a ConfigError whose message contains `needle`.
+static void expect_config_error(const std::string& text, const std::string& file,
+                                const std::string& needle) {
+  try {
+    parse_config(text, file);
+    ADD_FAILURE() << "expected an error for " << text;
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+  }
+}
+
 static fs::path source_dir() {
   const char* env = std::getenv("SOFTEVO_SOURCE_DIR");
   return env ? fs::path(env) : fs::current_path();
@@ -141,12 +152,7 @@ TEST(Config, TerrainKeysEnterTheTextOnlyOffFlatGround) {
         {"[terrain]\nkind = \"heightfield\"\nheightfield = \"slope\"\nslope_angle = 70\n",
          "out of range"},
         {"[terrain]\nkind = \"rows\"\nresample = \"sometimes\"\n", "per_evaluation"}}) {
-    try {
-      parse_config(text_in, "t.toml");
-      FAIL() << "expected an error for " << text_in;
-    } catch (const ConfigError& e) {
-      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-    }
+    expect_config_error(text_in, "t.toml", needle);
   }
 }
 
@@ -224,12 +230,7 @@ TEST(Config, ActuatorOptionsEnterTheTextOnlyOffTheirDefaults) {
          "controller.init = \"oscillator\" needs task.control = \"closed\""},
         {"[controller]\noscillator_inputs = false\n",
          "controller.oscillator_inputs = false needs task.control = \"closed\""}}) {
-    try {
-      parse_config(text_in, "a.toml");
-      FAIL() << "expected an error for " << text_in;
-    } catch (const ConfigError& e) {
-      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-    }
+    expect_config_error(text_in, "a.toml", needle);
   }
 }
 
