@@ -7,20 +7,12 @@ Run: python3 -m pytest tests/tools/test_schedule_model.py   (ctest does this)
 
 from __future__ import annotations
 
-import importlib.util
-import os
-import pathlib
-import sys
-
 import h5py
 import numpy as np
 import pytest
+from tool_loader import load_tool
 
-REPO = pathlib.Path(os.environ.get("SOFTEVO_SOURCE_DIR", pathlib.Path(__file__).resolve().parents[2]))
-_spec = importlib.util.spec_from_file_location("schedule_model", REPO / "tools" / "schedule_model.py")
-model = importlib.util.module_from_spec(_spec)
-sys.modules["schedule_model"] = model  # dataclasses look their module up there
-_spec.loader.exec_module(model)
+model = load_tool("schedule_model")
 
 
 def generation(seconds, costs=None):

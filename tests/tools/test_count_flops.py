@@ -1,0 +1,63 @@
+"""Tests of tools/count_flops.py, the instrumented FLOP count of the physics step
+(docs/scaling.md): the classification of instructions by lanes, and the reading of a callgrind
+dump (self cost only; other objects apart). The objdump side is replaced by a fixed table.
+
+Run: python3 -m pytest tests/tools/test_count_flops.py   (ctest does this)
+"""
+
+from __future__ import annotations
+
+import pytest
+from tool_loader import load_tool
+
+flops = load_tool("count_flops")
+
+
+@pytest.mark.parametrize("mnemonic, operands, expected", [
+    ("addsd", "%xmm1,%xmm0", ("add", 1)),
+    ("subsd", "0x8(%rax),%xmm2", ("add", 1)),
+    ("mulpd", "%xmm1,%xmm0", ("mul", 2)),
+    ("vmulpd", "%ymm1,%ymm2,%ymm3", ("mul", 4)),
+    ("vdivpd", "%zmm1,%zmm2,%zmm3", ("div", 8)),
+    ("vsqrtsd", "%xmm1,%xmm1,%xmm1", ("sqrt", 1)),
+    ("mulss", "%xmm1,%xmm0", ("mul", 1)),
+    ("vaddps", "%ymm0,%ymm1,%ymm1", ("add", 8)),
+    ("maxsd", "%xmm1,%xmm0", ("minmax", 1)),
+    ("cvtsd2ss", "%xmm0,%xmm0", ("convert", 1)),
+    ("vcvtpd2psy", "%ymm0,%xmm0", ("convert", 4)),
+])
+def test_arithmetic_counts_its_lanes(mnemonic, operands, expected):
+    assert flops.classify(mnemonic, operands) == expected
+
+
+@pytest.mark.parametrize("mnemonic", ["andpd", "vblendvpd", "vcmppd", "movsd", "vxorpd", "ucomisd",
+                                      "addq", "vpaddq", "mulq", "vgatherdpd"])
+def test_logic_moves_and_integer_arithmetic_are_not_flops(mnemonic):
+    assert flops.classify(mnemonic, "%ymm1,%ymm2,%ymm3") is None
+
+
+def test_a_dump_counts_self_cost_and_keeps_other_objects_apart():
+    code = {0x100: ("vmulpd", "%ymm1,%ymm2,%ymm3"), 0x104: ("vaddsd", "%xmm1,%xmm2,%xmm3"),
+            0x108: ("call", "200 <g>"), 0x10c: ("movq", "%rax,%rbx"), 0x200: ("divsd", "%xmm1,%xmm0")}
+    dump = """ob=/bin/prog
+fn=int softevo::physics::(anonymous namespace)::run_link_stretch<softevo::physics::(anonymous namespace)::LanesAvx2, 1>(int)
+0x100 0 10
+0x104 0 10
+cob=/bin/prog
+cfn=g(double)
+calls=3 0x200
+0x108 0 999
+0x10c 0 5
+fn=g(double)
+0x200 0 3
+ob=/lib/libm.so.6
+fn=sin
+0x300 0 7
+""".splitlines()
+    c = flops.count(dump, "/bin/prog", code)
+    assert c.instructions == 10 + 10 + 5 + 3 + 7  # the 999 after calls= is g's inclusive cost
+    assert c.outside == 7
+    assert c.ops["mul"] == 40 and c.ops["add"] == 10 and c.ops["div"] == 3
+    assert c.flops == 53
+    assert c.flops_by_function == {"run_link_stretch": 50, "g": 3}
+    assert c.instructions_by_function["run_link_stretch"] == 25
