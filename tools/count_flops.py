@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import os
 import re
 import subprocess
 import sys
@@ -88,11 +89,12 @@ def count(dump_lines, binary: str, code: dict[int, tuple[str, str]]) -> Count:
     """Self cost of every instruction of a callgrind dump (the line after `calls=` is the
     callee's inclusive cost, already counted inside the callee, so it is skipped)."""
     result = Count()
+    target = os.path.realpath(binary)  # callgrind names objects by absolute path
     obj = fn = ""
     after_call = False
     for line in dump_lines:
         if line.startswith("ob="):
-            obj = line[3:].strip()
+            obj = os.path.realpath(line[3:].strip())
             continue
         if line.startswith("fn="):
             fn = function_name(line[3:].strip())
@@ -108,7 +110,7 @@ def count(dump_lines, binary: str, code: dict[int, tuple[str, str]]) -> Count:
             continue
         address, n = int(m.group(1), 16), int(m.group(2))
         result.instructions += n
-        instruction = code.get(address) if obj == binary else None
+        instruction = code.get(address) if obj == target else None
         if instruction is None:
             result.outside += n
             continue

@@ -61,3 +61,10 @@ fn=sin
     assert c.flops == 53
     assert c.flops_by_function == {"run_link_stretch": 50, "g": 3}
     assert c.instructions_by_function["run_link_stretch"] == 25
+
+
+def test_a_binary_given_by_relative_path_matches_the_absolute_object_of_the_dump(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    dump = [f"ob={tmp_path}/bin/prog", "fn=f(double)", "0x100 0 4"]
+    c = flops.count(dump, "bin/prog", {0x100: ("mulsd", "%xmm1,%xmm0")})
+    assert c.outside == 0 and c.ops["mul"] == 4
