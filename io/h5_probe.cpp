@@ -66,8 +66,9 @@ constexpr int kProbeOk = 0;
 //   error of the read, which the child recognises (allocation_failed);
 // - where no limit can be set, its peak resident memory may grow by at most the allowance.
 // A good file needs at most a few blocks of its data at once (kReadBlockBytes); the allowance is
-// far above that and scales with the file.
-constexpr std::uint64_t kProbeMemoryBaseBytes = std::uint64_t{256} << 20;
+// far above that and scales with the file. (It also leaves room for AddressSanitizer, whose
+// quarantine keeps up to 256 MB of freed memory mapped.)
+constexpr std::uint64_t kProbeMemoryBaseBytes = std::uint64_t{512} << 20;
 constexpr std::uint64_t kProbeMemoryPerFileByte = 4;
 constexpr int kProbeExcessMemory = 3;
 
