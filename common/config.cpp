@@ -79,6 +79,9 @@ bool terrain_steps(const Config& c) {
 bool terrain_slope(const Config& c) {
   return terrain_heightfield(c) && c.terrain.heightfield == "slope";
 }
+bool learning_on(const Config& c) {
+  return c.learning.method != "none";
+}
 bool supply_scaled(const Config& c) {
   return c.pneumatics.supply_pressure_scaling != "none";
 }
@@ -95,8 +98,8 @@ std::vector<std::string> task_kind_names() {
   return names;
 }
 
-const std::vector<std::string> kSections = {"run",        "task",       "physics", "terrain",
-                                            "pneumatics", "controller", "body",    "neat"};
+const std::vector<std::string> kSections = {
+    "run", "task", "physics", "terrain", "pneumatics", "controller", "body", "neat", "learning"};
 
 std::vector<KeyDef> schema(Config& c) {
   const std::vector<std::string> activations = {"sigmoid", "sin",     "abs",   "square",
@@ -108,6 +111,7 @@ std::vector<KeyDef> schema(Config& c) {
   auto& pn = c.pneumatics;
   auto& ct = c.controller;
   auto& b = c.body;
+  auto& l = c.learning;
   auto& n = c.neat;
   return {
       {"run", "seed", &r.seed, 0, 9.0e15},
@@ -336,6 +340,29 @@ std::vector<KeyDef> schema(Config& c) {
       {"neat", "survival_threshold", &n.survival_threshold, 0, 1, {}, 1.0, "", 0, true},
       {"neat", "tournament_size", &n.tournament_size, 1, 1e9},
       {"neat", "min_species_size", &n.min_species_size, 1, 1e9},
+
+      {"learning",
+       "method",
+       &l.method,
+       0,
+       0,
+       {"none", "es"},
+       1.0,
+       "",
+       0,
+       false,
+       std::nullopt,
+       learning_on},
+      only_when({"learning", "evaluations", &l.evaluations, 2, 1e9}, learning_on,
+                "learning.method is not \"none\""),
+      only_when({"learning", "population", &l.population, 1, 1e9}, learning_on,
+                "learning.method is not \"none\""),
+      only_when({"learning", "inheritance", &l.inheritance, 0, 0, {"lamarckian", "baldwinian"}},
+                learning_on, "learning.method is not \"none\""),
+      only_when({"learning", "step_size_factor", &l.step_size_factor, 0, 1e6, {}, 1.0, "", 0, true},
+                learning_on, "learning.method is not \"none\""),
+      only_when({"learning", "body_mutate_power_factor", &l.body_mutate_power_factor, 0, 1e6},
+                learning_on, "learning.method is not \"none\""),
   };
 }
 
@@ -642,6 +669,24 @@ void check_consistency(const Config& c, const std::string& source) {
          "task.control = " +
              quote(c.task.control));
   }
+  if (learning_on(c) && c.learning.evaluations < 1 + c.learning.population) {
+    fail(at,
+         "learning.evaluations = " + std::to_string(c.learning.evaluations) +
+             " must be >= 1 + learning.population = " + std::to_string(1 + c.learning.population) +
+             " (the inherited controller's evaluation and one iteration of candidates)");
+  }
+  if (learning_on(c) && (c.learning.evaluations - 1) / c.learning.population > 100000) {
+    fail(at, "learning.evaluations = " + std::to_string(c.learning.evaluations) +
+                 " gives more than 100000 iterations of learning.population = " +
+                 std::to_string(c.learning.population) + " candidates (the archive's limit)");
+  }
+  // A candidate is evaluated under its own work-unit id: on a ground drawn per evaluation it
+  // would compete on another ground than its body's, and the learned robot would not replay.
+  if (learning_on(c) && c.terrain.kind != "flat" && c.terrain.resample == "per_evaluation") {
+    fail(at, "learning.method = " + quote(c.learning.method) +
+                 " needs terrain.resample = \"per_run\" or \"per_generation\" (candidates of one "
+                 "body must be scored on the same ground), got \"per_evaluation\"");
+  }
   if (c.neat.bias_min_value > c.neat.bias_max_value) {
     fail(at, "neat.bias_min_value must be <= neat.bias_max_value");
   }
@@ -935,11 +980,13 @@ std::optional<TaskKind> task_kind_from_string(const std::string& name) {
 }
 
 std::string experiment_name(const Config& config) {
+  // Controller learning is another experiment (docs/model.md §8.11): "gait-closed-learn".
+  const std::string learn = learning_on(config) ? "-learn" : "";
   const TerrainConfig& t = config.terrain;
-  if (t.kind == "flat") return experiment_name(config.task);
+  if (t.kind == "flat") return experiment_name(config.task) + learn;
   const std::string kind =
       config.task.kind == TaskKind::directed ? "dir" : to_string(config.task.kind);
-  return kind + (t.kind == "rows" ? "-rows-" : "-rough-") + config.task.control;
+  return kind + (t.kind == "rows" ? "-rows-" : "-rough-") + config.task.control + learn;
 }
 
 std::string experiment_name(const TaskConfig& task) {

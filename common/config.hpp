@@ -185,6 +185,28 @@ struct NeatConfig {
   std::int64_t min_species_size = 2;
 };
 
+// Controller learning inside a run (docs/model.md §8.11, thesis 5.3.6): every body that is new
+// in its generation learns its controller with a (1+lambda) evolution strategy before selection
+// sees it. method = "none" (the thesis, the default) leaves every [learning] key out of the
+// canonical text, so configs without learning keep their config hash and their bits.
+struct LearningConfig {
+  std::string method = "none";  // "none" or "es"
+  // Evaluations per new body, the inherited controller's own evaluation included: the strategy
+  // runs (evaluations - 1) / population iterations of `population` candidates each.
+  std::int64_t evaluations = 101;
+  std::int64_t population = 10;  // lambda: candidates per iteration
+  // "lamarckian": the learned controller (values and step sizes) replaces the genome's before
+  // reproduction; "baldwinian": only the learned fitness counts, the genome reproduces as born.
+  std::string inheritance = "lamarckian";
+  // The strategy's step sizes are the genome's (evolution's: weight_init_sd = 3 at first, one
+  // large mutation per generation) times this factor: a local search needs small steps.
+  double step_size_factor = 0.1;
+  // Factor on neat.weight_mutate_power and neat.bias_mutate_power (the CPPN, i.e. the body):
+  // the thesis cut them 20-fold so that mutated bodies keep working with their inherited
+  // controllers (thesis 3.3, 5.3.5); with learning, 20 restores the uncut strength.
+  double body_mutate_power_factor = 1.0;
+};
+
 struct Config {
   RunConfig run;
   TaskConfig task;
@@ -194,6 +216,7 @@ struct Config {
   ControllerConfig controller;
   BodyConfig body;
   NeatConfig neat;
+  LearningConfig learning;
 };
 
 // A config problem: message already names file, line, key and the allowed values.
@@ -228,7 +251,8 @@ std::vector<StructuralMaterial> material_table(const PhysicsConfig& physics);
 // "gait-open", "dir-closed", "rotate-open", ... from task.kind and task.control.
 std::string experiment_name(const TaskConfig& task);
 // The same with the ground when it is not flat: "gait-rough-open" (terrain.kind =
-// "heightfield"), "gait-rows-closed" (terrain.kind = "rows"); flat configs keep their name.
+// "heightfield"), "gait-rows-closed" (terrain.kind = "rows"); flat configs keep their name;
+// with controller learning "-learn" follows ("gait-closed-learn", docs/model.md §8.11).
 std::string experiment_name(const Config& config);
 
 }  // namespace softevo

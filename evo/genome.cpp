@@ -60,6 +60,10 @@ EvoParams::CrossoverMethod crossover_method_from_string(const std::string& name)
 EvoParams evo_params(const Config& config, int task_inputs) {
   EvoParams p;
   p.neat = config.neat;
+  // learning.body_mutate_power_factor (1 unless learning is on): the body's mutation strength
+  // the thesis cut 20-fold for the sake of inherited controllers (docs/model.md §8.11).
+  p.neat.weight_mutate_power *= config.learning.body_mutate_power_factor;
+  p.neat.bias_mutate_power *= config.learning.body_mutate_power_factor;
   p.num_inputs = 4;   // x, y, z, d (§6.2)
   p.num_outputs = 4;  // presence, is_pneu, stiffness, sorting (§6.3)
   p.feed_forward = true;

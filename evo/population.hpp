@@ -63,6 +63,10 @@ class Population {
   // id or a non-finite fitness and std::runtime_error if every species went extinct; the
   // population is unchanged when it throws.
   void advance(const std::vector<Evaluation>& results);
+  // Lamarckian inheritance of controller learning (docs/model.md §8.11): member `id` takes the
+  // controller values and step sizes of `learned` (same CPPN) before advance() reproduces.
+  // Throws std::invalid_argument for an unknown id or a learned genome of another body or shape.
+  void adopt_controller(std::int64_t id, const Genome& learned);
 
   // Whole state as a framed message (kind population); see population.cpp for the layout.
   std::vector<std::uint8_t> serialize() const;

@@ -185,7 +185,13 @@ void GenerationRecord::check() const {
       wall_seconds.size() == n && worker_rank.size() == n && genome.size() == n && units >= 1 &&
       (reused_from.empty() || reused_from.size() == n) && !component_columns.empty() &&
       components.size() == n * static_cast<std::size_t>(units) * component_columns.size();
-  if (!same)
+  const bool learning_same =
+      fitness_before.empty()
+          ? learn_evaluations.empty() && learned_genome.empty() && learning_curve.empty()
+          : fitness_before.size() == n && learn_evaluations.size() == n &&
+                learned_genome.size() == n && learning_points >= 1 &&
+                learning_curve.size() == n * static_cast<std::size_t>(learning_points);
+  if (!same || !learning_same)
     throw ArchiveError("generation " + std::to_string(generation) +
                        ": record columns have different lengths");
   for (const std::string& c : component_columns)
@@ -352,6 +358,13 @@ void write_generation_group(const h5::Group& parent, const std::string& name,
                           record.components)
       .write_string_attribute(kColumnsAttribute, join_columns(record.component_columns),
                               h5::Charset::ascii);
+  if (record.has_learning()) {
+    g.write_dataset<double>("fitness_before", {n}, record.fitness_before);
+    g.write_dataset<std::int64_t>("learn_evaluations", {n}, record.learn_evaluations);
+    g.write_byte_rows("learned_genome", record.learned_genome);
+    g.write_dataset<double>("learning_curve", {n, static_cast<hsize_t>(record.learning_points)},
+                            record.learning_curve);
+  }
   g.write_attribute<double>("best", record.best);
   g.write_attribute<double>("mean", record.mean);
   g.write_attribute<double>("sd", record.sd);
@@ -795,6 +808,19 @@ GenerationRecord Archive::generation(std::int64_t gen) const {
                          join_columns(r.component_columns) + ")");
     r.components = components.read<double>();
     r.units = static_cast<int>(dims[1]);
+    if (g.has_link("fitness_before")) {  // a run with controller learning
+      r.fitness_before = column("fitness_before").read<double>();
+      r.learn_evaluations = column("learn_evaluations").read<std::int64_t>();
+      r.learned_genome = column("learned_genome").read_byte_rows(n, ArchiveLimits::genome_bytes);
+      const h5::Dataset curve = g.open_dataset("learning_curve");
+      const std::vector<hsize_t> curve_dims = curve.dims();
+      if (curve_dims.size() != 2 || curve_dims[0] != n || curve_dims[1] < 1 ||
+          curve_dims[1] > static_cast<hsize_t>(ArchiveLimits::learning_points))
+        throw ArchiveError(path_ + ": /" + name + "/learning_curve is not [" + std::to_string(n) +
+                           ", 1.." + std::to_string(ArchiveLimits::learning_points) + "]");
+      r.learning_curve = curve.read<double>();
+      r.learning_points = static_cast<std::int64_t>(curve_dims[1]);
+    }
     r.best = g.read_attribute<double>("best");
     r.mean = g.read_attribute<double>("mean");
     r.sd = g.read_attribute<double>("sd");
@@ -917,6 +943,16 @@ void hash_generation_results(Fnv& h, const GenerationRecord& r) {
     h.bytes(r.genome[i]);
   }
   for (double c : r.components) h.f64(c);
+  // Only a run with controller learning hashes its columns: every other digest is unchanged.
+  if (r.has_learning()) {
+    h.i64(r.learning_points);
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      h.f64(r.fitness_before[i]);
+      h.i64(r.learn_evaluations[i]);
+      h.bytes(r.learned_genome[i]);
+    }
+    for (double c : r.learning_curve) h.f64(c);
+  }
   h.f64(r.best);
   h.f64(r.mean);
   h.f64(r.sd);

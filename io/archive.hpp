@@ -49,6 +49,8 @@ struct ArchiveLimits {
   static constexpr std::int64_t checkpoint_bytes = 1LL << 32;  // /checkpoint/population
   static constexpr std::int64_t config_bytes = 1LL << 20;      // /config text
   static constexpr std::int64_t string_bytes = 4096;           // any string attribute
+  // Points of one learning curve: strategy iterations (<= 10^5, common/config.cpp) + 1.
+  static constexpr std::int64_t learning_points = 100'001;
 };
 
 // A missing, unreadable, foreign or malformed archive, or a failed write; the message names the
@@ -106,6 +108,17 @@ struct GenerationRecord {
   // "status"; legacy_component_columns() for an archive that does not name them).
   std::vector<std::string> component_columns = legacy_component_columns();
   std::vector<double> components;  // row-major [n][units][component_columns.size()]
+  // Controller learning (docs/model.md §8.11), all empty in a run without learning. Per row:
+  // the fitness of the genome as created (`fitness` is the learned one), the evaluations spent
+  // on the body (the born one included; a reused row repeats its origin's), the genome with
+  // the learned controller (evo::encode_genome) and the best fitness so far after the born
+  // evaluation and after every strategy iteration, row-major [n][learning_points].
+  std::vector<double> fitness_before;
+  std::vector<std::int64_t> learn_evaluations;
+  std::vector<std::vector<std::uint8_t>> learned_genome;
+  std::int64_t learning_points = 0;  // curve points per row (iterations + 1)
+  std::vector<double> learning_curve;
+  bool has_learning() const { return !fitness_before.empty(); }
   // Group attributes.
   double best = 0.0;
   double mean = 0.0;

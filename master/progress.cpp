@@ -65,7 +65,16 @@ std::string generation_line(const GenerationSummary& s, std::int64_t total_gener
                 static_cast<long long>(s.species), rate, duration_text(elapsed_seconds).c_str(),
                 duration_text(eta_seconds).c_str());
   const std::string reused = s.reused > 0 ? "  reused " + std::to_string(s.reused) : "";
-  return head + status_counts_text(s.status_counts) + tail + reused;
+  std::string learned;
+  if (s.learned_bodies > 0) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "  learned %lld x %lld it, gain mean %+.4f%s best %+.4f%s",
+                  static_cast<long long>(s.learned_bodies),
+                  static_cast<long long>(s.learning_iterations), s.learning_gain_mean, unit.c_str(),
+                  s.learning_gain_best, unit.c_str());
+    learned = buf;
+  }
+  return head + status_counts_text(s.status_counts) + tail + reused + learned;
 }
 
 std::string generation_warning(const GenerationSummary& s) {
@@ -161,6 +170,7 @@ void ProgressReporter::clear_live() {
 
 void ProgressReporter::generation_started(std::int64_t generation, std::size_t units_total) {
   generation_ = generation;
+  round_.reset();
   generation_start_ = std::chrono::steady_clock::now();
   last_live_ = generation_start_;
   unit_done(0, units_total);
@@ -174,12 +184,27 @@ void ProgressReporter::unit_done(std::size_t units_done, std::size_t units_total
       now - last_live_ < std::chrono::milliseconds(200))
     return;
   last_live_ = now;
-  const double elapsed = std::chrono::duration<double>(now - generation_start_).count();
+  const double elapsed =
+      std::chrono::duration<double>(now - (round_ ? round_start_ : generation_start_)).count();
   const double rate = elapsed > 0 ? static_cast<double>(units_done) / elapsed : 0.0;
-  std::fprintf(live_, "\r\033[K  gen %lld: %zu/%zu evaluations, %.2f eval/s",
-               static_cast<long long>(generation_), units_done, units_total, rate);
+  if (round_)
+    std::fprintf(live_,
+                 "\r\033[K  gen %lld learn %lld/%lld (%zu bodies): %zu/%zu evaluations, %.2f "
+                 "eval/s, gain mean %+.4g best %+.4g",
+                 static_cast<long long>(generation_), static_cast<long long>(round_->iteration),
+                 static_cast<long long>(round_->iterations), round_->bodies, units_done,
+                 units_total, rate, round_->gain_mean, round_->gain_best);
+  else
+    std::fprintf(live_, "\r\033[K  gen %lld: %zu/%zu evaluations, %.2f eval/s",
+                 static_cast<long long>(generation_), units_done, units_total, rate);
   std::fflush(live_);
   live_visible_ = true;
+}
+
+void ProgressReporter::learning_started(const LearningProgress& round) {
+  round_ = round;
+  round_start_ = std::chrono::steady_clock::now();
+  last_live_ = round_start_;
 }
 
 void ProgressReporter::generation_finished(const GenerationSummary& s) {

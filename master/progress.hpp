@@ -33,6 +33,21 @@ struct GenerationSummary {
   double max_abs_ok_fitness = 0.0;  // largest |fitness| of an ok genome: 0 = nothing moved
   std::string fitness_unit;         // the task's ("cm", "rad")
   std::int64_t reused = 0;          // work units whose result was reused (not simulated)
+  // Controller learning (docs/model.md §8.11): bodies that learned in this generation, the
+  // strategy iterations each ran, and the mean and largest fitness gained by learning.
+  std::int64_t learned_bodies = 0;
+  std::int64_t learning_iterations = 0;
+  double learning_gain_mean = 0.0;
+  double learning_gain_best = 0.0;
+};
+
+// A learning round of a generation starts (the live line names it).
+struct LearningProgress {
+  std::int64_t iteration = 0;  // 1-based iteration of this round
+  std::int64_t iterations = 0;
+  std::size_t bodies = 0;  // bodies learning
+  double gain_mean = 0.0;  // mean fitness gained so far
+  double gain_best = 0.0;  // largest fitness gained so far
 };
 
 // The generation's line: "gen 3/10  best 1.6440 cm  mean ... ok 11 flipped 1 ... elapsed 12s
@@ -76,6 +91,8 @@ class ProgressReporter {
 
   void generation_started(std::int64_t generation, std::size_t units_total);
   void unit_done(std::size_t units_done, std::size_t units_total);
+  // The generation's next learning round: the live line then reads "gen 3 learn 2/10: ...".
+  void learning_started(const LearningProgress& round);
   void generation_finished(const GenerationSummary& s);
   void message(const char* text);  // a free-form line (clears the live line first)
 
@@ -90,6 +107,8 @@ class ProgressReporter {
   std::int64_t generations_reported_ = 0;
   double seconds_reported_ = 0.0;  // sum of generation_seconds, for the ETA
   bool live_visible_ = false;
+  std::optional<LearningProgress> round_;  // the learning round in flight, if any
+  std::chrono::steady_clock::time_point round_start_;
   std::chrono::steady_clock::time_point start_;
   std::chrono::steady_clock::time_point generation_start_;
   std::chrono::steady_clock::time_point last_live_;

@@ -32,6 +32,16 @@ void ResultMemory::remember(const io::GenerationRecord& record) {
     r.chambers = record.chambers[i];
     const auto first = record.components.begin() + static_cast<std::ptrdiff_t>(i * per_row);
     r.components.assign(first, first + static_cast<std::ptrdiff_t>(per_row));
+    if (record.has_learning()) {
+      r.fitness_before = record.fitness_before[i];
+      r.learn_evaluations = record.learn_evaluations[i];
+      r.learned_genome = record.learned_genome[i];
+      const auto points = static_cast<std::size_t>(record.learning_points);
+      const auto curve = record.learning_curve.begin() + static_cast<std::ptrdiff_t>(i * points);
+      r.learning_curve.assign(curve, curve + static_cast<std::ptrdiff_t>(points));
+      if (record.learned_genome[i] != record.genome[i])
+        by_genome_.emplace(key_of(record.learned_genome[i]), r);
+    }
     // Equal bytes have equal results: the first row of them is as good as any.
     by_genome_.emplace(key_of(record.genome[i]), std::move(r));
   }

@@ -32,6 +32,11 @@ struct ReusableResult {
   std::int32_t voxels = 0;
   std::int32_t chambers = 0;
   std::vector<double> components;  // the row's [units][component columns]
+  // Controller learning (io::GenerationRecord): empty learned_genome = the run does not learn.
+  double fitness_before = 0.0;
+  std::int64_t learn_evaluations = 0;
+  std::vector<std::uint8_t> learned_genome;
+  std::vector<double> learning_curve;
 };
 
 // Whether a result with `status` is the same whenever the genome is evaluated.
@@ -40,6 +45,8 @@ bool reusable(EvalStatus status);
 class ResultMemory {
  public:
   // Forgets everything, then remembers the reusable rows of `record` (an archived generation).
+  // A learned row is found by its genome and by its learned genome: an elite that inherited
+  // the learned controller (Lamarckian) keeps the learned result, it does not learn again.
   void remember(const io::GenerationRecord& record);
   // The remembered result of `genome` (bytes compared exactly), nullptr if none.
   const ReusableResult* find(std::span<const std::uint8_t> genome) const;

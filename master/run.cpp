@@ -71,6 +71,16 @@ std::int64_t generations_on_disk(const std::string& out) {
   }
 }
 
+// One row's learning columns (io::GenerationRecord), every row of a learning run.
+void record_learning(GenerationRecord& rec, double fitness_before, std::int64_t evaluations,
+                     std::vector<std::uint8_t> learned_genome, const std::vector<double>& curve) {
+  rec.learning_points = static_cast<std::int64_t>(curve.size());
+  rec.fitness_before.push_back(fitness_before);
+  rec.learn_evaluations.push_back(evaluations);
+  rec.learned_genome.push_back(std::move(learned_genome));
+  rec.learning_curve.insert(rec.learning_curve.end(), curve.begin(), curve.end());
+}
+
 // Archives generation `record.generation`; `info` counts it only once it is on disk. A failed
 // write (full disk, I/O error) leaves the archive and `info` at the previous generation, so the
 // error path's state change and a later --resume see a consistent archive: a failure loses at
@@ -317,15 +327,21 @@ GenerationScheduler& RunLoop::begin_generation() {
       encoded_[i] = evo::encode_genome(members[i].genome);
       ids[i] = members[i].id;
     }
-    plan_ = plan_reuse(ids, encoded_, run_.options.reuse_results ? &run_.memory : nullptr);
+    // A learned result is not a function of the genome alone when it is learned again (a
+    // Lamarckian elite would learn on from its learned controller): with learning, results are
+    // always reused (docs/model.md §8.11).
+    const bool reuse = run_.options.reuse_results || config.learning.method != "none";
+    plan_ = plan_reuse(ids, encoded_, reuse ? &run_.memory : nullptr);
     std::vector<std::int64_t> evaluated_ids;
-    std::vector<double> costs;
+    costs_.clear();
     for (std::size_t m : plan_.evaluate) {
       evaluated_ids.push_back(ids[m]);
       if (run_.options.longest_first)
-        costs.push_back(predicted_unit_cost(members[m].genome, config.body));
+        costs_.push_back(predicted_unit_cost(members[m].genome, config.body));
     }
-    scheduler_.emplace(run_.population->generation(), evaluated_ids, *task_, costs);
+    learning_.reset();
+    units_before_ = 0;
+    scheduler_.emplace(run_.population->generation(), evaluated_ids, *task_, costs_);
     progress_.generation_started(scheduler_->generation(), scheduler_->units_total());
     t_eval_ = Clock::now();
   });
@@ -333,6 +349,7 @@ GenerationScheduler& RunLoop::begin_generation() {
 }
 
 EvalRequest RunLoop::request(const WorkUnit& unit) const {
+  if (learning_) return learning_->request(unit, run_.config_hash);
   EvalRequest r;
   r.config_hash = run_.config_hash;
   r.generation = scheduler_->generation();
@@ -340,6 +357,54 @@ EvalRequest RunLoop::request(const WorkUnit& unit) const {
   r.unit = unit.unit;
   r.genome = encoded_[plan_.evaluate[unit.member]];
   return r;
+}
+
+GenerationScheduler* RunLoop::continue_generation() {
+  GenerationScheduler* next = nullptr;
+  if (run_.config.learning.method == "none") return next;
+  guarded([&] {
+    GenerationScheduler& scheduler = *scheduler_;
+    const std::int64_t g = scheduler.generation();
+    check_failures(scheduler);
+    if (!learning_) {
+      // Round 0 (the members as born) is done: every evaluated body starts learning.
+      const std::vector<evo::Individual>& members = run_.population->members();
+      std::vector<std::int64_t> ids;
+      std::vector<evo::Genome> genomes;
+      for (std::size_t m : plan_.evaluate) {
+        ids.push_back(members[m].id);
+        genomes.push_back(members[m].genome);
+      }
+      learning_.emplace(run_.config, run_.population->params(), g, std::move(ids),
+                        std::move(genomes), scheduler.outcomes(), costs_);
+    } else {
+      learning_->end_iteration(scheduler.outcomes());
+    }
+    if (learning_->finished()) return;
+    units_before_ += scheduler.units_total();
+    std::vector<std::int64_t> unit_ids;
+    std::vector<double> costs;
+    learning_->begin_iteration(unit_ids, costs);
+    if (!run_.options.longest_first) costs.clear();
+    scheduler_.emplace(g, std::move(unit_ids), *task_, costs);
+    progress_.learning_started(LearningProgress{
+        learning_->iteration() + 1, learning_->iterations(), learning_->bodies_learning(),
+        learning_->mean_improvement(), learning_->best_improvement()});
+    progress_.unit_done(0, scheduler_->units_total());
+    next = &*scheduler_;
+  });
+  return next;
+}
+
+void RunLoop::check_failures(const GenerationScheduler& scheduler) const {
+  if (run_.config.run.on_failure != "abort") return;
+  const auto failures = scheduler.failures();
+  if (failures.empty()) return;
+  const EvalResult& f = *failures.front();
+  throw RunError((learning_ ? "learning candidate " : "genome ") + std::to_string(f.genome_id) +
+                 " (generation " + std::to_string(scheduler.generation()) + ", unit " +
+                 std::to_string(f.unit) + ") failed on rank " + std::to_string(f.worker_rank) +
+                 ": " + f.message + " (run.on_failure = abort)");
 }
 
 void RunLoop::end_generation() {
@@ -352,20 +417,20 @@ void RunLoop::end_generation() {
     const std::vector<evo::Individual>& members = population.members();
     const std::int64_t g = scheduler.generation();
     const double eval_seconds = seconds_since(t_eval_);
-    if (config.run.on_failure == "abort") {
-      const auto failures = scheduler.failures();
-      if (!failures.empty()) {
-        const EvalResult& f = *failures.front();
-        throw RunError("genome " + std::to_string(f.genome_id) + " (generation " +
-                       std::to_string(g) + ", unit " + std::to_string(f.unit) +
-                       ") failed on rank " + std::to_string(f.worker_rank) + ": " + f.message +
-                       " (run.on_failure = abort)");
-      }
+    check_failures(scheduler);
+    // plan_.evaluate order; with learning, the learned genomes' outcomes
+    std::vector<GenomeOutcome> evaluated;
+    if (learning_) {
+      for (const LearnedResult& l : learning_->results()) evaluated.push_back(l.learned);
+    } else {
+      evaluated = scheduler.outcomes();
     }
-    const std::vector<GenomeOutcome> evaluated = scheduler.outcomes();  // plan_.evaluate order
     std::vector<const GenomeOutcome*> outcome_of(members.size(), nullptr);
-    for (std::size_t k = 0; k < plan_.evaluate.size(); ++k)
+    std::vector<const LearnedResult*> learned_of(members.size(), nullptr);
+    for (std::size_t k = 0; k < plan_.evaluate.size(); ++k) {
       outcome_of[plan_.evaluate[k]] = &evaluated[k];
+      if (learning_) learned_of[plan_.evaluate[k]] = &learning_->results()[k];
+    }
 
     // Archive rows in id order.
     std::vector<std::size_t> order(members.size());
@@ -396,6 +461,9 @@ void RunLoop::end_generation() {
         rec.wall_seconds.push_back(0.0);
         rec.worker_rank.push_back(-1);
         rec.components.insert(rec.components.end(), r.components.begin(), r.components.end());
+        if (learning_)
+          record_learning(rec, r.fitness_before, r.learn_evaluations, r.learned_genome,
+                          r.learning_curve);
       } else {
         const bool copy = source.kind == ResultSource::Kind::same_generation;
         const GenomeOutcome& o = *outcome_of[copy ? source.member : i];
@@ -409,6 +477,12 @@ void RunLoop::end_generation() {
           const std::vector<double> row = tasks::component_row(u);
           rec.components.insert(rec.components.end(), row.begin(), row.end());
         }
+        if (learning_) {
+          const LearnedResult& l = *learned_of[copy ? source.member : i];
+          record_learning(rec, l.born.fitness, l.evaluations, evo::encode_genome(l.genome),
+                          l.curve);
+          if (!copy) rec.wall_seconds.back() = l.wall_seconds;
+        }
       }
       evaluations.push_back(evo::Evaluation{m.id, rec.fitness.back(), rec.status.back() != 0});
     }
@@ -421,9 +495,14 @@ void RunLoop::end_generation() {
     // content_digest, which reuse leaves as it was.
     rec.evaluations = static_cast<std::int64_t>(members.size()) * task.units();
     rec.eval_wall_seconds = eval_seconds;
-    const auto simulated = static_cast<std::int64_t>(scheduler.units_total());
+    const auto simulated = static_cast<std::int64_t>(units_before_ + scheduler.units_total());
 
     try {
+      // Lamarckian inheritance: the learned controllers are what reproduces (§8.11).
+      if (learning_ && config.learning.inheritance == "lamarckian")
+        for (std::size_t r = 0; r < rec.size(); ++r)
+          if (rec.learned_genome[r] != rec.genome[r])
+            population.adopt_controller(rec.id[r], evo::decode_genome(rec.learned_genome[r]));
       population.advance(evaluations);
     } catch (const std::exception& e) {
       throw RunError("generation " + std::to_string(g) + ": reproduction failed: " + e.what());
@@ -449,6 +528,12 @@ void RunLoop::end_generation() {
                               0.0,
                               task.fitness_unit(),
                               static_cast<std::int64_t>(plan_.reused()) * task.units()};
+    if (learning_ && learning_->bodies_learning() > 0) {
+      summary.learned_bodies = static_cast<std::int64_t>(learning_->bodies_learning());
+      summary.learning_iterations = learning_->iterations();
+      summary.learning_gain_mean = learning_->mean_improvement();
+      summary.learning_gain_best = learning_->best_improvement();
+    }
     for (std::size_t i = 0; i < rec.size(); ++i) {
       if (rec.status[i] < summary.status_counts.size()) ++summary.status_counts[rec.status[i]];
       if (rec.status[i] == static_cast<std::uint8_t>(EvalStatus::ok))
@@ -561,6 +646,11 @@ std::vector<RunOutcome> execute_runs(const std::vector<PreparedRun*>& runs, Unit
       if (it == active.end())
         throw RunError("the executor finished run " + std::to_string(*done) +
                        ", which has no generation in flight");
+      // A learning round of the same generation takes the finished round's place.
+      if (GenerationScheduler* round = loops[*done]->continue_generation()) {
+        it->scheduler = round;
+        continue;
+      }
       active.erase(it);
       loops[*done]->end_generation();
       start_next(*done);

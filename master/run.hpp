@@ -22,6 +22,7 @@
 #include "evo/population.hpp"
 #include "io/archive.hpp"
 #include "io/run_lock.hpp"
+#include "master/learning_rounds.hpp"
 #include "master/progress.hpp"
 #include "master/result_reuse.hpp"
 #include "master/scheduler.hpp"
@@ -153,6 +154,10 @@ class RunLoop {
   GenerationScheduler& begin_generation();
   EvalRequest request(const WorkUnit& unit) const;
   ProgressReporter& progress() const { return progress_; }
+  // After every unit of the scheduler has its result: with controller learning on, the next
+  // learning round of the generation (master/learning_rounds.hpp) in the same scheduler, or
+  // nullptr when the generation is complete (always nullptr without learning).
+  GenerationScheduler* continue_generation();
   // After every unit of the generation has its result: archives it, reproduces, checkpoints.
   void end_generation();
   // Records the final state (complete or interrupted) and packs the archive.
@@ -163,6 +168,8 @@ class RunLoop {
  private:
   template <class Step>
   void guarded(const Step& step);
+  // RunError naming the first failed unit of `scheduler` under run.on_failure = "abort".
+  void check_failures(const GenerationScheduler& scheduler) const;
 
   using Clock = std::chrono::steady_clock;
   PreparedRun& run_;
@@ -170,7 +177,11 @@ class RunLoop {
   std::unique_ptr<tasks::Task> task_;
   std::vector<std::vector<std::uint8_t>> encoded_;  // members' genomes, member order
   ReusePlan plan_;
+  std::vector<double> costs_;  // predicted cost per evaluated member (empty: member order)
   std::optional<GenerationScheduler> scheduler_;
+  // Controller learning of the generation in flight (learning.method != "none").
+  std::optional<GenerationLearning> learning_;
+  std::size_t units_before_ = 0;  // units simulated in the generation's finished rounds
   Clock::time_point t_generation_;
   Clock::time_point t_eval_;
   bool archive_written_ = false;

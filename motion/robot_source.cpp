@@ -304,7 +304,9 @@ ArchivedIndividual individual_at(const io::GenerationRecord& record, std::size_t
   ind.fitness = record.fitness[row];
   ind.voxels = record.voxels[row];
   ind.chambers = record.chambers[row];
-  ind.genome = record.genome[row];
+  // In a learning run the archived fitness is the learned controller's (docs/model.md §8.11):
+  // the robot that earned it is the body with that controller.
+  ind.genome = record.has_learning() ? record.learned_genome[row] : record.genome[row];
   ind.units = record.units;
   ind.component_columns = record.component_columns;
   const std::size_t per_row =

@@ -76,7 +76,7 @@ struct ArchivedIndividual {
   double fitness = 0.0;     // archived fitness
   std::int32_t voxels = 0;
   std::int32_t chambers = 0;
-  std::vector<std::uint8_t> genome;  // encoded genome
+  std::vector<std::uint8_t> genome;  // encoded genome (the learned one in a learning run)
   int units = 1;                     // rows of `components`: work units of the genome
   // Archived fitness components [units][component_columns.size()] (docs/archive.md).
   std::vector<std::string> component_columns;

@@ -156,6 +156,44 @@ TEST(Config, TerrainKeysEnterTheTextOnlyOffFlatGround) {
   }
 }
 
+// Controller learning (docs/model.md §8.11): off by default and then absent from the text (every
+// existing config hash stays), its keys settable only with a method, its budget checked.
+TEST(Config, LearningKeysEnterTheTextOnlyWithAMethod) {
+  EXPECT_EQ(canonical_text(Config{}).find("[learning]"), std::string::npos);
+  EXPECT_EQ(config_hash(parse_config("[learning]\nmethod = \"none\"\n", "n")),
+            config_hash(Config{}));
+  const Config learn = parse_config(
+      "[learning]\nmethod = \"es\"\nevaluations = 51\npopulation = 5\n"
+      "inheritance = \"baldwinian\"\nstep_size_factor = 0.2\nbody_mutate_power_factor = 20.0\n",
+      "l.toml");
+  EXPECT_EQ(learn.learning.evaluations, 51);
+  EXPECT_EQ(learn.learning.population, 5);
+  EXPECT_EQ(learn.learning.inheritance, "baldwinian");
+  EXPECT_EQ(learn.learning.step_size_factor, 0.2);
+  const std::string text = canonical_text(learn);
+  EXPECT_NE(text.find("[learning]\nmethod = \"es\"\nevaluations = 51\npopulation = 5\n"
+                      "inheritance = \"baldwinian\"\nstep_size_factor = 0.2\n"
+                      "body_mutate_power_factor = 20.0\n"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(canonical_text(parse_config(text, "canonical")), text);
+  EXPECT_EQ(experiment_name(learn), "gait-open-learn");
+  for (const auto& [text_in, needle] :
+       {std::pair<std::string, std::string>{"[learning]\nevaluations = 50\n",
+                                            "learning.evaluations applies only when "
+                                            "learning.method is not \"none\""},
+        {"[learning]\nmethod = \"cma\"\n", "\"es\""},
+        {"[learning]\nmethod = \"es\"\ninheritance = \"darwinian\"\n", "\"baldwinian\""},
+        {"[learning]\nmethod = \"es\"\nevaluations = 10\npopulation = 10\n",
+         "learning.evaluations = 10 must be >= 1 + learning.population = 11"},
+        {"[learning]\nmethod = \"es\"\nbudget = 10\n", "unknown key 'learning.budget'"},
+        {"[learning]\nmethod = \"es\"\n[terrain]\nkind = \"rows\"\n"
+         "resample = \"per_evaluation\"\n",
+         "needs terrain.resample"}}) {
+    expect_config_error(text_in, "l.toml", needle);
+  }
+}
+
 // Thesis 5.3.4 options (docs/model.md §3.8, §4.1, §4.8): at their defaults they leave the
 // canonical text (so every existing config hash) unchanged; other values print their keys; a
 // typo or a value out of range is an error naming the key.

@@ -16,6 +16,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -200,6 +201,26 @@ bool wait_for_generations(const std::string& path, std::int64_t g, pid_t child) 
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   return false;
+}
+
+// Rank 0 starts softevo-mpi `args` as a child and kills it (SIGKILL: no chance to clean up)
+// once `archive` holds `generations` generations; 1 on every rank when that worked.
+int run_and_kill(const TempDir& dir, const std::vector<std::string>& args,
+                 const std::string& archive, std::int64_t generations) {
+  int ok = 1;
+  if (world_rank() == 0) {
+    const pid_t child = spawn_child(args, dir.file("child.log"));
+    ok = child > 0 && wait_for_generations(archive, generations, child) ? 1 : 0;
+    if (child > 0) {
+      kill(child, SIGKILL);
+      bool signalled = false;
+      wait_exit(child, &signalled);
+      EXPECT_TRUE(signalled) << "the child finished before it could be killed";
+    }
+    EXPECT_EQ(ok, 1) << file_bytes(dir.file("child.log"));
+  }
+  MPI_Bcast(&ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  return ok;
 }
 
 // ---- tests ---------------------------------------------------------------------------------
@@ -388,27 +409,60 @@ TEST(SoftevoMpi, SeveralRunsInOneJobResumeAfterSigkill) {
   args.insert(args.end(), {"--out-dir", dir.file("ref")});
   ASSERT_EQ(run_on(world_size(), args), 0);
   const std::string killed = dir.file("killed");
-  int ok = 1;
-  if (world_rank() == 0) {
-    std::vector<std::string> cargs = common;
-    cargs.insert(cargs.end(), {"--out-dir", killed});
-    const pid_t child = spawn_child(cargs, dir.file("child.log"));
-    ok = child > 0 && wait_for_generations(killed + "/tiny-01.h5", 2, child) ? 1 : 0;
-    if (child > 0) {
-      kill(child, SIGKILL);
-      bool signalled = false;
-      wait_exit(child, &signalled);
-      EXPECT_TRUE(signalled) << "the child finished before it could be killed";
-    }
-    EXPECT_EQ(ok, 1) << file_bytes(dir.file("child.log"));
-    EXPECT_LT(Archive(killed + "/tiny-01.h5").info().generations_done, 5);
-  }
-  MPI_Bcast(&ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  ASSERT_EQ(ok, 1);
+  std::vector<std::string> cargs = common;
+  cargs.insert(cargs.end(), {"--out-dir", killed});
+  ASSERT_EQ(run_and_kill(dir, cargs, killed + "/tiny-01.h5", 2), 1);
+  if (world_rank() == 0) EXPECT_LT(Archive(killed + "/tiny-01.h5").info().generations_done, 5);
   args = common;
   args.insert(args.end(), {"--out-dir", killed, "--resume"});
   ASSERT_EQ(run_on(world_size(), args), 0);
   if (world_rank() == 0) expect_same_runs(killed, dir.file("ref"), kPackedNames);
+}
+
+// Controller learning (docs/model.md §8.11): the candidates of every body are work units in the
+// one pool; the archive (learned controllers and curves included) is the same for np = 1 ..
+// world size, and a kill -9 in the middle of the run plus --resume gives the uninterrupted one.
+constexpr const char* kLearningSets[] = {
+    "--set", "learning.method=es",    "--set", "learning.evaluations=5",
+    "--set", "learning.population=2", "--set", "task.eval_seconds=0.05"};
+
+TEST(SoftevoMpi, LearningRunIsIdenticalForAnyRankCountAndAfterSigkill) {
+  TempDir dir;
+  const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
+  std::vector<std::string> common = {"--config", cfg, "--generations", "4"};
+  common.insert(common.end(), std::begin(kLearningSets), std::end(kLearningSets));
+  std::vector<Digests> d;
+  for (int np = 1; np <= world_size(); ++np) {
+    std::vector<std::string> args = common;
+    args.insert(args.end(), {"--out", dir.file("learn-np" + std::to_string(np) + ".h5")});
+    ASSERT_EQ(run_on(np, args), 0) << "np=" << np;
+    d.push_back(digests(dir.file("learn-np" + std::to_string(np) + ".h5")));
+  }
+  for (std::size_t i = 1; i < d.size(); ++i) {
+    EXPECT_EQ(d[i].fitness, d[0].fitness) << "np=" << i + 1 << " vs np=1";
+    EXPECT_EQ(d[i].content, d[0].content) << "np=" << i + 1 << " vs np=1";
+  }
+  if (world_rank() == 0) {
+    const GenerationRecord r = Archive(dir.file("learn-np1.h5")).generation(1);
+    ASSERT_TRUE(r.has_learning());
+    EXPECT_EQ(r.learning_points, 3);  // born + 2 iterations of 2
+    // Every unit simulated: 5 per new body (born + 4 candidates), none for a reused row.
+    std::int64_t fresh = 0;
+    for (std::size_t i = 0; i < r.size(); ++i) fresh += r.reused_from[i] == io::kNotReused;
+    EXPECT_GT(fresh, 0);
+  }
+
+  const std::string killed = dir.file("killed.h5");
+  std::vector<std::string> cargs = common;
+  cargs.insert(cargs.end(), {"--out", killed});
+  ASSERT_EQ(run_and_kill(dir, cargs, killed, 1), 1);  // in generation 1's learning or later
+  if (world_rank() == 0) EXPECT_LT(Archive(killed).info().generations_done, 4);
+  std::vector<std::string> args = common;
+  args.insert(args.end(), {"--out", killed, "--resume"});
+  ASSERT_EQ(run_on(world_size(), args), 0);
+  const Digests b = digests(killed);
+  EXPECT_EQ(b.fitness, d[0].fitness);
+  EXPECT_EQ(b.content, d[0].content);
 }
 
 TEST(SoftevoMpi, ResumeAfterSigkillGivesTheSameArchive) {
@@ -421,26 +475,15 @@ TEST(SoftevoMpi, ResumeAfterSigkillGivesTheSameArchive) {
   ASSERT_EQ(run_on(world_size(), args), 0);
 
   const std::string killed = dir.file("killed.h5");
-  int ok = 1;
+  std::vector<std::string> cargs = common;
+  cargs.insert(cargs.end(), {"--out", killed});
+  ASSERT_EQ(run_and_kill(dir, cargs, killed, 2), 1);  // mid-generation 2 (or later)
   if (world_rank() == 0) {
-    std::vector<std::string> cargs = common;
-    cargs.insert(cargs.end(), {"--out", killed});
-    const pid_t child = spawn_child(cargs, dir.file("child.log"));
-    ok = child > 0 && wait_for_generations(killed, 2, child) ? 1 : 0;
-    if (child > 0) {
-      kill(child, SIGKILL);  // mid-generation 2 (or later): no chance to clean up
-      bool signalled = false;
-      wait_exit(child, &signalled);
-      EXPECT_TRUE(signalled) << "the child finished before it could be killed";
-    }
-    EXPECT_EQ(ok, 1) << file_bytes(dir.file("child.log"));
     const RunInfo info = Archive(killed).info();  // still a valid archive
     EXPECT_EQ(info.state, "running");
     EXPECT_GE(info.generations_done, 2);
     EXPECT_LT(info.generations_done, 5);
   }
-  MPI_Bcast(&ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
-  ASSERT_EQ(ok, 1);
   args = common;
   args.insert(args.end(), {"--out", killed, "--resume"});
   ASSERT_EQ(run_on(world_size(), args), 0);
