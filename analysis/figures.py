@@ -14,6 +14,10 @@ Writes (PNG and PDF for every figure, CSV for every table):
   comparison.csv                       Welch's t-test and Mann-Whitney U for those (the thesis
                                        reports p = 0.012 for the gait population means)
   champions.csv, champions.*           table of run champions (best of the last generation)
+  learning.*, learning.csv             when a run learns controllers (docs/model.md §8.11):
+                                       best fitness so far against evaluations simulated, every
+                                       experiment (equal budgets compare at equal x), and the
+                                       mean learning curve of the new bodies
 
 Pairs compared: the thesis' open vs closed loop of each task (gait, directed) and of their
 rough-ground variants (gait-rough-*, dir-rough-*) when the folder has them, or, with
@@ -47,7 +51,8 @@ import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 from scipy import stats  # noqa: E402
 
-from softevo_archive import EXPERIMENTS, Run, find_runs, status_name  # noqa: E402
+from softevo_archive import (EXPERIMENTS, Run, evaluations_per_generation, find_runs,  # noqa: E402
+                             status_name)
 
 # The pairs compared by default: name -> (first, second) experiment, and their titles.
 TASKS = {"gait": ("gait-open", "gait-closed"), "directed": ("dir-open", "dir-closed"),
@@ -306,6 +311,67 @@ def champions(runs: list[Run], out: pathlib.Path, written: list[pathlib.Path]) -
     save(fig, out, "champions", written)
 
 
+def budget_curves(runs: list[Run]) -> tuple[np.ndarray, np.ndarray]:
+    """A common grid of simulated evaluations (up to the smallest run total) and [runs x grid]
+    best-so-far fitness at each point (a step function of each run's generations)."""
+    per_run = []
+    for r in runs:
+        gens, counts = evaluations_per_generation(r)
+        _, _, bests = r.fitness_curves()
+        per_run.append((np.cumsum(counts), np.maximum.accumulate(bests)))
+    end = min(int(x[-1]) for x, _ in per_run)
+    grid = np.linspace(0, end, 200)
+    values = np.array([[b[min(np.searchsorted(x, v), len(b) - 1)] for v in grid]
+                       for x, b in per_run])
+    return grid, values
+
+
+def learning_figure(by_exp: dict[str, list[Run]], out: pathlib.Path,
+                    written: list[pathlib.Path]) -> None:
+    """learning.*: every experiment's best-so-far fitness against the evaluations it simulated
+    (equal budgets compare at equal x), and the mean learning curve of the learning runs' new
+    bodies (fitness gained against strategy iterations); learning.csv: the numbers."""
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    rows: list[list] = []
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for k, (label, runs) in enumerate(by_exp.items()):
+        grid, values = budget_curves(runs)
+        m, s = values.mean(axis=0), sd(values, axis=0)
+        c = colours[k % len(colours)]
+        ax.plot(grid, m, color=c, label=f"{label} (n={len(runs)})")
+        ax.fill_between(grid, m - s, m + s, color=c, alpha=0.2, linewidth=0)
+        rows += [[label, "best_so_far", float(x), float(y), float(z)]
+                 for x, y, z in zip(grid[::20], m[::20], s[::20])]
+        learners = [r for r in runs if r.learning is not None]
+        if not learners:
+            continue
+        gains = [np.asarray(curve) - curve[0] for r in learners
+                 for curve, fresh in zip(r.learning["learning_curve"],
+                                         r._columns["reused_from"] == -1) if fresh]
+        gains = np.array(gains)
+        gm = gains.mean(axis=0)
+        it = np.arange(len(gm))
+        ax2.plot(it, gm, color=c, marker="o", markersize=3,
+                 label=f"{label}: {len(gains)} bodies")
+        ax2.fill_between(it, np.percentile(gains, 25, axis=0), np.percentile(gains, 75, axis=0),
+                         color=c, alpha=0.2, linewidth=0)
+        rows += [[label, "mean_gain", int(i), float(g), float(np.std(gains[:, i]))]
+                 for i, g in enumerate(gm)]
+    unit = fitness_unit(base_experiment(label) for label in by_exp)
+    ax.set_xlabel("evaluations simulated (work units)")
+    ax.set_ylabel(f"best fitness so far [{unit}]")
+    ax.set_title("Fitness against evaluation budget (mean +- 1 sd over runs)", fontsize=9)
+    ax.legend(fontsize=7)
+    ax2.set_xlabel("strategy iteration")
+    ax2.set_ylabel(f"fitness gained by learning [{unit}]")
+    ax2.set_title("Learning curve of the new bodies (mean, 25-75 %)", fontsize=9)
+    if ax2.lines:
+        ax2.legend(fontsize=7)
+    fig.tight_layout()
+    save(fig, out, "learning", written)
+    write_csv(out / "learning.csv", ["experiment", "series", "x", "mean", "sd"], rows, written)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("runs_dir", help="folder with run archives (*.h5, searched recursively)")
@@ -366,6 +432,8 @@ def main(argv: list[str] | None = None) -> int:
               f" vs closed {row[7]:.4g} +- {row[8]:.3g} (n={row[4]}); Welch p = {row[10]:.3g},"
               f" Mann-Whitney p = {row[12]:.3g}")
     champions([r for rs in by_exp.values() for r in rs], out, written)
+    if any(r.learning is not None for rs in by_exp.values() for r in rs):
+        learning_figure(by_exp, out, written)
     print("wrote:")
     for p in written:
         print(f"  {p}")

@@ -59,7 +59,18 @@ class Run:
         self.state = self.run.info["state"]
         table = self.run.individuals()
         self._columns = {k: np.asarray(table[k]) for k in
-                         ("generation", "id", "status_code", "fitness", "voxels", "chambers")}
+                         ("generation", "id", "status_code", "fitness", "voxels", "chambers",
+                          "reused_from")}
+        # Controller learning (docs/model.md §8.11): fitness before learning, evaluations spent
+        # per body and the learning curves; None for a run without learning.
+        self.learning = None
+        names = table.columns if hasattr(table, "columns") else table.dtype.names
+        if "learn_evaluations" in names:
+            self.learning = {k: np.asarray(table[k]) for k in
+                             ("fitness_before", "learn_evaluations")}
+            self.learning["learning_curve"] = list(table["learning_curve"])
+        # work units per genome (directed: one per direction), for counting evaluations
+        self.units = int(self.run._all_columns().get("units", 1)) or 1
         self.generation_numbers = self.run.generations
 
     def __enter__(self) -> "Run":
@@ -90,6 +101,21 @@ class Run:
             means.append(float(np.mean(gen.fitness)))
             bests.append(float(np.max(gen.fitness)))
         return np.array(gens, dtype=np.int64), np.array(means), np.array(bests)
+
+
+def evaluations_per_generation(run: Run) -> tuple[np.ndarray, np.ndarray]:
+    """(generation numbers, work units simulated in each generation): the rows evaluated in
+    their generation (reused_from = -1), each the evaluations its body spent learning in a
+    learning run, else one per work unit of the task."""
+    c = run._columns
+    gens = np.array(run.generation_numbers, dtype=np.int64)
+    fresh = c["reused_from"] == -1
+    if run.learning is not None:
+        per_row = run.learning["learn_evaluations"] * fresh
+    else:
+        per_row = fresh.astype(np.int64) * run.units
+    counts = np.array([int(per_row[c["generation"] == g].sum()) for g in gens], dtype=np.int64)
+    return gens, counts
 
 
 def find_runs(folder: str | pathlib.Path) -> tuple[list[Run], list[str]]:

@@ -4,7 +4,8 @@
 // default (and --best) is the highest fitness of the generation, the lowest id winning ties
 // (§8.1 step 5: first wins), as for render and replay. The file's `evaluation` block carries the
 // run's config, its hashes and the archived fitness and status, so that `softevo eval` gives the
-// archived fitness back bit for bit (docs/model.md §10).
+// archived fitness back bit for bit (docs/model.md §10). In a run with controller learning the
+// robot is the body with its learned controller, whose evaluation the archived fitness is.
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -60,7 +61,9 @@ void register_export(CLI::App& app, int& exit_code) {
       throw io::ArchiveError(a->path + ": generation " + std::to_string(g) +
                              " has no individual with id " + std::to_string(a->id));
     const Config config = parse_config(archive.config_text(), a->path + ":/config");
-    const evo::Genome genome = evo::decode_genome(rec.genome[row]);
+    // A learning run's fitness is its learned controller's: the learned robot is exported.
+    const evo::Genome genome =
+        evo::decode_genome(rec.has_learning() ? rec.learned_genome[row] : rec.genome[row]);
     const std::string name = archive.info().experiment + "_seed" +
                              std::to_string(archive.info().seed) + "_gen" + std::to_string(g) +
                              "_id" + std::to_string(rec.id[row]);

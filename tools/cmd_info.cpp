@@ -5,6 +5,7 @@
 // requires (master/archive_check.hpp) and exits 1 when one fails. It counts the robots of each
 // status (all generations, and the last) and names the champion (best of the last generation)
 // with its status: a killed champion is flagged, not passed off as a result.
+#include <algorithm>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -31,6 +32,29 @@ struct Champion {
   std::int64_t id = 0;
   double fitness = 0.0;
   std::string status;
+  std::optional<double> fitness_before;  // a learning run's: the genome as born
+  std::int64_t learn_evaluations = 0;
+};
+
+// Controller learning over the whole run (docs/model.md §8.11): bodies that learned (evaluated
+// in their generation, not reused), the evaluations they cost, and their fitness gained.
+struct LearningTotals {
+  std::int64_t bodies = 0;
+  std::int64_t evaluations = 0;
+  double gain_sum = 0.0;
+  double gain_best = 0.0;
+  std::int64_t iterations = 0;  // strategy iterations per body (curve points - 1)
+  void add(const io::GenerationRecord& r) {
+    iterations = r.learning_points - 1;
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      if (r.reused_from[i] != io::kNotReused) continue;
+      ++bodies;
+      evaluations += r.learn_evaluations[i];
+      const double gain = r.fitness[i] - r.fitness_before[i];
+      gain_sum += gain;
+      gain_best = std::max(gain_best, gain);
+    }
+  }
 };
 
 // Every status in EvalStatus order, with its count (0 included: "no killed robot" is news too).
@@ -109,10 +133,15 @@ void register_info(CLI::App& app, int& exit_code) {
     // Robots per status, over every generation and in the last; the last generation's best.
     std::map<std::string, std::int64_t> all_statuses, last_statuses;
     std::optional<Champion> champion;
+    std::optional<LearningTotals> learning;
     try {
       const std::vector<std::int64_t> gens = archive.generations();
       for (const std::int64_t g : gens) {
         const io::GenerationRecord r = archive.generation(g);
+        if (r.has_learning()) {
+          if (!learning) learning.emplace();
+          learning->add(r);
+        }
         for (const std::uint8_t code : r.status) {
           const std::string name = to_string(static_cast<EvalStatus>(code));
           ++all_statuses[name];
@@ -122,8 +151,15 @@ void register_info(CLI::App& app, int& exit_code) {
           std::size_t best = 0;
           for (std::size_t i = 1; i < r.size(); ++i)
             if (r.fitness[i] > r.fitness[best]) best = i;
-          champion = Champion{g, r.id[best], r.fitness[best],
-                              to_string(static_cast<EvalStatus>(r.status[best]))};
+          champion.emplace();
+          champion->generation = g;
+          champion->id = r.id[best];
+          champion->fitness = r.fitness[best];
+          champion->status = to_string(static_cast<EvalStatus>(r.status[best]));
+          if (r.has_learning()) {
+            champion->fitness_before = r.fitness_before[best];
+            champion->learn_evaluations = r.learn_evaluations[best];
+          }
         }
       }
     } catch (const io::ArchiveError&) {
@@ -158,6 +194,21 @@ void register_info(CLI::App& app, int& exit_code) {
                                                         {"fitness", champion->fitness},
                                                         {"status", champion->status}}
                                : nlohmann::ordered_json();
+      if (champion && champion->fitness_before) {
+        j["champion"]["fitness_before"] = *champion->fitness_before;
+        j["champion"]["learn_evaluations"] = champion->learn_evaluations;
+      }
+      j["learning"] =
+          learning
+              ? nlohmann::ordered_json{{"bodies_learned", learning->bodies},
+                                       {"evaluations", learning->evaluations},
+                                       {"iterations", learning->iterations},
+                                       {"mean_gain", learning->bodies > 0
+                                                         ? learning->gain_sum /
+                                                               static_cast<double>(learning->bodies)
+                                                         : 0.0},
+                                       {"best_gain", learning->gain_best}}
+              : nlohmann::ordered_json();
       auto& gens = j["generations"] = nlohmann::ordered_json::array();
       for (const auto& s : stats)
         gens.push_back({{"generation", static_cast<std::int64_t>(s.generation)},
@@ -202,6 +253,17 @@ void register_info(CLI::App& app, int& exit_code) {
                     static_cast<long long>(champion->id), champion->fitness,
                     champion->status.c_str(),
                     champion->status == "ok" ? "" : "  <- NOT ok: its fitness is 0 by rule");
+      if (champion && champion->fitness_before)
+        std::printf("                 learned from %.6g in %lld evaluations\n",
+                    *champion->fitness_before, static_cast<long long>(champion->learn_evaluations));
+      if (learning)
+        std::printf(
+            "learning         %lld bodies x %lld iterations, %lld evaluations, gain mean "
+            "%+.6g best %+.6g\n",
+            static_cast<long long>(learning->bodies), static_cast<long long>(learning->iterations),
+            static_cast<long long>(learning->evaluations),
+            learning->bodies > 0 ? learning->gain_sum / static_cast<double>(learning->bodies) : 0.0,
+            learning->gain_best);
       std::printf("fitness_digest   %s\n", fitness.c_str());
       std::printf("content_digest   %s\n", content.c_str());
       if (check.ok())

@@ -11,7 +11,8 @@ master/unit_cost.hpp). Unit times are taken from real archives (/generations/G/w
 and voxels), so the model replays measured generations.
 
   schedule_model.py check RUN.h5 [--ranks N]     model vs. the archived eval_wall_seconds
-  schedule_model.py table RUN.h5 [...]           parallel efficiency at 1..512 ranks
+  schedule_model.py table RUN.h5 [...]           parallel efficiency at 1..512 ranks, also of
+                                                 a controller-learning run (--learning L,T)
 
 Efficiency = simulated unit seconds / (ranks x wall seconds): the master rank counts as a rank.
 Reads archives with h5py (Debian python3-h5py); a finished (packed) or running archive.
@@ -38,11 +39,20 @@ class Unit:
 class Generation:
     units: list[Unit]
     measured_wall: float  # [s] eval_wall_seconds of the archive
+    # [s] master time after its last result, None = --barrier-seconds; a learning round of a
+    # generation (docs/model.md §8.11) costs only the strategies' update, not an archive write.
+    barrier: float | None = None
+    archived: int = 0  # the archived generation this is (a learning generation has rounds)
 
 
-def read_generations(path: str, include_reused: bool = False) -> list[Generation]:
+def read_generations(path: str, include_reused: bool = False,
+                     round_seconds: float = 0.01) -> list[Generation]:
     """The simulated units of every generation, id order. A reused row has no unit (wall 0)
-    unless `include_reused` (then it costs what its origin cost: the schedule without reuse)."""
+    unless `include_reused` (then it costs what its origin cost: the schedule without reuse).
+    A generation of a learning run (docs/model.md §8.11) is its rounds: the new bodies as born,
+    then lambda candidates of each per iteration, every unit of a body costing its archived
+    wall_seconds / learn_evaluations; rounds end in a `round_seconds` barrier, the last in the
+    generation's."""
     out = []
     with h5py.File(path, "r") as f:
         names = sorted(f["generations"].keys())
@@ -54,6 +64,23 @@ def read_generations(path: str, include_reused: bool = False) -> list[Generation
             ids = np.asarray(g["id"])
             units = int(g["components"].shape[1])
             reused = np.asarray(g["reused_from"]) if "reused_from" in g else np.full(len(ids), -1)
+            if "learn_evaluations" in g:  # a learning run: round 0, then T rounds of lambda
+                evals = np.asarray(g["learn_evaluations"])
+                rounds = int(g["learning_curve"].shape[1])
+                fresh = [i for i in range(len(ids)) if reused[i] < 0]
+                walls = [Generation([], 0.0, round_seconds, len(names)) for _ in range(rounds)]
+                for i in fresh:
+                    unit = Unit(wall[i] / evals[i] / units, voxels[i])
+                    walls[0].units += [unit] * units
+                    lam = (int(evals[i]) - 1) // (rounds - 1) if rounds > 1 else 0
+                    for r in range(1, rounds):
+                        walls[r].units += [unit] * (lam * units)
+                walls[-1].barrier = None
+                walls[0].measured_wall = float(g.attrs["eval_wall_seconds"])
+                for w in walls:
+                    w.archived = int(name)
+                out += walls
+                continue
             gen_units = []
             for i in range(len(ids)):
                 if reused[i] >= 0:
@@ -64,7 +91,7 @@ def read_generations(path: str, include_reused: bool = False) -> list[Generation
                     seconds = wall[i]
                     by_id[int(ids[i])] = seconds
                 gen_units += [Unit(seconds / units, voxels[i])] * units
-            out.append(Generation(gen_units, float(g.attrs["eval_wall_seconds"])))
+            out.append(Generation(gen_units, float(g.attrs["eval_wall_seconds"]), None, int(name)))
     return out
 
 
@@ -74,6 +101,7 @@ class _Active:
     index: int
     remaining: list[Unit]
     outstanding: int = 0
+    barrier: float = 0.0
 
 
 @dataclass
@@ -94,10 +122,13 @@ def simulate(runs: list[list[Generation]], ranks: int, message_seconds: float,
         # Python's sort is stable: equal costs keep member order, as GenerationScheduler does.
         return sorted(units, key=lambda u: -u.cost) if longest_first else list(units)
 
+    def barrier_of(g: Generation) -> float:
+        return barrier_seconds if g.barrier is None else g.barrier
+
     work = sum(u.seconds for run in runs for g in run for u in g.units)
     if ranks == 1:  # the master evaluates alone, one generation after another
-        walls = [sum(u.seconds for u in g.units) + barrier_seconds for g in runs[0]]
-        total = sum(sum(u.seconds for u in g.units) + barrier_seconds for run in runs for g in run)
+        walls = [sum(u.seconds for u in g.units) + barrier_of(g) for g in runs[0]]
+        total = sum(sum(u.seconds for u in g.units) + barrier_of(g) for run in runs for g in run)
         return Result(total, work, walls)
     master = 0.0
     idle = list(range(ranks - 1))
@@ -109,7 +140,8 @@ def simulate(runs: list[list[Generation]], ranks: int, message_seconds: float,
 
     def start(run: int, index: int) -> None:
         if index < len(runs[run]):
-            active.append(_Active(run, index, ordered(runs[run][index].units)))
+            g = runs[run][index]
+            active.append(_Active(run, index, ordered(g.units), 0, barrier_of(g)))
             if run == 0:
                 started[index] = master
 
@@ -129,7 +161,7 @@ def simulate(runs: list[list[Generation]], ranks: int, message_seconds: float,
         nonlocal master
         for g in [a for a in active if not a.remaining and a.outstanding == 0]:
             active.remove(g)
-            master += barrier_seconds
+            master += g.barrier
             if g.run == 0:
                 walls.append(master - started[g.index])
             start(g.run, g.index + 1)
@@ -145,7 +177,7 @@ def simulate(runs: list[list[Generation]], ranks: int, message_seconds: float,
         idle.append(worker)
         if not g.remaining and g.outstanding == 0:
             active.remove(g)
-            master += barrier_seconds
+            master += g.barrier
             if g.run == 0:
                 walls.append(master - started[g.index])
             start(g.run, g.index + 1)
@@ -158,6 +190,24 @@ def directed_from_gait(gens: list[Generation], directions: int = 5) -> list[Gene
     """A directed run from gait unit times: each genome's body runs `directions` units of the
     same simulated seconds (same body, same time step), so each costs the gait unit's time."""
     return [Generation([u for u in g.units for _ in range(directions)], 0.0) for g in gens]
+
+
+def learning_from_gait(gens: list[Generation], lam: int, iterations: int,
+                       round_seconds: float) -> list[Generation]:
+    """A run with controller learning (docs/model.md §8.11) from a run's unit times: each
+    generation is its round 0 (the new bodies as born, the archive's simulated units) and then
+    `iterations` rounds of `lam` candidates per new body, each candidate costing its body's unit
+    time (the same body and seconds; the controller does not change the step count). Rounds are
+    barriers of the generation: the master updates the strategies (`round_seconds`) before it
+    hands out the next round; the generation's own barrier (archive) follows the last round."""
+    out = []
+    for g in gens:
+        out.append(Generation(list(g.units), 0.0, round_seconds))
+        for r in range(iterations):
+            last = r == iterations - 1
+            out.append(Generation([u for u in g.units for _ in range(lam)], 0.0,
+                                  None if last else round_seconds))
+    return out
 
 
 def main() -> int:
@@ -176,8 +226,15 @@ def main() -> int:
                    help="multiply every measured unit time (e.g. CPU/wall of a loaded machine)")
     p.add_argument("--without-reuse", action="store_true",
                    help="reused rows cost their origin's time (the schedule of older builds)")
+    p.add_argument("--learning", default="10,10", metavar="LAMBDA,ITERATIONS",
+                   help="table: the learning run's candidates per iteration and iterations")
+    p.add_argument("--population", type=int, default=0,
+                   help="table: resample every generation's units to this many bodies (fixed "
+                        "seed; e.g. the thesis's 50 from a smaller run's unit times)")
+    p.add_argument("--round-seconds", type=float, default=0.01,
+                   help="[s] master time between two learning rounds (strategy update)")
     a = p.parse_args()
-    gens_of = [read_generations(x, a.without_reuse) for x in a.archive]
+    gens_of = [read_generations(x, a.without_reuse, a.round_seconds) for x in a.archive]
     for gens in gens_of:
         for g in gens:
             for u in g.units:
@@ -187,22 +244,38 @@ def main() -> int:
             model = simulate([gens], a.ranks, a.message_seconds, a.barrier_seconds,
                              not a.fixed_order, a.latency_seconds)
             print(f"# {path}: np={a.ranks}, {'fixed' if a.fixed_order else 'longest-first'} order")
-            print("generation\tunits\tmeasured_s\tmodel_s\tmodel/measured")
-            for i, (g, w) in enumerate(zip(gens, model.generation_walls)):
-                w -= a.barrier_seconds  # eval_wall_seconds ends at the last result
-                ratio = w / g.measured_wall if g.measured_wall > 0 else float("nan")
-                print(f"{i}\t{len(g.units)}\t{g.measured_wall:.1f}\t{w:.1f}\t{ratio:.3f}")
+            print("generation\tunits\tmeasured_s\tmodel_s\tmodel/measured\tmodel_efficiency")
+            # The rounds of a learning generation add up to the archived generation.
+            by_gen: dict[int, list[float]] = {}
+            for g, w in zip(gens, model.generation_walls):
+                e = by_gen.setdefault(g.archived, [0, 0.0, 0.0, 0.0])
+                e[0] += len(g.units)
+                e[1] += g.measured_wall
+                e[2] += w - (a.barrier_seconds if g.barrier is None else g.barrier)
+                e[2] += 0.0 if g.barrier is None else g.barrier
+                e[3] += sum(u.seconds for u in g.units)
+            for i, (n, measured, w, work) in by_gen.items():
+                ratio = w / measured if measured > 0 else float("nan")
+                print(f"{i}\t{n}\t{measured:.1f}\t{w:.1f}\t{ratio:.3f}\t{work / (a.ranks * w):.3f}")
         return 0
     gait = gens_of[0]
+    if a.population > 0:
+        rng = np.random.default_rng(1)
+        gait = [Generation([g.units[k] for k in rng.integers(0, len(g.units), a.population)],
+                           g.measured_wall) for g in gait if g.units]
     directed = directed_from_gait(gait)
     grid = [gait] * 20 + [directed] * 20
-    print("ranks\tgait_fixed\tgait_longest\tdirected_longest\tpacked_grid_longest")
+    lam, iterations = (int(x) for x in a.learning.split(","))
+    learning = learning_from_gait(gait, lam, iterations, a.round_seconds)
+    print("ranks\tgait_fixed\tgait_longest\tdirected_longest\tpacked_grid_longest\t"
+          f"gait_learning_{lam}x{iterations}")
     for ranks in [1, 2, 3, 4, 8, 16, 32, 51, 64, 128, 251, 256, 512]:
         args = (a.message_seconds, a.barrier_seconds)
         row = [simulate([gait], ranks, *args, False, a.latency_seconds),
                simulate([gait], ranks, *args, True, a.latency_seconds),
                simulate([directed], ranks, *args, True, a.latency_seconds),
-               simulate(grid, ranks, *args, True, a.latency_seconds)]
+               simulate(grid, ranks, *args, True, a.latency_seconds),
+               simulate([learning], ranks, *args, True, a.latency_seconds)]
         print(f"{ranks}\t" + "\t".join(f"{r.efficiency(ranks):.3f}" for r in row))
     return 0
 

@@ -76,18 +76,31 @@ class Run:
         """One row per individual of every generation (generations ascending, ids ascending).
 
         Columns: generation, id, parent1, parent2 (-1: none), species, status (name),
-        status_code, fitness, voxels, chambers, wall_seconds, worker_rank, then the archived
+        status_code, fitness, voxels, chambers, wall_seconds, worker_rank, reused_from (-1:
+        simulated in its generation, else the id whose result the row repeats), then the archived
         components (the task's named components of every work unit; for a task with several
-        units, e.g. the directed task's directions, as name_<unit>). A pandas DataFrame when
-        pandas imports, else a numpy structured array.
+        units, e.g. the directed task's directions, as name_<unit>). A run with controller
+        learning (docs/model.md §8.11) has, before the components, fitness_before (the genome as
+        born; `fitness` is the learned one), learn_evaluations (evaluations spent on the body)
+        and learning_curve (per row an array: best fitness so far after the born evaluation and
+        every strategy iteration). A pandas DataFrame when pandas imports, else a numpy
+        structured array.
         """
         c = self._all_columns()
         columns = {k: c[k] for k in _FIXED_COLUMNS}
         codes = c["status_code"]
         names = {int(code): _softevo.status_name(int(code)) for code in np.unique(codes)}
         columns["status"] = np.array([names[int(x)] for x in codes], dtype=object)
+        columns["reused_from"] = c["reused_from"]
         order = ["generation", "id", "parent1", "parent2", "species", "status", "status_code",
-                 "fitness", "voxels", "chambers", "wall_seconds", "worker_rank"]
+                 "fitness", "voxels", "chambers", "wall_seconds", "worker_rank", "reused_from"]
+        if "fitness_before" in c:  # controller learning (docs/model.md §8.11)
+            columns["fitness_before"] = c["fitness_before"]
+            columns["learn_evaluations"] = c["learn_evaluations"]
+            curves = np.empty(len(c["learning_curve"]), dtype=object)
+            curves[:] = list(c["learning_curve"])
+            columns["learning_curve"] = curves
+            order += ["fitness_before", "learn_evaluations", "learning_curve"]
         for name, values in c["components"].items():
             if name in ("fitness", "status"):  # already columns of the row (one-unit tasks)
                 continue
@@ -105,8 +118,9 @@ class Run:
                           "evaluations_per_second"])
 
     def genome(self, id: int, generation: int | None = None) -> _softevo.Robot:
-        """Individual `id` as a Robot: its archived genome developed with the archived config,
-        as the run evaluated it (from `generation`, default the latest one it is in).
+        """Individual `id` as a Robot: its archived genome (in a run with controller learning
+        the learned one, whose fitness is archived) developed with the archived config, as the
+        run evaluated it (from `generation`, default the latest one it is in).
         KeyError when the archive has no such individual."""
         return self._archive.robot(int(id), None if generation is None else int(generation))
 

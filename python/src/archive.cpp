@@ -55,6 +55,11 @@ py::dict individual_columns(const io::Archive& archive) {
   std::vector<std::string> component_names;
   std::vector<std::vector<double>> components;
   int units = 0;
+  // Controller learning (docs/model.md §8.11): columns only when every generation has them.
+  bool learning = true;
+  std::vector<double> fitness_before;
+  std::vector<std::int64_t> learn_evaluations, reused_from;
+  std::vector<std::vector<double>> learning_curve;
   for (const std::int64_t g : archive.generations()) {
     const io::GenerationRecord r = archive.generation(g);
     r.check();
@@ -79,6 +84,18 @@ py::dict individual_columns(const io::Archive& archive) {
     chambers.insert(chambers.end(), r.chambers.begin(), r.chambers.end());
     wall_seconds.insert(wall_seconds.end(), r.wall_seconds.begin(), r.wall_seconds.end());
     worker_rank.insert(worker_rank.end(), r.worker_rank.begin(), r.worker_rank.end());
+    reused_from.insert(reused_from.end(), r.reused_from.begin(), r.reused_from.end());
+    learning = learning && r.has_learning();
+    if (learning) {
+      fitness_before.insert(fitness_before.end(), r.fitness_before.begin(), r.fitness_before.end());
+      learn_evaluations.insert(learn_evaluations.end(), r.learn_evaluations.begin(),
+                               r.learn_evaluations.end());
+      const auto points = static_cast<std::size_t>(r.learning_points);
+      for (std::size_t row = 0; row < r.size(); ++row)
+        learning_curve.emplace_back(
+            r.learning_curve.begin() + static_cast<std::ptrdiff_t>(row * points),
+            r.learning_curve.begin() + static_cast<std::ptrdiff_t>((row + 1) * points));
+    }
     const std::size_t width = components.size();
     if (r.components.size() != r.size() * width)
       throw io::ArchiveError(archive.path() + ": /generations/" + io::generation_group_name(g) +
@@ -100,6 +117,14 @@ py::dict individual_columns(const io::Archive& archive) {
   d["chambers"] = array_of(chambers);
   d["wall_seconds"] = array_of(wall_seconds);
   d["worker_rank"] = array_of(worker_rank);
+  d["reused_from"] = array_of(reused_from);
+  if (learning && !fitness_before.empty()) {
+    d["fitness_before"] = array_of(fitness_before);
+    d["learn_evaluations"] = array_of(learn_evaluations);
+    py::list curves;
+    for (const std::vector<double>& c : learning_curve) curves.append(array_of(c));
+    d["learning_curve"] = curves;
+  }
   py::dict comps;
   for (std::size_t c = 0; c < components.size(); ++c)
     comps[py::str(component_names[c])] = array_of(components[c]);
@@ -148,7 +173,9 @@ RobotFile archived_robot(const io::Archive& archive, std::int64_t id,
     if (row >= r.genome.size())
       throw io::ArchiveError(archive.path() + ": /generations/" + io::generation_group_name(*g) +
                              "/genome has no row " + std::to_string(row));
-    const evo::Genome genome = evo::decode_genome(r.genome[row]);
+    // A learning run's fitness is the learned controller's: that robot is the individual.
+    const evo::Genome genome =
+        evo::decode_genome(r.has_learning() ? r.learned_genome[row] : r.genome[row]);
     return worker::robot_file_of(
         config, genome,
         archive.info().experiment + " gen " + std::to_string(*g) + " id " + std::to_string(id));

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <map>
 #include <string>
 
@@ -49,6 +50,38 @@ TEST(Progress, ReusedUnitsAreCountedWhenThereAreAny) {
   s.reused = 4;
   const std::string line = generation_line(s, 10, 1.0, 1.0);
   EXPECT_NE(line.find("  reused 4"), std::string::npos) << line;
+}
+
+TEST(Progress, LearningIsReportedWhenBodiesLearned) {
+  GenerationSummary s = summary_of(counts(12, 0, 0, 0, 0), 1.5);
+  EXPECT_EQ(generation_line(s, 10, 1.0, 1.0).find("learned"), std::string::npos);
+  s.learned_bodies = 12;
+  s.learning_iterations = 10;
+  s.learning_gain_mean = 0.5;
+  s.learning_gain_best = 2.0;
+  const std::string line = generation_line(s, 10, 1.0, 1.0);
+  EXPECT_NE(line.find("  learned 12 x 10 it, gain mean +0.5000 cm best +2.0000 cm"),
+            std::string::npos)
+      << line;
+}
+
+// The live line names the learning round, its bodies and the gain so far.
+TEST(Progress, TheLiveLineNamesTheLearningRound) {
+  std::FILE* live = std::tmpfile();
+  ASSERT_NE(live, nullptr);
+  ProgressReporter reporter(nullptr, live, nullptr, 10);
+  reporter.generation_started(4, 20);
+  reporter.learning_started(LearningProgress{3, 10, 7, 0.25, 1.5});
+  reporter.unit_done(0, 70);
+  std::rewind(live);
+  std::string text;
+  for (int c = std::fgetc(live); c != EOF; c = std::fgetc(live))
+    text.push_back(static_cast<char>(c));
+  std::fclose(live);
+  EXPECT_NE(text.find("gen 4 learn 3/10 (7 bodies): 0/70 evaluations"), std::string::npos) << text;
+  EXPECT_NE(text.find("gain mean +0.25 best +1.5"), std::string::npos) << text;
+  // Round 0 (the bodies as born) had the generation's plain line.
+  EXPECT_LT(text.find("gen 4: 0/20 evaluations"), text.find("learn")) << text;
 }
 
 TEST(Progress, RareStatusesAreCountedWhenTheyOccur) {

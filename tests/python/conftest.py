@@ -73,6 +73,22 @@ def binary(name: str) -> pathlib.Path:
 
 
 @pytest.fixture(scope="session")
+def learning_run(tmp_path_factory) -> pathlib.Path:
+    """A tiny real run with controller learning (docs/model.md §8.11): 2 generations of 4
+    robots, 0.3 s each, 5 evaluations per new body."""
+    path = tmp_path_factory.mktemp("learn") / "learn.h5"
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1")
+    subprocess.run([str(binary("softevo-mpi")), "--config", str(SOURCE_DIR / "configs/quickstart.toml"),
+                    "--seed", "5", "--generations", "2", "--population", "4",
+                    "--set", "body.lattice=[4,4,4]", "--set", "task.eval_seconds=0.3",
+                    "--set", "learning.method=es", "--set", "learning.evaluations=5",
+                    "--set", "learning.population=2", "--out", str(path)],
+                   check=True, env=env, capture_output=True, cwd=SOURCE_DIR)
+    return path
+
+
+@pytest.fixture(scope="session")
 def tiny_run(tmp_path_factory) -> pathlib.Path:
     """A tiny real run archive (2 generations of 6 robots, 0.5 s each) made by softevo-mpi."""
     path = tmp_path_factory.mktemp("run") / "tiny.h5"

@@ -69,6 +69,30 @@ def test_genome_re_evaluates_to_the_archived_bits(tiny_run):
     assert softevo.evaluate(robot, config=run.config).fitness == float(row["fitness"].iloc[0])
 
 
+def test_learning_columns_and_the_learned_robot(learning_run):
+    pytest.importorskip("pandas")
+    run = softevo.open_run(learning_run)
+    table = run.individuals()
+    for column in ("reused_from", "fitness_before", "learn_evaluations", "learning_curve"):
+        assert column in table.columns
+    fresh = table[table["reused_from"] == -1]
+    assert (fresh["learn_evaluations"] == 5).all()  # born + 2 iterations of 2
+    for _, row in table.iterrows():
+        curve = row["learning_curve"]
+        assert len(curve) == 3 and curve[0] == row["fitness_before"] and curve[-1] == row["fitness"]
+        assert np.all(np.diff(curve) >= 0)
+    # The individual is the learned robot: it re-evaluates to the archived (learned) fitness.
+    generation, best = run.best()
+    row = table[(table["generation"] == generation) & (table["id"] == best)]
+    assert softevo.evaluate(run.genome(best), config=run.config).fitness == float(row["fitness"].iloc[0])
+
+
+def test_a_run_without_learning_has_no_learning_columns(tiny_run):
+    pytest.importorskip("pandas")
+    table = softevo.open_run(tiny_run).individuals()
+    assert "reused_from" in table.columns and "fitness_before" not in table.columns
+
+
 def test_lineage_follows_the_first_parent(tiny_run):
     run = softevo.open_run(tiny_run)
     table = run.individuals()

@@ -37,10 +37,15 @@ EXPERIMENT_CONFIG = {
 
 def write_synthetic_archive(path: pathlib.Path, experiment: str, seed: int, generations: int,
                             pop: int, level: float, with_experiment_attr: bool = True,
-                            task_keys: str = "") -> None:
+                            task_keys: str = "", learning: bool = False) -> None:
     """A complete archive whose population fitness is `level` + noise, best = level + 10 + g.
-    Each individual's parent1 is the individual of the previous generation one row below."""
-    kind, control = EXPERIMENT_CONFIG[experiment]
+    Each individual's parent1 is the individual of the previous generation one row below.
+    `learning`: a run with controller learning (docs/archive.md): 5 evaluations per body, a
+    3-point learning curve from fitness - 2 up to fitness; row 0 of each generation but the
+    first reuses an earlier result (no evaluation)."""
+    kind, control = EXPERIMENT_CONFIG[experiment.removesuffix("-learn")]
+    if learning:
+        task_keys += ('\n[learning]\nmethod = "es"\nevaluations = 5\npopulation = 2\n')
     n_dir = 5 if kind == "directed" else 1
     rng = np.random.default_rng(seed)
     with h5py.File(path, "w") as f:
@@ -83,6 +88,15 @@ def write_synthetic_archive(path: pathlib.Path, experiment: str, seed: int, gene
             for i in range(pop):
                 genome[i] = np.frombuffer(b"synthetic", dtype=np.uint8)
             grp["components"] = np.zeros((pop, n_dir, 6))
+            if learning:
+                grp["reused_from"] = np.array([1 if g > 0 and i == 0 else -1 for i in range(pop)],
+                                              dtype=np.int64)
+                grp["fitness_before"] = fitness - 2.0
+                grp["learn_evaluations"] = np.full(pop, 5, dtype=np.int64)
+                learned = grp.create_dataset("learned_genome", (pop,), dtype=vlen)
+                for i in range(pop):
+                    learned[i] = np.frombuffer(b"learned", dtype=np.uint8)
+                grp["learning_curve"] = np.stack([fitness - 2.0, fitness - 1.0, fitness], axis=1)
             for k, v in (("best", fitness.max()), ("mean", fitness.mean()), ("sd", fitness.std())):
                 grp.attrs[k] = float(v)
             grp.attrs["species_count"] = np.int64(1)
@@ -102,9 +116,9 @@ EXPECTED_FILES = [
 ]
 
 
-def run_figures(runs_dir: pathlib.Path, out: pathlib.Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, str(ANALYSIS / "figures.py"), str(runs_dir), "-o", str(out)],
-                          capture_output=True, text=True, timeout=300)
+def run_figures(runs_dir: pathlib.Path, out: pathlib.Path, *extra: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, str(ANALYSIS / "figures.py"), str(runs_dir), "-o", str(out),
+                           *extra], capture_output=True, text=True, timeout=300)
 
 
 class MixedConfigs(unittest.TestCase):
@@ -250,6 +264,42 @@ class SyntheticGrid(unittest.TestCase):
         result = run_figures(empty, self.tmp / "none")
         self.assertEqual(result.returncode, 2)
         self.assertIn("no run archive", result.stderr)
+
+
+class LearningRuns(unittest.TestCase):
+    """gait-closed with and without controller learning: figures.py --compare pools each,
+    and writes learning.* (fitness against evaluations simulated, mean learning curve)."""
+
+    def test_learning_figure_counts_evaluations_and_gains(self):
+        tmp = pathlib.Path(tempfile.mkdtemp(prefix="softevo_test_learning_"))
+        try:
+            runs = tmp / "runs"
+            runs.mkdir()
+            for seed in (1, 2):
+                write_synthetic_archive(runs / f"plain-{seed}.h5", "gait-closed", seed,
+                                        generations=10, pop=4, level=10.0)
+                write_synthetic_archive(runs / f"learn-{seed}.h5", "gait-closed-learn", seed,
+                                        generations=2, pop=4, level=12.0, learning=True)
+            result = run_figures(runs, tmp / "figs", "--compare", "gait-closed,gait-closed-learn")
+            self.assertEqual(result.returncode, 0, result.stderr)
+            self.assertIn("runs: gait-closed x2, gait-closed-learn x2", result.stdout)
+            for name in ("learning.png", "learning.pdf", "learning.csv"):
+                self.assertTrue((tmp / "figs" / name).is_file(), name)
+            with open(tmp / "figs" / "learning.csv") as f:
+                rows = list(csv.DictReader(f))
+            # Budget: plain runs simulate 4 units per generation (40), learning runs 5 per
+            # fresh body (4 + 3 = 7 bodies: 35); the common grid ends at the smaller.
+            best = [r for r in rows if r["series"] == "best_so_far"]
+            self.assertEqual({r["experiment"] for r in best}, {"gait-closed", "gait-closed-learn"})
+            self.assertLessEqual(max(float(r["x"]) for r in best), 35.0)
+            gains = [r for r in rows if r["series"] == "mean_gain"]
+            self.assertEqual([float(r["mean"]) for r in gains], [0.0, 1.0, 2.0])
+            run = Run(runs / "learn-1.h5")
+            self.assertEqual(run.experiment, "gait-closed-learn")
+            from softevo_archive import evaluations_per_generation
+            self.assertEqual(evaluations_per_generation(run)[1].tolist(), [20, 15])
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
 
 
 def find_softevo_mpi() -> pathlib.Path | None:

@@ -145,6 +145,50 @@ TEST_F(CmdExport, EveryExportedIndividualReEvaluatesToItsArchivedFitnessBitForBi
   EXPECT_EQ(changed.output.find("archived "), std::string::npos) << changed.output;
 }
 
+// A run with controller learning (docs/model.md §8.11): the archived fitness is the learned
+// controller's, so export writes the learned robot, which `eval`s to it bit for bit; replay
+// --verify re-simulates the learned robots; info reports what learning did.
+TEST_F(CmdExport, LearnedRobotsReEvaluateToTheirArchivedFitness) {
+  const std::string learn = (dir_ / "learn.h5").string();
+  const auto run = test::run_command(
+      binary("softevo-mpi") +
+      " --config configs/quickstart.toml --seed 4 --generations 2 --population 4 "
+      "--set body.lattice=[4,4,4] --set task.eval_seconds=0.3 --set learning.method=es "
+      "--set learning.evaluations=5 --set learning.population=2 --out " +
+      learn);
+  ASSERT_EQ(run.code, 0) << run.output;
+  EXPECT_NE(run.output.find("learned "), std::string::npos) << run.output;
+  const io::Archive archive(learn);
+  EXPECT_EQ(archive.info().experiment, "gait-open-learn");
+  const io::GenerationRecord generation = archive.generation(1);
+  ASSERT_TRUE(generation.has_learning());
+  for (std::size_t row = 0; row < generation.size(); ++row) {
+    const fs::path out = dir_ / ("learn" + std::to_string(generation.id[row]) + ".json");
+    const auto exported =
+        test::run_command(binary("softevo") + " export " + learn + " --id " +
+                          std::to_string(generation.id[row]) + " -o " + out.string() + " --force");
+    ASSERT_EQ(exported.code, 0) << exported.output;
+    const auto eval = test::run_command(binary("softevo") + " eval " + out.string() + " --json");
+    ASSERT_EQ(eval.code, 0) << eval.output;
+    const nlohmann::json j = nlohmann::json::parse(eval.output);
+    EXPECT_EQ(bits_of(j["fitness"].get<double>()), bits_of(generation.fitness[row]))
+        << "id " << generation.id[row];
+    EXPECT_EQ(j["reproduces_archived_fitness"], true) << eval.output;
+  }
+  const auto replay = test::run_command(binary("softevo") + " replay " + learn + " --all --verify");
+  EXPECT_EQ(replay.code, 0) << replay.output;
+  EXPECT_NE(replay.output.find("0 mismatched"), std::string::npos) << replay.output;
+  const auto info = test::run_command(binary("softevo") + " info " + learn);
+  ASSERT_EQ(info.code, 0) << info.output;
+  EXPECT_NE(info.output.find("learning         "), std::string::npos) << info.output;
+  EXPECT_NE(info.output.find("learned from "), std::string::npos) << info.output;
+  const auto info_json = test::run_command(binary("softevo") + " info " + learn + " --json");
+  const nlohmann::json j = nlohmann::json::parse(info_json.output);
+  EXPECT_GT(j["learning"]["evaluations"].get<std::int64_t>(), 0);
+  EXPECT_EQ(j["learning"]["iterations"], 2);
+  EXPECT_TRUE(j["champion"].contains("fitness_before"));
+}
+
 // `softevo info` (the command a researcher reads a run with) counts the robots of each status and
 // names the champion's.
 TEST_F(CmdExport, InfoCountsRobotsPerStatusAndShowsTheChampionsStatus) {
