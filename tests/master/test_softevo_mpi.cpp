@@ -412,7 +412,9 @@ TEST(SoftevoMpi, SeveralRunsInOneJobResumeAfterSigkill) {
   std::vector<std::string> cargs = common;
   cargs.insert(cargs.end(), {"--out-dir", killed});
   ASSERT_EQ(run_and_kill(dir, cargs, killed + "/tiny-01.h5", 2), 1);
-  if (world_rank() == 0) EXPECT_LT(Archive(killed + "/tiny-01.h5").info().generations_done, 5);
+  if (world_rank() == 0) {
+    EXPECT_LT(Archive(killed + "/tiny-01.h5").info().generations_done, 5);
+  }
   args = common;
   args.insert(args.end(), {"--out-dir", killed, "--resume"});
   ASSERT_EQ(run_on(world_size(), args), 0);
@@ -456,7 +458,9 @@ TEST(SoftevoMpi, LearningRunIsIdenticalForAnyRankCountAndAfterSigkill) {
   std::vector<std::string> cargs = common;
   cargs.insert(cargs.end(), {"--out", killed});
   ASSERT_EQ(run_and_kill(dir, cargs, killed, 1), 1);  // in generation 1's learning or later
-  if (world_rank() == 0) EXPECT_LT(Archive(killed).info().generations_done, 4);
+  if (world_rank() == 0) {
+    EXPECT_LT(Archive(killed).info().generations_done, 4);
+  }
   std::vector<std::string> args = common;
   args.insert(args.end(), {"--out", killed, "--resume"});
   ASSERT_EQ(run_on(world_size(), args), 0);
