@@ -311,19 +311,24 @@ def champions(runs: list[Run], out: pathlib.Path, written: list[pathlib.Path]) -
     save(fig, out, "champions", written)
 
 
-def budget_curves(runs: list[Run]) -> tuple[np.ndarray, np.ndarray]:
-    """A common grid of simulated evaluations (up to the smallest run total) and [runs x grid]
-    best-so-far fitness at each point (a step function of each run's generations)."""
-    per_run = []
+def budget_curves(runs: list[Run], end: float) -> tuple[np.ndarray, np.ndarray]:
+    """A grid of simulated evaluations up to `end` and [runs x grid] best-so-far fitness at each
+    point: a step function that starts when the run's first generation is archived (NaN before)
+    and holds each generation's value until the next one's evaluations are all spent."""
+    grid = np.linspace(0, end, 400)
+    values = []
     for r in runs:
-        gens, counts = evaluations_per_generation(r)
+        _, counts = evaluations_per_generation(r)
         _, _, bests = r.fitness_curves()
-        per_run.append((np.cumsum(counts), np.maximum.accumulate(bests)))
-    end = min(int(x[-1]) for x, _ in per_run)
-    grid = np.linspace(0, end, 200)
-    values = np.array([[b[min(np.searchsorted(x, v), len(b) - 1)] for v in grid]
-                       for x, b in per_run])
-    return grid, values
+        x, b = np.cumsum(counts), np.maximum.accumulate(bests)
+        k = np.searchsorted(x, grid, side="right") - 1  # the last generation complete at v
+        values.append(np.where(k >= 0, b[np.maximum(k, 0)], np.nan))
+    return grid, np.array(values)
+
+
+def run_budget(r: Run) -> int:
+    """Work units the run has simulated (every archived generation)."""
+    return int(evaluations_per_generation(r)[1].sum())
 
 
 def learning_figure(by_exp: dict[str, list[Run]], out: pathlib.Path,
@@ -334,14 +339,21 @@ def learning_figure(by_exp: dict[str, list[Run]], out: pathlib.Path,
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
     rows: list[list] = []
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    # Equal budgets: every experiment up to the smallest budget any run of them has spent.
+    end = min(run_budget(r) for runs in by_exp.values() for r in runs)
     for k, (label, runs) in enumerate(by_exp.items()):
-        grid, values = budget_curves(runs)
-        m, s = values.mean(axis=0), sd(values, axis=0)
+        grid, values = budget_curves(runs, end)
+        with warnings.catch_warnings():  # columns before a run's first generation: all NaN
+            warnings.simplefilter("ignore", category=RuntimeWarning)
+            m = np.nanmean(values, axis=0)
+            s = np.nanstd(values, axis=0, ddof=1) if len(runs) > 1 else np.zeros_like(m)
+        m[np.isnan(values).any(axis=0)] = np.nan  # only where every run has a generation
         c = colours[k % len(colours)]
-        ax.plot(grid, m, color=c, label=f"{label} (n={len(runs)})")
+        ax.plot(grid, m, color=c, label=f"{label} (n={len(runs)}): {m[-1]:.3g} at {end}")
         ax.fill_between(grid, m - s, m + s, color=c, alpha=0.2, linewidth=0)
         rows += [[label, "best_so_far", float(x), float(y), float(z)]
-                 for x, y, z in zip(grid[::20], m[::20], s[::20])]
+                 for x, y, z in zip(grid[::40], m[::40], s[::40]) if not np.isnan(y)]
+        rows.append([label, "best_so_far", float(grid[-1]), float(m[-1]), float(s[-1])])
         learners = [r for r in runs if r.learning is not None]
         if not learners:
             continue
@@ -360,7 +372,8 @@ def learning_figure(by_exp: dict[str, list[Run]], out: pathlib.Path,
     unit = fitness_unit(base_experiment(label) for label in by_exp)
     ax.set_xlabel("evaluations simulated (work units)")
     ax.set_ylabel(f"best fitness so far [{unit}]")
-    ax.set_title("Fitness against evaluation budget (mean +- 1 sd over runs)", fontsize=9)
+    ax.set_title("Best fitness against evaluations simulated, to the smallest budget\n"
+                 "(mean +- 1 sd over runs; from each run's first archived generation)", fontsize=9)
     ax.legend(fontsize=7)
     ax2.set_xlabel("strategy iteration")
     ax2.set_ylabel(f"fitness gained by learning [{unit}]")
