@@ -1,7 +1,5 @@
 #include "master/mpi_driver.hpp"
 
-#include <sys/resource.h>
-
 #include <chrono>
 #include <cstdio>
 #include <map>
@@ -13,18 +11,12 @@
 #include "common/launcher_watch.hpp"
 #include "common/version.hpp"
 #include "common/wire.hpp"
+#include "master/run_driver.hpp"
 #include "master/run_state.hpp"
 #include "master/signals.hpp"
 
 namespace softevo::master {
 namespace {
-
-double cpu_seconds() {
-  rusage ru{};
-  getrusage(RUSAGE_SELF, &ru);
-  return static_cast<double>(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) +
-         1e-6 * static_cast<double>(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
-}
 
 bool same_host(const RankProcess& p) {
   return !p.host.empty() && p.host == host_name();
@@ -43,13 +35,6 @@ bool process_ended(long pid) {
   if (close == std::string::npos || close + 2 >= text.size()) return false;
   const char state = text[close + 2];
   return state == 'Z' || state == 'X';
-}
-
-// What stopped rank 0: its launcher died, or a signal (or a stop request from code) arrived.
-std::string rank0_stop_cause() {
-  if (launcher_gone()) return "rank 0: " + launcher_gone_reason();
-  const std::string signal = stop_signal_name();
-  return signal.empty() ? "rank 0: a stop request" : "rank 0 received " + signal;
 }
 
 // Why the run stops now, from this process's point of view; "" = no stop-now request. A dead
@@ -205,67 +190,6 @@ class MpiExecutor : public UnitExecutor {
   Clock::time_point roll_call_end_;
 };
 
-void print_header(const PreparedRun& r, const std::string& config_path, int ranks, bool verbose) {
-  std::printf("softevo-mpi %s (commit %s), %d rank%s\n", kVersion, kGitCommit, ranks,
-              ranks == 1 ? "" : "s");
-  // The resolved config is in the archive (/config, `softevo info`); -v prints it here too.
-  std::printf("# config %s (config hash %s, experiment %s hash %s)%s\n", config_path.c_str(),
-              hash_hex(r.config_hash).c_str(), r.info.experiment.c_str(),
-              r.info.experiment_hash.c_str(),
-              verbose ? "" : "; -v or `softevo info ARCHIVE` shows every resolved key");
-  if (verbose) std::printf("%s", r.config_text.c_str());
-  std::printf("# archive %s (%s)\n", r.options.out_path.c_str(),
-              r.already_complete ? (r.info.state == "complete" ? "complete: nothing to do"
-                                                               : "every generation archived: "
-                                                                 "marking it complete")
-              : r.resumed
-                  ? ("resuming at generation " + std::to_string(r.info.generations_done)).c_str()
-                  : "new run");
-  std::fflush(stdout);
-  if (r.previous_run) {  // on stderr too: a requeued job's user reads that log first
-    std::fprintf(stderr, "softevo-mpi: %s: %s\n", r.options.out_path.c_str(),
-                 r.previous_run->c_str());
-    std::fflush(stderr);
-  }
-}
-
-// Several runs in one job: one line per run instead of the config (each archive holds its own).
-void print_packed_header(const std::vector<PreparedRun*>& runs, const std::string& config_path,
-                         int ranks) {
-  std::printf("softevo-mpi %s (commit %s), %d rank%s, %zu runs in one pool (%s)\n", kVersion,
-              kGitCommit, ranks, ranks == 1 ? "" : "s", runs.size(), config_path.c_str());
-  for (const PreparedRun* r : runs) {
-    const std::string what =
-        r->already_complete ? "every generation archived"
-        : r->resumed        ? "resuming at generation " + std::to_string(r->info.generations_done)
-                            : std::string("new run");
-    std::printf("# archive %s (seed %lld, config hash %s, experiment %s hash %s): %s\n",
-                r->options.out_path.c_str(), static_cast<long long>(r->config.run.seed),
-                hash_hex(r->config_hash).c_str(), r->info.experiment.c_str(),
-                r->info.experiment_hash.c_str(), what.c_str());
-    if (r->previous_run)
-      std::fprintf(stderr, "softevo-mpi: %s: %s\n", r->options.out_path.c_str(),
-                   r->previous_run->c_str());
-  }
-  std::fflush(stdout);
-  std::fflush(stderr);
-}
-
-void print_summary(const PreparedRun& r, RunOutcome outcome, const std::string& stop_reason,
-                   int code, double wall, double cpu) {
-  if (outcome == RunOutcome::interrupted)
-    std::printf("# interrupted: %s; exit %d: %s (%s is consistent and marked interrupted)\n",
-                stop_reason.c_str(), code, resume_note(r.info.generations_done).c_str(),
-                r.options.out_path.c_str());
-  else if (outcome == RunOutcome::complete)
-    std::printf(
-        "# complete: %lld generations, archive %s; master wall %.1f s, master CPU %.2f s "
-        "(%.1f%%)\n",
-        static_cast<long long>(r.info.generations_done), r.options.out_path.c_str(), wall, cpu,
-        wall > 0 ? 100.0 * cpu / wall : 0.0);
-  std::fflush(stdout);
-}
-
 // How long the stop messages may take in all [s]: a worker polls every <= 10 ms, so only a dead
 // one (on another host, not known as lost) takes longer, and its send would never end.
 constexpr int kStopSendSeconds = 5;
@@ -288,10 +212,6 @@ void stop_workers(const mpi::Communicator& comm, int exit_code, const std::set<i
       if (!quiet) std::fprintf(stderr, "softevo-mpi: %s\n", e.what());
     }
   }
-}
-
-int exit_code_of(RunOutcome outcome) {
-  return outcome == RunOutcome::interrupted ? kExitRequeue : 0;
 }
 
 }  // namespace
@@ -321,62 +241,22 @@ int run_master(const mpi::Communicator& comm, PreparedRun& run, const MasterOpti
 
 int run_master(const mpi::Communicator& comm, const std::vector<PreparedRun*>& runs,
                const MasterOptions& options) {
-  const bool packed = runs.size() > 1;
-  const bool chatty = !options.quiet && !options.terse;
-  if (chatty) {
-    if (packed)
-      print_packed_header(runs, options.config_path, comm.size());
-    else
-      print_header(*runs.front(), options.config_path, comm.size(), options.verbose);
-  }
-  std::vector<ProgressReporter> reporters;
-  for (const PreparedRun* run : runs) {
-    if (options.quiet)
-      reporters.push_back(ProgressReporter::silent());
-    else if (packed)  // no live line: the runs' lines interleave, each names its archive
-      reporters.push_back(ProgressReporter(options.terse ? nullptr : stdout, nullptr, stderr,
-                                           run->config.run.generations,
-                                           run->options.out_path + ": "));
-    else
-      reporters.push_back(
-          ProgressReporter::console(run->config.run.generations, options.progress, options.terse));
-  }
-  std::vector<ProgressReporter*> progress;
-  for (ProgressReporter& r : reporters) progress.push_back(&r);
-  const auto t0 = std::chrono::steady_clock::now();
-  const double cpu0 = cpu_seconds();
-  std::vector<RunOutcome> outcomes;
-  std::string stop_reason;
+  DriverOptions driver;
+  driver.workers = std::to_string(comm.size()) + (comm.size() == 1 ? " rank" : " ranks");
+  driver.config_path = options.config_path;
+  driver.quiet = options.quiet;
+  driver.terse = options.terse;
+  driver.verbose = options.verbose;
+  driver.progress = options.progress;
+  int code = 0;
   std::set<int> lost;
-  try {
-    if (comm.size() == 1) {
-      LocalExecutor local(options.evaluate_alone);
-      outcomes = execute_runs(runs, local, progress);
-    } else {
-      MpiExecutor executor(comm, options.processes, options.quiet);
-      outcomes = execute_runs(runs, executor, progress);
-      stop_reason = executor.stop_reason();
-      lost = executor.lost();
-    }
-  } catch (const RunError& e) {
-    // The caller aborts the job with this message: say where --resume continues.
-    std::string where;
-    for (const PreparedRun* run : runs)
-      where += (where.empty() ? "" : "; ") + run->options.out_path + ": " +
-               resume_note(run->info.generations_done);
-    throw RunError(std::string(e.what()) + " (" + where + ")");
-  }
-  RunOutcome overall = RunOutcome::complete;
-  for (RunOutcome o : outcomes)
-    if (o == RunOutcome::interrupted) overall = o;
-  if (stop_reason.empty() && overall == RunOutcome::interrupted) stop_reason = rank0_stop_cause();
-  const int code = exit_code_of(overall);
-  // -q keeps the one line that says how to continue an interrupted run.
-  if (chatty || (!options.quiet && overall == RunOutcome::interrupted)) {
-    const double wall =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    for (std::size_t r = 0; r < runs.size(); ++r)
-      print_summary(*runs[r], outcomes[r], stop_reason, code, wall, cpu_seconds() - cpu0);
+  if (comm.size() == 1) {
+    LocalExecutor local(options.evaluate_alone);
+    code = drive_runs(runs, local, driver);
+  } else {
+    MpiExecutor executor(comm, options.processes, options.quiet);
+    code = drive_runs(runs, executor, driver, [&executor] { return executor.stop_reason(); });
+    lost = executor.lost();
   }
   // An orphan's workers are orphans too and leave by themselves; its MPI may be half gone.
   if (launcher_gone()) return code;

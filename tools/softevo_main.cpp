@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
   CLI::App app{"softevo: co-evolution of pneumatic soft robot bodies and brains (single process)"};
   app.require_subcommand(1);
   int exit_code = softevo::cli::kExitOk;
+  softevo::cli::register_evolve(app, exit_code);
   softevo::cli::register_version(app, exit_code);
   softevo::cli::register_config(app, exit_code);
   softevo::cli::register_bench_physics(app, exit_code);

@@ -1,0 +1,202 @@
+// `softevo evolve` end to end against softevo-mpi, with the real evaluator on tiny problems
+// (5x5x5 lattice, 0.1 s robots): any number of worker threads writes the archive softevo-mpi
+// writes at np = 1 and (with mpirun) np = 3, for the gait and the directed task (fitness and
+// content digests); a SIGKILL followed by --resume, and SIGTERM/SIGUSR1 (exit 75, state
+// interrupted) followed by --resume, give the archive of an uninterrupted run; start-up errors
+// exit 2 and touch nothing.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "common/config.hpp"
+#include "io/archive.hpp"
+#include "tests/build_tree.hpp"
+#include "tests/master/child_process.hpp"
+
+namespace softevo {
+namespace {
+
+namespace fs = std::filesystem;
+using test::binary;
+
+// The tiny real problem shared with tests/python/test_evolve.py.
+std::string tiny_config() {
+  const char* source = std::getenv("SOFTEVO_SOURCE_DIR");
+  return std::string(source != nullptr ? source : ".") + "/tests/data/tiny-run.toml";
+}
+
+struct Digests {
+  std::string fitness, content, state;
+  std::int64_t generations_done = -1;
+  int ranks = 0;
+};
+Digests digests(const std::string& path) {
+  const io::Archive a(path);
+  return {hash_hex(io::fitness_digest(a)), hash_hex(io::content_digest(a)), a.info().state,
+          a.info().generations_done, a.info().ranks};
+}
+
+std::string join(const std::vector<std::string>& args) {
+  std::string s;
+  for (const std::string& a : args) s += " '" + a + "'";
+  return s;
+}
+
+class CmdEvolve : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!fs::exists(binary("softevo")) || !fs::exists(binary("softevo-mpi")))
+      GTEST_SKIP() << "softevo or softevo-mpi not built";
+    config_ = tiny_config();
+    if (!fs::exists(config_)) GTEST_SKIP() << config_ << " not found";
+    dir_ = test::fresh_test_dir("cmd_evolve");
+  }
+  void TearDown() override {
+    std::error_code ec;
+    if (!dir_.empty()) fs::remove_all(dir_, ec);
+  }
+  std::string file(const std::string& name) const { return (dir_ / name).string(); }
+  test::CommandResult evolve(const std::vector<std::string>& args) const {
+    return test::run_command(binary("softevo") + " evolve --progress never" + join(args));
+  }
+  test::CommandResult mpi(int np, const std::vector<std::string>& args) const {
+    std::string launcher;
+#ifdef SOFTEVO_MPIEXEC
+    if (np > 1)
+      launcher = std::string(SOFTEVO_MPIEXEC) + " --oversubscribe -np " + std::to_string(np) + " ";
+#endif
+    if (np > 1 && launcher.empty()) return {};
+    return test::run_command("env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " +
+                             launcher + binary("softevo-mpi") + " --progress never" + join(args));
+  }
+  fs::path dir_;
+  std::string config_;
+};
+
+TEST_F(CmdEvolve, WritesTheArchiveOfSoftevoMpiAtAnyRankCount) {
+  const std::vector<std::pair<std::string, std::vector<std::string>>> problems = {
+      {"gait", {}},
+      {"directed",
+       {"--set", "task.kind=directed", "--set", "task.eval_seconds=0.05", "--generations", "2",
+        "--population", "4"}}};
+  for (const auto& [kind, extra] : problems) {
+    std::vector<std::string> common = {"--config", config_};
+    common.insert(common.end(), extra.begin(), extra.end());
+    const auto with_out = [&](const std::string& out) {
+      std::vector<std::string> a = common;
+      a.insert(a.end(), {"--out", out});
+      return a;
+    };
+    const std::string np1 = file(kind + "-np1.h5");
+    const test::CommandResult r1 = mpi(1, with_out(np1));
+    ASSERT_EQ(r1.code, 0) << r1.output;
+    const Digests reference = digests(np1);
+    std::vector<std::string> compared = {np1};
+    const std::string np3 = file(kind + "-np3.h5");
+    const test::CommandResult r3 = mpi(3, with_out(np3));
+    if (r3.code != -1 || !r3.output.empty()) {
+      ASSERT_EQ(r3.code, 0) << r3.output;
+      compared.push_back(np3);
+    }
+    for (int workers : {1, 3}) {
+      const std::string out = file(kind + "-w" + std::to_string(workers) + ".h5");
+      std::vector<std::string> args = with_out(out);
+      args.insert(args.end(), {"--workers", std::to_string(workers)});
+      const test::CommandResult r = evolve(args);
+      ASSERT_EQ(r.code, 0) << r.output;
+      EXPECT_NE(r.output.find(std::to_string(workers) + " worker thread"), std::string::npos)
+          << r.output;
+      EXPECT_NE(r.output.find("# complete"), std::string::npos) << r.output;
+      compared.push_back(out);
+      EXPECT_EQ(digests(out).ranks, workers + 1);
+    }
+    for (const std::string& path : compared) {
+      const Digests d = digests(path);
+      EXPECT_EQ(d.fitness, reference.fitness) << path;
+      EXPECT_EQ(d.content, reference.content) << path;
+      EXPECT_EQ(d.state, "complete") << path;
+    }
+  }
+}
+
+// Waits (max 120 s) until the archive has at least `g` generations; false if the child ended.
+bool wait_for_generations(const std::string& path, std::int64_t g, pid_t child) {
+  return test::wait_until(
+             [&] {
+               int st = 0;
+               if (waitpid(child, &st, WNOHANG) == child) return true;
+               std::error_code ec;
+               if (!fs::exists(path, ec)) return false;
+               try {
+                 return io::Archive(path).info().generations_done >= g;
+               } catch (const io::ArchiveError&) {
+                 return false;
+               }
+             },
+             120) &&
+         fs::exists(path) && io::Archive(path).info().generations_done >= g;
+}
+
+TEST_F(CmdEvolve, ResumeAfterSigkillOrAStopSignalGivesTheSameArchive) {
+  const std::vector<std::string> common = {"--config", config_,     "--generations",
+                                           "6",        "--workers", "2"};
+  std::vector<std::string> ref_args = common;
+  ref_args.insert(ref_args.end(), {"--out", file("ref.h5")});
+  const test::CommandResult ref = evolve(ref_args);
+  ASSERT_EQ(ref.code, 0) << ref.output;
+  const Digests expected = digests(file("ref.h5"));
+  for (int sig : {SIGKILL, SIGTERM, SIGINT, SIGUSR1}) {
+    const std::string out = file("sig" + std::to_string(sig) + ".h5");
+    std::vector<std::string> argv = {binary("softevo"), "evolve", "--progress", "never"};
+    argv.insert(argv.end(), common.begin(), common.end());
+    argv.insert(argv.end(), {"--out", out});
+    const pid_t child = test::spawn_child(argv, file("child.log"));
+    ASSERT_GT(child, 0);
+    ASSERT_TRUE(wait_for_generations(out, 2, child)) << test::file_bytes(file("child.log"));
+    kill(child, sig);
+    bool signalled = false;
+    const int code = test::wait_exit(child, &signalled);
+    const Digests stopped = digests(out);
+    if (sig == SIGKILL) {
+      EXPECT_TRUE(signalled) << "the child finished before it could be killed";
+      EXPECT_EQ(stopped.state, "running");
+    } else {
+      EXPECT_EQ(code, 75) << test::file_bytes(file("child.log"));
+      EXPECT_EQ(stopped.state, "interrupted");
+      EXPECT_NE(test::file_bytes(file("child.log")).find("--resume"), std::string::npos);
+    }
+    EXPECT_LT(stopped.generations_done, 6) << "signal " << sig;
+    std::vector<std::string> resume = common;
+    resume.insert(resume.end(), {"--out", out, "--resume"});
+    const test::CommandResult r = evolve(resume);
+    ASSERT_EQ(r.code, 0) << r.output;
+    const Digests d = digests(out);
+    EXPECT_EQ(d.state, "complete");
+    EXPECT_EQ(d.fitness, expected.fitness) << "signal " << sig;
+    EXPECT_EQ(d.content, expected.content) << "signal " << sig;
+  }
+}
+
+TEST_F(CmdEvolve, StartupErrorsExitTwoAndTouchNothing) {
+  const test::CommandResult missing = evolve({"--config", file("absent.toml")});
+  EXPECT_EQ(missing.code, 2) << missing.output;
+  EXPECT_NE(missing.output.find("absent.toml"), std::string::npos) << missing.output;
+  const std::string out = file("run.h5");
+  ASSERT_EQ(evolve({"--config", config_, "--out", out, "--generations", "1"}).code, 0);
+  const std::string before = test::file_bytes(out);
+  const test::CommandResult again = evolve({"--config", config_, "--out", out});
+  EXPECT_EQ(again.code, 2) << again.output;
+  EXPECT_NE(again.output.find("--resume"), std::string::npos) << again.output;
+  EXPECT_EQ(test::file_bytes(out), before);
+  const test::CommandResult workers = evolve({"--config", config_, "--workers", "0"});
+  EXPECT_EQ(workers.code, 2) << workers.output;
+  const test::CommandResult help = test::run_command(binary("softevo") + " --help");
+  EXPECT_NE(help.output.find("evolve"), std::string::npos) << help.output;
+}
+
+}  // namespace
+}  // namespace softevo
