@@ -14,20 +14,49 @@ The numbers are the C++ numbers, bit for bit: every function calls the same code
     run = softevo.open_run("runs/quickstart.h5")         # a run archive
     table = run.individuals()                            # pandas DataFrame (numpy without pandas)
 
+    for gen in softevo.evolution("configs/quickstart.toml", workers=2):   # evolve robots
+        print(gen.generation, gen.best, gen.fitness_unit)
+
 Robots: load_robot, Robot.save, develop.  Configs: load_config, default_config, parse_config,
-Config.
+Config (a read-only Mapping).
 Evaluation: evaluate, evaluate_many, EvalResult.  Stepping: Simulation, Controller,
-softevo.env.SoftRobotEnv.  Archives: open_run.  Errors: RobotFileError and ConfigError
-(ValueError), ArchiveError and OutputFileError (OSError).
+softevo.env.SoftRobotEnv.  Evolution: evolve, evolution, Generation.  Archives: open_run.
+Errors: RobotFileError and ConfigError (ValueError), ArchiveError and OutputFileError (OSError),
+RunError (RuntimeError).  softevo.__version__: the version.
 """
 
 from __future__ import annotations
 
+import collections.abc
 import concurrent.futures
 import os
+import sys
 from typing import Iterable, Mapping, Sequence
 
-from . import _softevo
+from . import _build_info
+
+
+def _import_error(error: ImportError) -> ImportError:
+    """The ImportError of a package loaded by an interpreter it was not built for (pyenv or
+    conda first on PATH), naming both interpreters."""
+    built = f"{_build_info.PYTHON_EXECUTABLE} (Python {_build_info.PYTHON_VERSION})"
+    this = f"{sys.executable} (Python {sys.version_info.major}.{sys.version_info.minor})"
+    if os.path.realpath(sys.executable) != os.path.realpath(_build_info.PYTHON_EXECUTABLE):
+        return ImportError(
+            f"softevo was built for {built}, but this is {this}: {error}. Run "
+            f"{_build_info.PYTHON_EXECUTABLE}, or build the package for this interpreter "
+            f"(cmake -DPython_EXECUTABLE={sys.executable}, or pip install . with it; "
+            f"docs/guide.md, section Python)")
+    return ImportError(f"softevo ({built}) cannot import what it needs: {error} "
+                       f"(Debian: apt install python3-numpy)")
+
+
+try:
+    import numpy  # noqa: F401  (the compiled module needs it)
+    from . import _softevo
+except ImportError as _error:
+    raise _import_error(_error) from _error
+
 from ._softevo import (  # noqa: F401  (re-exported)
     ArchiveError,
     Config,
@@ -37,17 +66,21 @@ from ._softevo import (  # noqa: F401  (re-exported)
     OutputFileError,
     Robot,
     RobotFileError,
+    RunError,
     Simulation,
     evaluate,
     status_name,
 )
 from ._run import Run, open_run  # noqa: F401
+from ._evolve import Evolution, Generation, evolution, evolve  # noqa: F401
+
+__version__ = _build_info.VERSION
 
 __all__ = [
-    "ArchiveError", "Config", "ConfigError", "Controller", "EvalResult", "OutputFileError",
-    "Robot", "RobotFileError", "Run", "Simulation", "TASKS", "default_config", "develop",
-    "evaluate", "evaluate_many", "load_config", "load_robot", "open_run", "parse_config",
-    "status_name",
+    "ArchiveError", "Config", "ConfigError", "Controller", "EvalResult", "Evolution",
+    "Generation", "OutputFileError", "Robot", "RobotFileError", "Run", "RunError", "Simulation",
+    "TASKS", "__version__", "default_config", "develop", "evaluate", "evaluate_many", "evolution",
+    "evolve", "load_config", "load_robot", "open_run", "parse_config", "status_name",
 ]
 
 TASKS = ("gait", "directed", "rotate")
@@ -63,14 +96,99 @@ def _existing_file(path: str | os.PathLike, what: str) -> str:
     return text
 
 
+# The first bytes of files that are often opened by mistake, and what they are.
+_FILE_KINDS = (
+    (b"\x89HDF\r\n\x1a\n", "an HDF5 file (a run archive or a trace), not a robot file: "
+                             "softevo.open_run(path).genome(id) gives a robot of a run archive, "
+                             "`softevo export RUN.h5 --best` writes one"),
+    (b"\x89PNG", "a PNG image, not a robot file"),
+    (b"PK\x03\x04", "a zip archive, not a robot file"),
+    (b"\x1f\x8b", "a gzip file, not a robot file"),
+)
+
+
 def load_robot(path: str | os.PathLike) -> Robot:
     """Read a robot file (softevo.robot/1 JSON, docs/model.md §10).
 
     The reader is strict: an unknown key, a wrong type or a wrong length raises
-    RobotFileError (a ValueError) whose message names the file and the key. A missing file
-    raises FileNotFoundError.
+    RobotFileError (a ValueError) whose message names the file and the key; a file of another
+    kind (a run archive, an image) raises RobotFileError naming the file and what it is. A
+    missing file raises FileNotFoundError.
     """
-    return Robot.load(_existing_file(path, "robot file"))
+    text = _existing_file(path, "robot file")
+    with open(text, "rb") as f:
+        head = f.read(16)
+    for magic, what in _FILE_KINDS:
+        if head.startswith(magic):
+            raise RobotFileError(f"{text}: {what}")
+    if head.lstrip()[:1] not in (b"{", b""):
+        raise RobotFileError(f"{text}: not a robot file (softevo.robot/1 is JSON text that "
+                             f"starts with '{{'; this file starts with {head[:8]!r})")
+    try:
+        return Robot.load(text)
+    except RobotFileError as e:
+        if str(e):
+            raise
+        raise RobotFileError(f"{text}: not a valid softevo.robot/1 file") from e
+
+
+def _robot_save(self: Robot, path: str | os.PathLike, overwrite: bool = False) -> None:
+    """Write the robot file atomically. An existing file is replaced only with overwrite=True
+    (as the command line's --force); OutputFileError (an OSError) for an existing file without
+    it, a symlink or a special file."""
+    self._save(os.fspath(path), overwrite)
+
+
+Robot._save = Robot.save
+Robot.save = _robot_save
+
+
+class _ConfigMapping(collections.abc.Mapping):
+    """The Mapping methods of Config: its resolved keys as "section.key" -> value."""
+
+    def _flat(self) -> dict:
+        import tomllib
+
+        flat = {}
+        for section, keys in tomllib.loads(self.text).items():
+            for key, value in keys.items():
+                flat[f"{section}.{key}"] = value
+        return flat
+
+    def __getitem__(self, key: str):
+        flat = self._flat()
+        if key not in flat:
+            raise KeyError(f"{key!r} is not a config key (section.key, e.g. 'neat.pop_size'; "
+                           f"list(config) names them)")
+        return flat[key]
+
+    def __iter__(self):
+        return iter(self._flat())
+
+    def __len__(self) -> int:
+        return len(self._flat())
+
+
+# Config is a read-only Mapping of its resolved keys (every key, defaults included, as the
+# canonical text gives them: pressures in bar as in config files, everything else SI).
+for _name in ("__getitem__", "__iter__", "__len__", "__contains__", "keys", "items", "values",
+              "get", "_flat"):
+    setattr(Config, _name, getattr(_ConfigMapping, _name))
+collections.abc.Mapping.register(Config)
+
+
+def _eval_result_to_dict(self: EvalResult) -> dict:
+    """The result as plain Python values (the fields of `softevo eval --json`'s result)."""
+    return {
+        "fitness": self.fitness, "status": self.status, "killed": self.killed,
+        "message": self.message, "task": self.task, "config_source": self.config_source,
+        "components": [dict(c) for c in self.components], "steps": self.steps,
+        "voxels": self.voxels, "chambers": self.chambers, "sim_seconds": self.sim_seconds,
+        "wall_seconds": self.wall_seconds,
+    }
+
+
+EvalResult.to_dict = _eval_result_to_dict
 
 
 def _override_value(value) -> str:

@@ -35,8 +35,14 @@ def _table(columns: dict[str, np.ndarray], names: list[str]):
     return out
 
 
+# The methods that read the archive (a closed Run refuses them).
+_ARCHIVE_USERS = frozenset(("info", "config", "generations", "individuals", "stats", "genome",
+                            "best", "lineage", "fitness_digest", "_all_columns"))
+
+
 class Run:
-    """One run archive, opened read-only (see softevo.open_run)."""
+    """One run archive, opened read-only (see softevo.open_run). A context manager: `with
+    softevo.open_run(path) as run:` closes the file at the end of the block."""
 
     def __init__(self, path: str | os.PathLike):
         text = os.fspath(path)
@@ -46,7 +52,30 @@ class Run:
         self._archive = _softevo.Archive(text)
         self._columns = None
 
+    def __enter__(self) -> "Run":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Closes the archive file; any further use raises ValueError."""
+        self._archive = None
+        self._columns = None
+
+    @property
+    def closed(self) -> bool:
+        """True once close() was called (or the with block ended)."""
+        return self._archive is None
+
+    def __getattribute__(self, name):
+        if name in _ARCHIVE_USERS and object.__getattribute__(self, "_archive") is None:
+            raise ValueError(f"{object.__getattribute__(self, 'path')}: the run archive is closed")
+        return object.__getattribute__(self, name)
+
     def __repr__(self) -> str:
+        if self._archive is None:
+            return f"<softevo.Run {self.path!r}: closed>"
         info = self.info
         return (f"<softevo.Run {self.path!r}: {info['experiment']}, "
                 f"{info['generations_done']} generations, {info['state']}>")

@@ -8,8 +8,13 @@ It needs only numpy. When gymnasium is installed (it is not in Debian 12) the cl
 gymnasium.Env and its spaces are gymnasium.spaces.Box; otherwise they are a small Box with the
 same attributes (shape, low, high, dtype, sample()).
 
+Frames for videos: SoftRobotEnv(robot, render_mode="rgb_array").render() gives the current
+state as a (height, width, 3) uint8 image from the headless renderer (no display, no GPU).
+
 Action: valve openings in [0, 1], shape (chambers, 2) (inlet, outlet of each chamber), one
-60 Hz control frame per step. Observation (float32): the chamber pressures [bar], the task's
+60 Hz control frame per step. Observation (float32): the chamber pressures [bar absolute: the
+scale of the controller's sensors, kept for learning; Simulation's observation dict gives them
+in Pa], the task's
 controller inputs (the direction sensor of the directed task), the centroid displacement
 [m] (x, y, z), the heading [rad] and the simulated time [s].
 
@@ -78,11 +83,19 @@ class SoftRobotEnv(_Base):
     """One robot on one work unit of a task, one control frame per step (see the module
     docstring for the observation, action and reward)."""
 
-    metadata = {"render_modes": []}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 60}
 
     def __init__(self, robot: _softevo.Robot, config: _softevo.Config | None = None,
                  task: str | None = None, seconds: float | None = None,
-                 direction: float | None = None, unit: int = 0):
+                 direction: float | None = None, unit: int = 0,
+                 render_mode: str | None = None, render_size: tuple[int, int] = (480, 360),
+                 render_view: str = "side"):
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode {render_mode!r}: only None and 'rgb_array' "
+                             f"(frames from the headless renderer of `softevo render`)")
+        self.render_mode = render_mode
+        self._render_size = (int(render_size[0]), int(render_size[1]))
+        self._render_view = render_view
         self._sim = _softevo.Simulation(robot, config=config, task=task, seconds=seconds,
                                         direction=direction, unit=unit)
         self.task = self._sim.task
@@ -143,6 +156,16 @@ class SoftRobotEnv(_Base):
             self._progress = progress
         self._rewarded += reward
         return self._vector(obs), float(reward), terminated, truncated, info
+
+    def render(self):
+        """With render_mode="rgb_array": the current state as an RGB frame, a uint8 array
+        (height, width, 3) drawn by the headless renderer of `softevo render` (render_size =
+        (width, height) pixels, render_view side, top or iso; terrain included). None without
+        a render mode (the Gymnasium convention)."""
+        if self.render_mode is None:
+            return None
+        width, height = self._render_size
+        return self._sim.render(width, height, self._render_view)
 
     @property
     def simulation(self) -> _softevo.Simulation:

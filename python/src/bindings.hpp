@@ -17,6 +17,8 @@ void bind_robots(pybind11::module_& m);
 void bind_evaluation(pybind11::module_& m);
 // The run archive reader (io::Archive).
 void bind_archive(pybind11::module_& m);
+// softevo.evolve: a run driven from Python on worker threads (RunError).
+void bind_evolution(pybind11::module_& m);
 
 // A 1-D numpy array holding a copy of `values`.
 template <typename T>

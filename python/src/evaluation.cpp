@@ -4,7 +4,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -16,7 +18,10 @@
 #include "physics/observables.hpp"
 #include "physics/pneumatics.hpp"
 #include "physics/state.hpp"
+#include "physics/terrain.hpp"
 #include "python/src/bindings.hpp"
+#include "render/compose.hpp"
+#include "render/render.hpp"
 #include "tasks/task.hpp"
 #include "worker/controller.hpp"
 #include "worker/evaluate.hpp"
@@ -133,6 +138,10 @@ std::vector<float> float_values(const py::handle& values, std::size_t n, const c
   return std::vector<float>(a.data(), a.data() + n);
 }
 
+// 1 bar [Pa]: the observation's pressures are all given in Pa (SI); sensor_pressures keeps
+// the controller's own scale (bar), which Controller.act reads.
+constexpr double kPaPerBar = 1e5;
+
 // The steppable simulation of one work unit, with its config and task.
 class PySimulation {
  public:
@@ -211,7 +220,11 @@ class PySimulation {
     obs["frame"] = sim_->frame();
     obs["time"] = sim_->time();
     obs["pressures"] = array_of(pressures);
-    obs["sensor_pressures"] = array_of(sensors);
+    obs["sensor_pressures"] = array_of(sensors);  // [bar]: kept, Controller.act reads it
+    std::vector<double> sensors_pa(sensors.size());
+    for (std::size_t q = 0; q < sensors.size(); ++q)
+      sensors_pa[q] = kPaPerBar * static_cast<double>(sensors[q]);
+    obs["sensor_pressures_pa"] = array_of(sensors_pa);
     obs["task_inputs"] = array_of(task_inputs_);
     obs["centroid"] = array_of(std::vector<double>{c.x(), c.y(), c.z()});
     obs["heading"] = physics::mean_rotation_vector(model, state).z();
@@ -244,6 +257,61 @@ class PySimulation {
       out(v, 3) = q[v].z;
     }
     return a;
+  }
+
+  // The current state drawn by the headless renderer of `softevo render` (render/render.hpp):
+  // an RGB image (height, width, 3) of uint8, framed on the robot, the ground (terrain too)
+  // under it. One pose, so rigid cubes at the voxels' positions and orientations.
+  py::array_t<std::uint8_t> render(int width, int height, const std::string& view_name) const {
+    if (width < 32 || width > 8192 || height < 32 || height > 8192)
+      throw py::value_error("render: width and height must be in [32, 8192], got " +
+                            std::to_string(width) + " x " + std::to_string(height));
+    render::View view;
+    try {
+      view = render::parse_view(view_name);
+    } catch (const std::invalid_argument& e) {
+      throw py::value_error(std::string("render: ") + e.what());
+    }
+    const render::Body body =
+        render::body_from_plan(body_, static_cast<int>(config_.physics.material_count));
+    render::Pose pose;
+    pose.time = sim_->time();
+    for (const physics::Vec3& p : sim_->state().pos)
+      pose.position.emplace_back(p.x(), p.y(), p.z());
+    for (const auto& q : sim_->state().orient) pose.orientation.emplace_back(q.w, q.x, q.y, q.z);
+    for (int q = 0; q < sim_->chambers(); ++q)
+      pose.chamber_pressure.push_back(physics::chamber_pressure_pa(sim_->pneumatics(), q));
+    const std::vector<render::Pose> poses{pose};
+    render::SceneOptions scene;
+    scene.floor_z = -0.5 * body.voxel_size;
+    const physics::Terrain& terrain = sim_->model().terrain;
+    if (terrain.kind != physics::TerrainKind::flat) {
+      // As `softevo render`: the surface half a voxel below where a voxel centre rests
+      // (docs/model.md §2.8a), its height range sampled around the robot.
+      const double half = 0.5 * body.voxel_size;
+      scene.ground = [terrain, half](double x, double y) {
+        return physics::terrain_height(terrain, x, y) - half;
+      };
+      const Eigen::AlignedBox3d box = render::pose_bounds(body, pose);
+      double lo = scene.floor_z, hi = scene.floor_z;
+      for (double x = box.min().x() - 0.3; x <= box.max().x() + 0.3; x += 0.004)
+        for (double y = box.min().y() - 0.3; y <= box.max().y() + 0.3; y += 0.004) {
+          lo = std::min(lo, scene.ground(x, y));
+          hi = std::max(hi, scene.ground(x, y));
+        }
+      scene.ground_min = lo;
+      scene.ground_max = hi;
+    }
+    render::Image image;
+    {
+      const py::gil_scoped_release unlocked;
+      image = render::render_still(render::Clip{body, poses, ""}, view, pose.time, width, height,
+                                   scene);
+    }
+    py::array_t<std::uint8_t> out({static_cast<py::ssize_t>(image.height),
+                                   static_cast<py::ssize_t>(image.width), py::ssize_t{3}});
+    std::copy(image.rgb.begin(), image.rgb.end(), out.mutable_data());
+    return out;
   }
 
   const worker::Simulation& sim() const { return *sim_; }
@@ -393,8 +461,10 @@ Bad input raises ValueError (ConfigError for a bad config key).)");
     obs, info = sim.step(valves)     # valves: (chambers, 2) openings in [0, 1], inlet/outlet
 
 The config is resolved as in softevo.evaluate(). An observation is a dict: frame, time [s],
-pressures (chamber pressures [Pa]), sensor_pressures (what a controller reads this frame [bar];
-frame 0 reads pneumatics.initial_sensor_pressure), task_inputs (the task's controller inputs),
+pressures (chamber pressures, absolute [Pa]), sensor_pressures_pa (what a controller reads this
+frame, absolute [Pa]; frame 0 reads pneumatics.initial_sensor_pressure): every pressure in Pa.
+sensor_pressures keeps its earlier meaning, the same reading in the controller's own scale
+[bar] as float32 (what Controller.act reads). task_inputs (the task's controller inputs),
 centroid (centroid displacement since the start [m]), heading (mean rotation about z [rad]),
 direction_sensor (directed task), and with observe_voxels positions (n, 3) [m] and orientations
 (n, 4) (w, x, y, z). Feeding step() the commands of softevo.Controller(robot).act(obs) gives the
@@ -417,6 +487,10 @@ bits of softevo.evaluate() for that unit; result() scores it.)")
           "Hash of the physics state (equal states, equal hashes).")
       .def("observation", &PySimulation::observation, "The current observation (as step gives).")
       .def("positions", &PySimulation::positions, "Voxel centres (n, 3) [m].")
+      .def("render", &PySimulation::render, "width"_a = 480, "height"_a = 360, "view"_a = "side",
+           "The current state as an RGB image (height, width, 3) uint8, drawn by the headless "
+           "renderer of `softevo render` (view: side, top or iso; the ground and any terrain "
+           "under the robot).")
       .def("orientations", &PySimulation::orientations, "Voxel orientations (n, 4), (w, x, y, z).")
       .def_property_readonly(
           "time", [](const PySimulation& s) { return s.sim().time(); }, "Simulated time [s].")

@@ -12,4 +12,5 @@ PYBIND11_MODULE(_softevo, m) {
   softevo::python::bind_robots(m);
   softevo::python::bind_evaluation(m);
   softevo::python::bind_archive(m);
+  softevo::python::bind_evolution(m);
 }

@@ -68,3 +68,33 @@ def test_missing_file_and_bad_override_type(tmp_path):
         softevo.load_config(tmp_path / "none.toml")
     with pytest.raises(TypeError):
         softevo.load_config(QUICKSTART, overrides={"neat.pop_size": object()})
+
+
+def test_config_is_a_read_only_mapping_of_resolved_keys():
+    import collections.abc
+    import tomllib
+
+    c = softevo.load_config(QUICKSTART)
+    assert isinstance(c, collections.abc.Mapping)
+    assert c["neat.pop_size"] == 12
+    assert c["run.generations"] == 10
+    assert c["body.lattice"] == [6, 6, 6]
+    assert "task.kind" in c and "task.nonsense" not in c
+    # Every key of the canonical text, defaults included, as "section.key".
+    flat = {f"{s}.{k}" for s, keys in tomllib.loads(c.text).items() for k in keys}
+    assert set(c) == flat and len(c) == len(flat)
+    assert dict(c.items())["task.control"] == "open"
+    assert c.get("neat.nope", 3) == 3
+    with pytest.raises(KeyError, match="neat.nope"):
+        c["neat.nope"]
+    with pytest.raises(TypeError):
+        c["neat.pop_size"] = 5
+
+
+def test_version():
+    import tomllib
+
+    project = tomllib.loads((SOURCE_DIR / "pyproject.toml").read_text())["project"]
+    assert softevo.__version__ == project["version"]
+    out = subprocess.run([str(binary("softevo")), "--version"], capture_output=True, text=True)
+    assert softevo.__version__ in out.stdout

@@ -58,3 +58,18 @@ def test_is_a_gymnasium_env_when_gymnasium_is_installed():
         assert softevo.env.SoftRobotEnv.__mro__[1] is object
         return
     assert issubclass(softevo.env.SoftRobotEnv, gymnasium.Env)
+
+
+def test_rgb_array_frames_from_the_headless_renderer():
+    env = softevo.env.SoftRobotEnv(block_robot(), seconds=0.2, render_mode="rgb_array",
+                                   render_size=(160, 120))
+    env.reset()
+    first = env.render()
+    assert first.shape == (120, 160, 3) and first.dtype == np.uint8
+    assert len(np.unique(first.reshape(-1, 3), axis=0)) > 10  # a robot on a floor, not blank
+    for _ in range(10):
+        env.step(np.ones((2, 2), dtype=np.float32))
+    assert env.render().shape == (120, 160, 3)
+    assert softevo.env.SoftRobotEnv(block_robot(), seconds=0.1).render() is None
+    with pytest.raises(ValueError, match="render_mode"):
+        softevo.env.SoftRobotEnv(block_robot(), seconds=0.1, render_mode="human")

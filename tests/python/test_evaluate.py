@@ -121,3 +121,14 @@ def test_an_exported_robot_evaluates_with_its_runs_config_to_the_archived_bits(t
     assert result.config_source == "robot"
     assert bits(result.fitness) == bits(robot.evaluation["fitness"])
     assert softevo.evaluate(robot, config=softevo.default_config("gait")).config_source == "text"
+
+
+def test_result_as_a_dict():
+    import json as _json
+
+    r = softevo.evaluate(block_robot(), seconds=0.2)
+    d = r.to_dict()
+    assert d["fitness"] == r.fitness and d["status"] == r.status and d["task"] == "gait"
+    assert d["components"][0]["fitness"] == r.fitness
+    assert set(d) >= {"steps", "voxels", "chambers", "sim_seconds", "wall_seconds", "message"}
+    _json.dumps(d)  # plain values

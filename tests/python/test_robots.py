@@ -121,3 +121,32 @@ def test_every_public_name_and_method_has_a_docstring():
                     if not (getattr(member, "__doc__", "") or "").strip():
                         undocumented.append(f"{module.__name__}.{name}.{attr}")
     assert undocumented == []
+
+
+def test_save_refuses_an_existing_file_by_default(tmp_path):
+    path = tmp_path / "r.json"
+    block_robot().save(path)
+    with pytest.raises(softevo.OutputFileError, match="r.json"):
+        block_robot(closed=True).save(path)
+    assert not softevo.load_robot(path).closed_loop  # left as it was
+    block_robot(closed=True).save(path, overwrite=True)
+    assert softevo.load_robot(path).closed_loop
+
+
+def test_a_file_of_another_kind_is_named(tmp_path):
+    archive = tmp_path / "run.h5"
+    archive.write_bytes(b"\x89HDF\r\n\x1a\n" + bytes(100))
+    with pytest.raises(softevo.RobotFileError, match=r"run\.h5: an HDF5 file .*open_run"):
+        softevo.load_robot(archive)
+    toml = tmp_path / "c.toml"
+    toml.write_text("[run]\nseed = 1\n")
+    with pytest.raises(softevo.RobotFileError, match=r"c\.toml: not a robot file"):
+        softevo.load_robot(toml)
+
+
+def test_import_error_names_the_interpreter(monkeypatch):
+    monkeypatch.setattr("sys.executable", "/home/me/.pyenv/versions/3.12.1/bin/python3")
+    e = softevo._import_error(ImportError("No module named 'numpy'"))
+    assert "/home/me/.pyenv/versions/3.12.1/bin/python3" in str(e)
+    assert softevo._build_info.PYTHON_EXECUTABLE in str(e)
+    assert "numpy" in str(e)

@@ -119,3 +119,11 @@ def test_bad_archives_and_ids(tiny_run, tmp_path):
         run.genome(1, generation=7)
     with pytest.raises(KeyError):
         run.lineage(999999)
+
+
+def test_run_as_a_context_manager(tiny_run):
+    with softevo.open_run(tiny_run) as run:
+        assert run.info["state"] == "complete"
+    assert run.closed
+    with pytest.raises(ValueError, match="closed"):
+        run.stats()

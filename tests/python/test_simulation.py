@@ -115,3 +115,15 @@ def test_controller_act_needs_the_observation_keys():
     with pytest.raises(ValueError, match="chambers need"):
         controller.act({"task_inputs": np.zeros(0, np.float32),
                         "sensor_pressures": np.zeros(11, np.float32)})
+
+
+def test_every_observed_pressure_in_pa():
+    sim = softevo.Simulation(block_robot(closed=True), seconds=0.2)
+    obs = sim.reset()
+    for _ in range(5):
+        obs, _ = sim.step(np.ones((2, 2), dtype=np.float32))
+    # sensor_pressures keeps the controller's scale [bar]; sensor_pressures_pa is the same in Pa.
+    assert np.array_equal(obs["sensor_pressures_pa"], obs["sensor_pressures"].astype(np.float64) * 1e5)
+    assert obs["pressures"].dtype == np.float64 and np.all(obs["pressures"] > 5e4)
+    frame = sim.render(64, 48, "iso")
+    assert frame.shape == (48, 64, 3)

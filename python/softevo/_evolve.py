@@ -1,0 +1,179 @@
+"""softevo.evolve: a whole evolution from Python, on this machine's cores.
+
+The run is softevo-mpi's (the same config, archive, checkpoints and fitness_digest; docs/archive.md,
+"One process: softevo evolve"), its robots evaluated by worker threads of this process while the
+GIL is released. Ctrl-C stops it like softevo-mpi's SIGINT: the generation in flight is
+dropped, the archive keeps every finished generation, is marked interrupted, and
+evolve(..., resume=True) continues it bit for bit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from typing import Callable, Iterable, Iterator, Mapping
+
+from . import _softevo
+from ._run import Run
+
+
+@dataclasses.dataclass(frozen=True)
+class Generation:
+    """One archived generation of a run in progress (what evolution() yields and evolve()'s
+    callback receives).
+
+    generation: its number (0-based); generations: the run's total; best, mean, sd: fitness of
+    its individuals [fitness_unit: cm for gait and directed, rad for rotate]; species: species
+    count; individuals: how many were archived; status_counts: {status name: count};
+    eval_wall_seconds: wall time of its evaluation [s]; best_id: the id of
+    the best individual; best_robot: it as a Robot (its archived genome developed with the
+    run's config, as the run evaluated it, with the run's evaluation settings as `softevo
+    export` writes them: softevo.evaluate(best_robot) gives its archived fitness); out: the
+    archive's path.
+    """
+
+    generation: int
+    generations: int
+    best: float
+    mean: float
+    sd: float
+    species: int
+    individuals: int
+    status_counts: dict
+    eval_wall_seconds: float
+    fitness_unit: str
+    best_id: int
+    best_robot: _softevo.Robot
+    out: str
+
+    def to_dict(self) -> dict:
+        """Every field but best_robot as plain Python values (for JSON or a DataFrame row)."""
+        d = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
+             if f.name != "best_robot"}
+        d["status_counts"] = dict(self.status_counts)
+        return d
+
+
+def _resolve(config, overrides, generations, population, seed):
+    """(Config, name for the default archive) from a path or a Config, with the shorthands."""
+    from . import _override_list, _existing_file  # the package's helpers
+
+    extra = _override_list(overrides)
+    for key, value in (("run.generations", generations), ("neat.pop_size", population),
+                       ("run.seed", seed)):
+        if value is not None:
+            if isinstance(value, bool) or not isinstance(value, int):
+                raise TypeError(f"{key.split('.')[1] if key != 'neat.pop_size' else 'population'}"
+                                f" must be an int, got {value!r}")
+            extra.append(f"{key}={value}")
+    if isinstance(config, _softevo.Config):
+        name = config.experiment
+        if extra:
+            config = _softevo._parse_config(config.text, f"<Config {name}>", extra)
+        return config, name
+    if isinstance(config, (str, os.PathLike)):
+        path = _existing_file(config, "config file")
+        return (_softevo._load_config(path, extra),
+                os.path.splitext(os.path.basename(path))[0])
+    raise TypeError(f"config: expected a path or a softevo.Config, got {type(config).__name__}")
+
+
+class Evolution:
+    """An evolution run generation by generation: iterate it for one Generation per archived
+    generation (see softevo.evolution). A context manager; leaving it early (break, an
+    exception) closes the run: the archive keeps every finished generation and is marked
+    interrupted, so resume=True continues it."""
+
+    def __init__(self, config, workers: int | None = None, out: str | os.PathLike | None = None,
+                 *, generations: int | None = None, population: int | None = None,
+                 seed: int | None = None,
+                 overrides: Mapping[str, object] | Iterable[str] | None = None,
+                 resume: bool = False, overwrite: bool = False):
+        self.config, name = _resolve(config, overrides, generations, population, seed)
+        if workers is None:
+            workers = _softevo._available_cores()
+        if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+            raise ValueError(f"workers must be an int >= 1, got {workers!r}")
+        if out is None:
+            out = os.path.join("runs", f"{name}-{self.config.seed:02d}.h5")
+        self.out = os.fspath(out)
+        self._run = _softevo._Evolution(self.config, self.out, workers, resume, overwrite)
+        self.workers = workers
+
+    def __repr__(self) -> str:
+        return (f"<softevo.Evolution {self.out!r}: {self.config.experiment}, {self.workers} "
+                f"workers, {self._run.generations} generations, {self._run.state}>")
+
+    @property
+    def state(self) -> str:
+        """'running', 'complete' or 'interrupted'."""
+        return self._run.state
+
+    def __iter__(self) -> Iterator[Generation]:
+        try:
+            while True:
+                g = self._run.step()
+                if g is None:
+                    return
+                yield self._generation(g)
+        finally:
+            self._run.close()
+
+    def close(self) -> None:
+        """Ends the run where it is (state interrupted unless every generation is archived)."""
+        self._run.close()
+
+    def __enter__(self) -> "Evolution":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def run(self) -> Run:
+        """The archive, opened read-only (softevo.Run)."""
+        return Run(self.out)
+
+    def _generation(self, g: int) -> Generation:
+        d = self._run.summary(g)
+        return Generation(generations=self._run.generations, out=self.out, **d)
+
+
+def evolution(config, workers: int | None = None, out: str | os.PathLike | None = None,
+              **options) -> Evolution:
+    """An evolution to iterate: one softevo.Generation per archived generation.
+
+        for gen in softevo.evolution("configs/quickstart.toml", workers=2, out="runs/q.h5"):
+            print(gen.generation, gen.best, gen.fitness_unit)
+
+    Arguments as for evolve() (without callback)."""
+    return Evolution(config, workers, out, **options)
+
+
+def evolve(config, workers: int | None = None, out: str | os.PathLike | None = None, *,
+           callback: Callable[[Generation], object] | None = None,
+           generations: int | None = None, population: int | None = None,
+           seed: int | None = None,
+           overrides: Mapping[str, object] | Iterable[str] | None = None,
+           resume: bool = False, overwrite: bool = False) -> Run:
+    """Evolve robots: the run softevo-mpi and `softevo evolve` make of the same config, in this
+    process on `workers` threads (default: every core this process may use).
+
+    config: a config file path or a softevo.Config. out: the run archive (default
+    runs/<config name>-<seed, 2 digits>.h5, as the command line; its folder is created).
+    generations, population, seed: shorthands for run.generations, neat.pop_size, run.seed;
+    overrides: further keys as for load_config. resume: continue `out` from its last
+    checkpoint (a finished run may be extended with a larger `generations`); overwrite:
+    replace an existing `out`. callback(generation) is called after each archived generation
+    with a softevo.Generation; returning False stops the run there (interrupted, resumable).
+
+    Returns the archive as a softevo.Run. Raises RunError (a RuntimeError) if the run cannot
+    start (the archive exists without resume/overwrite, another run holds it, or it belongs to
+    another experiment) or fails; ConfigError for a bad config; KeyboardInterrupt after Ctrl-C,
+    with the archive checkpointed and marked interrupted.
+    """
+    with Evolution(config, workers, out, generations=generations, population=population,
+                   seed=seed, overrides=overrides, resume=resume, overwrite=overwrite) as evo:
+        for gen in evo:
+            if callback is not None and callback(gen) is False:
+                break
+        return evo.run()

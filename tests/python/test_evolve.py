@@ -1,0 +1,105 @@
+"""softevo.evolve / softevo.evolution: an evolution from Python writes the archive of
+`softevo evolve` and softevo-mpi (fitness and content digests), yields each generation's stats
+and best robot, stops on request or Ctrl-C with a checkpoint, and resumes to the same bits."""
+
+import os
+import signal
+import subprocess
+import threading
+
+import pytest
+
+import softevo
+from conftest import SOURCE_DIR, binary
+
+@pytest.fixture
+def tiny_config():
+    """The tiny real problem shared with tests/tools/test_cmd_evolve.cpp."""
+    return SOURCE_DIR / "tests" / "data" / "tiny-run.toml"
+
+
+def digests(path):
+    out = subprocess.run([str(binary("softevo")), "info", str(path), "--json"], check=True,
+                         capture_output=True, text=True).stdout
+    import json
+    info = json.loads(out)
+    return info["fitness_digest"], info.get("content_digest")
+
+
+def test_evolve_writes_the_archive_of_the_command_line(tiny_config, tmp_path):
+    cli = tmp_path / "cli.h5"
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    subprocess.run([str(binary("softevo-mpi")), "--config", str(tiny_config), "--out", str(cli),
+                    "-q"], check=True, env=env)
+    seen = []
+    run = softevo.evolve(tiny_config, workers=2, out=tmp_path / "py.h5", callback=seen.append)
+    assert isinstance(run, softevo.Run)
+    assert run.info["state"] == "complete"
+    assert run.info["ranks"] == 3
+    assert run.fitness_digest() == softevo.open_run(cli).fitness_digest()
+    assert digests(tmp_path / "py.h5") == digests(cli)
+    assert [g.generation for g in seen] == [0, 1, 2]
+    stats = run.stats()
+    for g in seen:
+        assert g.generations == 3
+        assert g.fitness_unit == "cm"
+        assert g.best == pytest.approx(float(stats["best"][g.generation]), abs=0)
+        assert g.individuals >= 6 and sum(g.status_counts.values()) == g.individuals
+        assert isinstance(g.best_robot, softevo.Robot)
+        assert "best_robot" not in g.to_dict()
+    # The best robot re-evaluates to its archived fitness (it carries its run's config).
+    last = seen[-1]
+    assert softevo.evaluate(last.best_robot).fitness == last.best
+
+
+def test_a_config_object_and_the_iterator(tiny_config, tmp_path):
+    config = softevo.load_config(tiny_config)
+    out = tmp_path / "it.h5"
+    with softevo.evolution(config, workers=1, out=out, generations=2) as evo:
+        gens = [g.generation for g in evo]
+    assert gens == [0, 1]
+    assert evo.state == "complete"
+    assert softevo.open_run(out).info["generations_done"] == 2
+
+
+def test_stop_and_resume_give_the_same_bits(tiny_config, tmp_path):
+    ref = softevo.evolve(tiny_config, workers=2, out=tmp_path / "ref.h5")
+    out = tmp_path / "stopped.h5"
+    run = softevo.evolve(tiny_config, workers=2, out=out, callback=lambda g: g.generation < 1)
+    assert run.info["state"] == "interrupted"
+    assert run.info["generations_done"] == 2
+    with pytest.raises(softevo.RunError, match="--resume|resume"):
+        softevo.evolve(tiny_config, workers=2, out=out)
+    done = softevo.evolve(tiny_config, workers=3, out=out, resume=True)
+    assert done.info["state"] == "complete"
+    assert done.fitness_digest() == ref.fitness_digest()
+    assert digests(out) == digests(tmp_path / "ref.h5")
+
+
+def test_ctrl_c_checkpoints_and_resume_completes(tiny_config, tmp_path):
+    ref = softevo.evolve(tiny_config, workers=2, out=tmp_path / "ref.h5", generations=5)
+    out = tmp_path / "interrupted.h5"
+
+    def interrupt_soon(gen):
+        if gen.generation == 1:  # Ctrl-C while generation 2 is evaluated (or just before)
+            threading.Timer(0.01, os.kill, (os.getpid(), signal.SIGINT)).start()
+
+    with pytest.raises(KeyboardInterrupt):
+        softevo.evolve(tiny_config, workers=2, out=out, generations=5, callback=interrupt_soon)
+    info = softevo.open_run(out).info
+    assert info["state"] == "interrupted"
+    assert 2 <= info["generations_done"] < 5
+    done = softevo.evolve(tiny_config, workers=2, out=out, generations=5, resume=True)
+    assert done.fitness_digest() == ref.fitness_digest()
+
+
+def test_bad_arguments(tiny_config, tmp_path):
+    with pytest.raises(ValueError, match="workers"):
+        softevo.evolve(tiny_config, workers=0, out=tmp_path / "x.h5")
+    with pytest.raises(TypeError, match="config"):
+        softevo.evolve(42, out=tmp_path / "x.h5")
+    with pytest.raises(FileNotFoundError):
+        softevo.evolve(tmp_path / "absent.toml", out=tmp_path / "x.h5")
+    with pytest.raises(softevo.ConfigError, match="pop_size"):
+        softevo.evolve(tiny_config, out=tmp_path / "x.h5", overrides={"neat.pop_size": -3})
+    assert not (tmp_path / "x.h5").exists()
