@@ -45,6 +45,7 @@
 #include "tasks/task.hpp"
 #include "tools/commands.hpp"
 #include "worker/evaluate.hpp"
+#include "worker/robot_eval_ids.hpp"
 
 namespace softevo::cli {
 namespace {
@@ -94,7 +95,8 @@ int run_eval(const EvalArgs& a) {
 
   worker::EvaluateOptions opts;
   opts.deadline = worker::deadline_after(config.run.eval_timeout_seconds);
-  opts.simd = physics::parse_simd(a.simd).value();  // checked by the option's IsMember
+  opts.ids = worker::robot_eval_ids(robot, settings);  // the ground its run gave it
+  opts.simd = physics::parse_simd(a.simd).value();     // checked by the option's IsMember
   if (!physics::simd_supported(opts.simd))
     throw std::invalid_argument("--simd " + a.simd + ": not supported by this CPU or build");
   const physics::Simd simd_used = physics::resolve_simd(opts.simd);  // = the Model's width

@@ -31,7 +31,7 @@ namespace softevo::worker {
 
 // Which evaluation a simulation is: the ground of terrain.resample = "per_generation" or
 // "per_evaluation" depends on it (the master's work unit carries both; `softevo eval` of a robot
-// file is generation 0, genome 0).
+// file with its run's config takes those it was archived with, worker::robot_eval_ids).
 struct EvaluationIds {
   std::int64_t generation = 0;
   std::int64_t genome_id = 0;

@@ -25,6 +25,7 @@
 #include "tasks/task.hpp"
 #include "worker/controller.hpp"
 #include "worker/evaluate.hpp"
+#include "worker/robot_eval_ids.hpp"
 #include "worker/simulation.hpp"
 
 namespace py = pybind11;
@@ -114,6 +115,7 @@ Result evaluate_robot(const RobotFile& robot, const std::optional<Config>& confi
   const std::unique_ptr<tasks::Task> t = tasks::make_task(resolved);
   worker::EvaluateOptions opts;  // as `softevo eval`: the config's deadline, the best SIMD width
   opts.deadline = worker::deadline_after(resolved.run.eval_timeout_seconds);
+  opts.ids = worker::robot_eval_ids(robot, settings);  // the ground its run gave it
   const Ablation a = parse_ablation(ablate);
   opts.ablate_oscillator = a.oscillator;
   opts.ablate_sensors = a.sensors;
@@ -151,6 +153,8 @@ class PySimulation {
                int unit, bool observe_voxels)
       : config_(worker::robot_eval_config(
             robot, eval_settings(config, task, seconds, integrator, direction))),
+        ids_(worker::robot_eval_ids(robot,
+                                    eval_settings(config, task, seconds, integrator, direction))),
         task_(tasks::make_task(config_)),
         body_(robot.body),
         unit_(unit),
@@ -284,6 +288,7 @@ class PySimulation {
     const std::vector<render::Pose> poses{pose};
     render::SceneOptions scene;
     scene.floor_z = -0.5 * body.voxel_size;
+    scene.voxel_scale = 1.04;  // a deformed body: as `softevo render`, hide the cracks
     const physics::Terrain& terrain = sim_->model().terrain;
     if (terrain.kind != physics::TerrainKind::flat) {
       // As `softevo render`: the surface half a voxel below where a voxel centre rests
@@ -320,11 +325,13 @@ class PySimulation {
  private:
   void start() {
     result_.reset();
-    sim_ = std::make_unique<worker::Simulation>(config_, *task_, body_, unit_);
+    sim_ = std::make_unique<worker::Simulation>(config_, *task_, body_, unit_, physics::Simd::best,
+                                                ids_);
     task_inputs_.assign(static_cast<std::size_t>(task_->controller_inputs()), 0.0f);
   }
 
   Config config_;
+  worker::EvaluationIds ids_;          // the ground of its run (worker::robot_eval_ids)
   std::unique_ptr<tasks::Task> task_;  // refers to config_
   BodyPlan body_;
   int unit_ = 0;

@@ -18,7 +18,7 @@ def bits(x: float) -> int:
 
 def cli_eval(robot: softevo.Robot, tmp_path, *flags: str) -> dict:
     path = tmp_path / "robot.json"
-    robot.save(path)
+    robot.save(path, overwrite=True)
     out = subprocess.run([str(binary("softevo")), "eval", str(path), "--json", *flags],
                          capture_output=True, text=True, check=True).stdout
     return json.loads(out)

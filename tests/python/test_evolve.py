@@ -103,3 +103,21 @@ def test_bad_arguments(tiny_config, tmp_path):
     with pytest.raises(softevo.ConfigError, match="pop_size"):
         softevo.evolve(tiny_config, out=tmp_path / "x.h5", overrides={"neat.pop_size": -3})
     assert not (tmp_path / "x.h5").exists()
+
+
+def test_best_robot_of_a_resampled_ground_re_evaluates_to_its_fitness(tiny_config, tmp_path):
+    # Bumps drawn anew every generation: the robot file carries the generation and id it was
+    # archived with, and evaluate() / Simulation take their ground from them.
+    rough = {"terrain.kind": "heightfield", "terrain.heightfield": "bumps",
+             "terrain.amplitude": 0.01, "terrain.correlation_length": 0.05,
+             "terrain.resample": "per_generation"}
+    gens = list(softevo.evolution(tiny_config, workers=2, out=tmp_path / "rough.h5",
+                                  overrides=rough))
+    for gen in gens[1:]:
+        assert softevo.evaluate(gen.best_robot).fitness == gen.best
+    sim = softevo.Simulation(gens[-1].best_robot)
+    controller = softevo.Controller(gens[-1].best_robot)
+    obs = sim.reset()
+    while not sim.done:
+        obs, _ = sim.step(controller.act(obs))
+    assert sim.result().fitness == gens[-1].best
