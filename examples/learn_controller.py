@@ -13,8 +13,8 @@ releases the GIL), keeps the best if it beats the parent (the evaluation is dete
 the parent's fitness never falls) and widens or narrows the step size with the share of
 offspring that beat the parent. Genes stay in the genome's range (+-5; frequency 1..5 Hz, as
 the run's). Prints one line per iteration (mean and best of the offspring, the parent's
-fitness, the step size) and the time taken. Default robot: the body of the
-gait-open-01 champion from ../shared/reference (give --robot FILE without it).
+fitness, the step size) and the time taken. Default robot: the sample gait walker of the
+repository (robots/gait-open-walker.robot.json, robots/README.md).
 """
 
 from __future__ import annotations
@@ -28,8 +28,7 @@ import numpy as np
 
 import softevo
 
-DEFAULT_ROBOT = (pathlib.Path(__file__).resolve().parents[1] / ".." / "shared" / "reference"
-                 / "bestbots" / "gait-open-01.robot.json")
+DEFAULT_ROBOT = pathlib.Path(__file__).resolve().parents[1] / "robots" / "gait-open-walker.robot.json"
 GENE_LIMIT = 5.0
 FREQ_RANGE = (1.0, 5.0)  # [Hz]
 

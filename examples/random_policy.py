@@ -5,7 +5,7 @@
 
 Each step opens the valves at random (the action space's sampler); each episode prints its
 return (= the task's fitness of the random motion), its length and how it ended. Default
-robot: the gait-open-01 champion from ../shared/reference (give --robot FILE without it).
+robot: the sample gait walker of the repository (robots/gait-open-walker.robot.json).
 """
 
 from __future__ import annotations
@@ -17,8 +17,7 @@ import sys
 import softevo
 import softevo.env
 
-DEFAULT_ROBOT = (pathlib.Path(__file__).resolve().parents[1] / ".." / "shared" / "reference"
-                 / "bestbots" / "gait-open-01.robot.json")
+DEFAULT_ROBOT = pathlib.Path(__file__).resolve().parents[1] / "robots" / "gait-open-walker.robot.json"
 
 
 def main(argv: list[str] | None = None) -> int:

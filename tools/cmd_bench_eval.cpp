@@ -2,7 +2,7 @@
 //  [--json]`
 //
 // Speed of one 10 s gait evaluation of the thesis gait champions (robot files of DIR whose
-// controller is not directed; default ../shared/reference/bestbots), compared with the thesis
+// controller is not directed; default the sample robots, robots/), compared with the thesis
 // simulator's CPU seconds recorded in each file (`reference.cpu_seconds`, median 33 s). Reports
 // per robot our thread CPU seconds, microseconds per voxel-step and evaluation status (a killed
 // robot ran fewer steps, so its time is not comparable), and the median speed-up
@@ -30,7 +30,7 @@ namespace {
 using validation::ChampionRow;
 
 struct BenchEvalArgs {
-  std::string dir = "../shared/reference/bestbots";
+  std::string dir = sample_robots_dir();
   int jobs = 1;
   std::string integrator = "pneuvox";
   std::string only;

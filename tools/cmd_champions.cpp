@@ -1,8 +1,8 @@
 // `softevo champions [DIR] [--jobs N] [--integrator I] [--only SUBSTR] [--set k=v] [--json]`
 //
-// Evaluates every robot file of DIR (default ../shared/reference/bestbots, the 40 thesis run
-// champions) with its task (directed controllers: the five directions of §7.4) and prints our
-// fitness next to `reference.fitness` (what the thesis simulator gives), then:
+// Evaluates every robot file of DIR (default the sample robots, robots/; the thesis champions
+// when given their folder) with its task (directed controllers: the five directions of §7.4) and
+// prints our fitness next to `reference.fitness` (what the thesis simulator gives), then:
 //  - the Spearman rank correlation over all robots with a reference (goal >= 0.8);
 //  - over the open-loop champions: the median relative difference |ours - ref| / |ref|
 //    (goal <= 10 %) and how many fall below half of their reference (goal: none);
@@ -25,7 +25,7 @@ namespace {
 using validation::ChampionRow;
 
 struct ChampionsArgs {
-  std::string dir = "../shared/reference/bestbots";
+  std::string dir = sample_robots_dir();
   int jobs = 1;
   std::string integrator = "pneuvox";
   std::string only;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,18 @@ inline CLI::Validator finite_in(double lo, double hi) {
         return "";
       },
       "FINITE in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+}
+
+// The sample robots of the repository (robots/, robots/README.md): `champions` and `bench eval`
+// read them by default, from the working directory, else from the source tree the program was
+// built from.
+inline std::string sample_robots_dir() {
+  if (std::filesystem::is_directory("robots")) return "robots";
+#ifdef SOFTEVO_DEFAULT_SOURCE_DIR
+  const std::string built = std::string(SOFTEVO_DEFAULT_SOURCE_DIR) + "/robots";
+  if (std::filesystem::is_directory(built)) return built;
+#endif
+  return "robots";
 }
 
 // The subcommand `word` is closest to (common/closest_word.hpp), "" when none is: what

@@ -6,6 +6,9 @@ import subprocess
 import sys
 
 
+import pytest
+
+import softevo
 from conftest import BESTBOTS, SOURCE_DIR, block_robot
 
 EXAMPLES = SOURCE_DIR / "examples"
@@ -19,17 +22,25 @@ def run_example(name: str, *args: str) -> str:
 
 
 def test_evaluate_champions():
-    out = run_example("evaluate_champions.py", "--seconds", "0.2", "--workers", "2",
-                      "gait-open-01", "dir-closed-04")
     if not BESTBOTS.exists():
-        assert "reference data not found" in out
-        return
-    assert "gait-open-01" in out and "dir-closed-04" in out and "2 champions" in out
+        pytest.skip(f"reference data not found ({BESTBOTS})")
+    out = run_example("evaluate_champions.py", "--reference", str(BESTBOTS), "--seconds", "0.2",
+                      "--workers", "2", "gait-open-01", "dir-closed-04")
+    assert "gait-open-01" in out and "dir-closed-04" in out and "2 robots" in out
+
+
+def test_evaluate_the_sample_robots_by_default():
+    samples = sorted((SOURCE_DIR / "robots").glob("*.robot.json"))
+    assert len(samples) >= 4, "robots/ holds the sample robots"
+    out = run_example("evaluate_champions.py", "--seconds", "0.1", "--workers", "2")
+    assert f"{len(samples)} robots" in out
+    for path in samples:
+        assert softevo.load_robot(path).name in out
 
 
 def test_evaluate_champions_without_the_reference(tmp_path):
     out = run_example("evaluate_champions.py", "--reference", str(tmp_path / "none"))
-    assert "nothing to do" in out
+    assert "robot folder not found" in out and "nothing to do" in out
 
 
 def test_learn_controller_improves_the_fitness(tmp_path):
