@@ -84,20 +84,26 @@ class Evolution {
     master::GenerationScheduler& scheduler = loop_->begin_generation();
     const std::int64_t g = scheduler.generation();
     master::RunLoop& loop = *loop_;
-    const master::ActiveGeneration active{
+    master::ActiveGeneration active{
         0, &scheduler, [&loop](const master::WorkUnit& unit) { return loop.request(unit); },
         &progress_};
-    std::optional<std::size_t> done;
-    {
-      const py::gil_scoped_release release;
-      done = executor_->evaluate_any({active});
-    }
-    if (!done) {
-      loop_->close(master::RunOutcome::interrupted);
-      finish("interrupted");
-      master::clear_stop_request();
-      if (interrupted_) throw py::error_already_set();  // the KeyboardInterrupt
-      throw master::RunError("the run was stopped");
+    for (;;) {
+      std::optional<std::size_t> done;
+      {
+        const py::gil_scoped_release release;
+        done = executor_->evaluate_any({active});
+      }
+      if (!done) {
+        loop_->close(master::RunOutcome::interrupted);
+        finish("interrupted");
+        master::clear_stop_request();
+        if (interrupted_) throw py::error_already_set();  // the KeyboardInterrupt
+        throw master::RunError("the run was stopped");
+      }
+      // With controller learning, the generation's next learning round (as execute_runs).
+      master::GenerationScheduler* round = loop_->continue_generation();
+      if (round == nullptr) break;
+      active.scheduler = round;
     }
     loop_->end_generation();
     return g;
