@@ -11,7 +11,24 @@
 // fastest run is kept (other tenants of a shared machine only ever slow a run down); the runs
 // must give bit-identical fitness, else the benchmark stops with an error. --set changes the
 // config of every evaluation (e.g. --set terrain.kind=heightfield: the cost of rough ground).
+//
+// `--baseline BIN` compares two builds instead (A/B on one machine): every robot is evaluated as
+// a separate `softevo eval ROBOT --json` process by BIN (another build's softevo) and by this
+// build, in turn (BIN first on odd runs, this build first on even runs, so that a drift of the
+// machine's speed hits both), --runs times each; the fastest CPU time of each build is kept, and
+// every run of both builds must give the same fitness bits. --with SUBSTR adds robot files of
+// any task (e.g. --with dir-open-09: a directed champion, all its directions). Printed: per
+// robot both CPU times and their ratio (baseline / this), the median and the worst robot.
+// --csv FILE appends one row per robot (date, CPU, SIMD width, both commits, times): the
+// machine's benchmark record (benchmarks/results/).
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <array>
 #include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -19,6 +36,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/version.hpp"
+#include "physics/model.hpp"
 #include "tasks/task.hpp"
 #include "tools/bench_common.hpp"
 #include "tools/commands.hpp"
@@ -37,18 +56,216 @@ struct BenchEvalArgs {
   int runs = 1;
   std::vector<std::string> overrides;  // "section.key=value" for every evaluation
   bool json = false;
+  std::string baseline;           // another build's softevo: A/B mode
+  std::vector<std::string> with;  // robot files of any task, by path substring
+  std::string csv;                // A/B rows appended here
 };
+
+// ---- A/B of two builds ----------------------------------------------------------------------
+
+std::string shell_quote(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+// stdout of a shell command and its exit status (-1: not run or killed).
+std::pair<std::string, int> capture(const std::string& command) {
+  std::string out;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) return {out, -1};
+  std::array<char, 4096> buf{};
+  std::size_t n = 0;
+  while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0) out.append(buf.data(), n);
+  const int status = ::pclose(pipe);
+  return {out, WIFEXITED(status) ? WEXITSTATUS(status) : -1};
+}
+
+struct ProcessEval {
+  double fitness = 0.0;
+  double cpu_seconds = 0.0;  // the evaluation's process CPU time, as `softevo eval` reports it
+  std::string status, simd;
+  int voxels = 0;
+  long long steps = 0;
+};
+
+// One `EXE eval FILE --json` (integrator and overrides as given) in its own process.
+ProcessEval eval_process(const std::string& exe, const std::string& file, const BenchEvalArgs& a) {
+  std::string cmd = shell_quote(exe) + " eval " + shell_quote(file) + " --json --integrator " +
+                    shell_quote(a.integrator);
+  for (const std::string& o : a.overrides) cmd += " --set " + shell_quote(o);
+  const auto [out, code] = capture(cmd + " 2>/dev/null");
+  const std::size_t brace = out.find('{');
+  if (code != 0 || brace == std::string::npos)
+    throw std::runtime_error(exe + " eval " + file + " failed (exit " + std::to_string(code) +
+                             "): " + out.substr(0, 300));
+  const nlohmann::json j = nlohmann::json::parse(out.substr(brace));
+  ProcessEval e;
+  e.fitness = j["fitness"].is_number() ? j["fitness"].get<double>() : std::nan("");
+  e.cpu_seconds = j["cpu_seconds"].get<double>();
+  e.status = j["status"].get<std::string>();
+  e.simd = j.value("simd", "");
+  e.voxels = j["voxels"].get<int>();
+  e.steps = j["steps"].get<long long>();
+  return e;
+}
+
+// "5f3b920b7688" from "softevo 0.1.0 (commit 5f3b920b7688)"; "unknown" otherwise.
+std::string commit_of(const std::string& exe) {
+  const std::string out = capture(shell_quote(exe) + " --version 2>/dev/null").first;
+  const std::size_t at = out.find("(commit ");
+  if (at == std::string::npos) return "unknown";
+  const std::size_t end = out.find(')', at);
+  return out.substr(at + 8, end == std::string::npos ? std::string::npos : end - at - 8);
+}
+
+// The CPU as /proc/cpuinfo names it (x86: model name, family and model numbers).
+std::string cpu_description() {
+  std::ifstream in("/proc/cpuinfo");
+  std::string line, name, family, model;
+  auto value = [](const std::string& l) {
+    const std::size_t c = l.find(':');
+    std::string v = c == std::string::npos ? "" : l.substr(c + 1);
+    v.erase(0, v.find_first_not_of(" \t"));
+    return v;
+  };
+  while (std::getline(in, line)) {
+    if (name.empty() && line.rfind("model name", 0) == 0) name = value(line);
+    if (family.empty() && line.rfind("cpu family", 0) == 0) family = value(line);
+    if (model.empty() && line.rfind("model\t", 0) == 0) model = value(line);
+  }
+  if (name.empty()) return "unknown";
+  return family.empty() ? name : name + " (family " + family + " model " + model + ")";
+}
+
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+int run_bench_ab(const BenchEvalArgs& a, const std::vector<ChampionRow>& rows) {
+  const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+  if (!std::filesystem::exists(a.baseline))
+    throw std::runtime_error("--baseline " + a.baseline + ": no such file");
+  const std::string base_commit = commit_of(a.baseline);
+  std::fprintf(stderr,
+               "A/B: baseline %s (commit %s) against this build (commit %s), %zu robots, %d "
+               "run(s) each, interleaved\n",
+               a.baseline.c_str(), base_commit.c_str(), kGitCommit, rows.size(), a.runs);
+  struct Row {
+    std::string name;
+    ProcessEval base, ours;  // fastest run of each build
+  };
+  std::vector<Row> out;
+  for (const ChampionRow& r : rows) {
+    Row row{r.robot.name.empty() ? r.file : r.robot.name, {}, {}};
+    for (int run = 0; run < a.runs; ++run) {
+      ProcessEval e[2];  // [0] baseline, [1] this build
+      for (int turn = 0; turn < 2; ++turn) {
+        const int which = run % 2 == 0 ? turn : 1 - turn;
+        e[which] = eval_process(which == 0 ? a.baseline : self, r.file, a);
+      }
+      const ProcessEval& first = run == 0 ? e[0] : row.base;
+      for (const ProcessEval& x : e)
+        if (!same_bits(x.fitness, first.fitness) || x.steps != first.steps)
+          throw std::runtime_error(r.file + ": the builds (or runs) gave different results: " +
+                                   "fitness " + std::to_string(x.fitness) + " vs " +
+                                   std::to_string(first.fitness) + " (not the same bits)");
+      if (run == 0 || e[0].cpu_seconds < row.base.cpu_seconds) row.base = e[0];
+      if (run == 0 || e[1].cpu_seconds < row.ours.cpu_seconds) row.ours = e[1];
+    }
+    std::fprintf(stderr, "  %-16s baseline %.2f s, this build %.2f s CPU (%.2fx)\n",
+                 row.name.c_str(), row.base.cpu_seconds, row.ours.cpu_seconds,
+                 row.base.cpu_seconds / row.ours.cpu_seconds);
+    out.push_back(row);
+  }
+  std::vector<double> ratio;
+  std::size_t worst = 0;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    ratio.push_back(out[i].base.cpu_seconds / out[i].ours.cpu_seconds);
+    if (ratio[i] < ratio[worst]) worst = i;
+  }
+  const double med = validation::median(ratio);
+  const std::string cpu = cpu_description();
+  if (!a.csv.empty()) {
+    const bool fresh = !std::filesystem::exists(a.csv) || std::filesystem::file_size(a.csv) == 0;
+    std::ofstream f(a.csv, std::ios::app);
+    if (!f) throw std::runtime_error("--csv " + a.csv + ": cannot open for appending");
+    if (fresh)
+      f << "date_utc,cpu,simd,commit,baseline_commit,integrator,runs,robot,voxels,steps,status,"
+           "baseline_cpu_seconds,cpu_seconds,speedup\n";
+    char date[32];
+    const std::time_t now = std::time(nullptr);
+    std::tm tm{};
+    ::gmtime_r(&now, &tm);
+    std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", &tm);
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      const Row& r = out[i];
+      char nums[96];
+      std::snprintf(nums, sizeof nums, "%.3f,%.3f,%.3f", r.base.cpu_seconds, r.ours.cpu_seconds,
+                    ratio[i]);
+      f << date << ',' << csv_field(cpu) << ',' << r.ours.simd << ',' << kGitCommit << ','
+        << base_commit << ',' << a.integrator << ',' << a.runs << ',' << csv_field(r.name) << ','
+        << r.ours.voxels << ',' << r.ours.steps << ',' << r.ours.status << ',' << nums << '\n';
+    }
+    if (!f) throw std::runtime_error("--csv " + a.csv + ": write failed");
+  }
+  if (a.json) {
+    nlohmann::ordered_json j;
+    j["cpu"] = cpu;
+    j["commit"] = kGitCommit;
+    j["baseline"] = a.baseline;
+    j["baseline_commit"] = base_commit;
+    j["integrator"] = a.integrator;
+    j["runs"] = a.runs;
+    nlohmann::ordered_json list = nlohmann::ordered_json::array();
+    for (std::size_t i = 0; i < out.size(); ++i)
+      list.push_back({{"name", out[i].name},
+                      {"status", out[i].ours.status},
+                      {"fitness", out[i].ours.fitness},
+                      {"voxels", out[i].ours.voxels},
+                      {"steps", out[i].ours.steps},
+                      {"simd", out[i].ours.simd},
+                      {"baseline_cpu_seconds", out[i].base.cpu_seconds},
+                      {"cpu_seconds", out[i].ours.cpu_seconds},
+                      {"speedup", ratio[i]}});
+    j["per_robot"] = list;
+    j["median_speedup"] = med;
+    j["worst_robot"] = out[worst].name;
+    j["worst_speedup"] = ratio[worst];
+    std::printf("%s\n", j.dump(1).c_str());
+    return kExitOk;
+  }
+  std::printf("CPU: %s; this build %s (SIMD %s), baseline %s; fastest of %d interleaved runs\n",
+              cpu.c_str(), kGitCommit, out.front().ours.simd.c_str(), base_commit.c_str(), a.runs);
+  std::printf("%-16s %6s %7s %12s %9s %8s  %s\n", "robot", "voxels", "steps", "baseline[s]",
+              "this[s]", "speedup", "status");
+  for (std::size_t i = 0; i < out.size(); ++i)
+    std::printf("%-16s %6d %7lld %12.2f %9.2f %7.2fx  %s\n", out[i].name.c_str(),
+                out[i].ours.voxels, out[i].ours.steps, out[i].base.cpu_seconds,
+                out[i].ours.cpu_seconds, ratio[i], out[i].ours.status.c_str());
+  std::printf(
+      "\nmedian speed-up %.2fx; worst robot %s %.2fx (CPU seconds, baseline / this build)\n", med,
+      out[worst].name.c_str(), ratio[worst]);
+  return kExitOk;
+}
 
 int run_bench_eval(const BenchEvalArgs& a) {
   std::vector<ChampionRow> rows;
   for (const std::string& f : validation::robot_files(a.dir)) {
     if (!a.only.empty() && f.find(a.only) == std::string::npos) continue;
     ChampionRow row = validation::load_champion(f);
-    // The gait robots: those whose controller fits the gait task.
-    if (tasks::default_task_for(row.robot.controller.task_inputs()) == TaskKind::gait)
+    // The gait robots: those whose controller fits the gait task; and those named by --with.
+    const bool with = std::any_of(a.with.begin(), a.with.end(), [&](const std::string& w) {
+      return f.find(w) != std::string::npos;
+    });
+    if (with || tasks::default_task_for(row.robot.controller.task_inputs()) == TaskKind::gait)
       rows.push_back(std::move(row));
   }
   if (rows.empty()) throw std::runtime_error(a.dir + ": no gait robot files selected");
+  if (!a.baseline.empty()) return run_bench_ab(a, rows);
   std::fprintf(stderr,
                "benchmarking %zu gait evaluations on %d thread(s), integrator %s, best of %d "
                "run(s)\n",
@@ -141,6 +358,10 @@ void register_bench_eval(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--set", a->overrides, "override a config key: section.key=value");
   cmd->add_flag("--json", a->json, "print one JSON object");
+  cmd->add_option("--baseline", a->baseline,
+                  "another build's softevo: A/B of the two builds, interleaved, per robot");
+  cmd->add_option("--with", a->with, "also robot files of any task whose path contains this");
+  cmd->add_option("--csv", a->csv, "with --baseline: append one row per robot to this CSV file");
   cmd->callback([&exit_code, a] { exit_code = run_bench_eval(*a); });
 }
 

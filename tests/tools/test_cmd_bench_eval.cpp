@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -72,6 +73,51 @@ TEST_F(CmdBenchEval, BestOfRunsReportsTheGaitRobotAgainstItsReference) {
   ASSERT_GT(cpu, 0.0);
   EXPECT_DOUBLE_EQ(j["median_speedup"].get<double>(), kReferenceCpuSeconds / cpu);
   EXPECT_DOUBLE_EQ(j["median_cpu_seconds"].get<double>(), cpu);
+}
+
+// --baseline: the A/B of two builds (here this build against itself): per robot both CPU times
+// and their ratio, the same fitness bits, --with adding the directed robot, and --csv appending
+// one row per robot with the CPU and both commits.
+TEST_F(CmdBenchEval, BaselineComparesTwoBuildsRobotByRobotAndRecordsCsvRows) {
+  const fs::path csv = dir_ / "results.csv";
+  const auto r = run_command(binary("softevo") + " bench eval '" + dir_.string() +
+                             "' --baseline '" + binary("softevo") +
+                             "' --with b-directed --runs 2 --json --csv '" + csv.string() + "'");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output.substr(r.output.find("{\n")));
+  EXPECT_EQ(j["runs"], 2);
+  ASSERT_EQ(j["per_robot"].size(), 2u) << "the gait robot and the directed robot of --with";
+  EXPECT_EQ(j["per_robot"][0]["name"], "a-gait");
+  EXPECT_EQ(j["per_robot"][1]["name"], "b-directed");
+  for (const nlohmann::json& row : j["per_robot"]) {
+    const double base = row["baseline_cpu_seconds"].get<double>();
+    const double ours = row["cpu_seconds"].get<double>();
+    ASSERT_GT(base, 0.0);
+    ASSERT_GT(ours, 0.0);
+    EXPECT_DOUBLE_EQ(row["speedup"].get<double>(), base / ours);
+    EXPECT_EQ(row["status"], "ok");
+  }
+  EXPECT_EQ(j["baseline_commit"], j["commit"]);
+  EXPECT_FALSE(j["cpu"].get<std::string>().empty());
+  const std::string worst = j["worst_robot"];
+  EXPECT_TRUE(worst == "a-gait" || worst == "b-directed") << worst;
+  std::ifstream in(csv);
+  std::string header, line;
+  ASSERT_TRUE(std::getline(in, header));
+  EXPECT_EQ(header.rfind("date_utc,cpu,simd,commit,baseline_commit,", 0), 0u) << header;
+  int rows = 0;
+  while (std::getline(in, line)) {
+    ++rows;
+    EXPECT_NE(line.find(rows == 1 ? ",a-gait," : ",b-directed,"), std::string::npos) << line;
+  }
+  EXPECT_EQ(rows, 2);
+}
+
+TEST_F(CmdBenchEval, MissingBaselineIsAnError) {
+  const auto r = run_command(binary("softevo") + " bench eval '" + dir_.string() +
+                             "' --baseline '" + (dir_ / "no-such-softevo").string() + "'");
+  EXPECT_NE(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("no-such-softevo"), std::string::npos) << r.output;
 }
 
 TEST_F(CmdBenchEval, RunCountOutOfRangeIsAUsageError) {
