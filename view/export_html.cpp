@@ -42,15 +42,42 @@ std::string replace_marked(std::string page, const std::string& name, const std:
   return page.replace(a, b + close.size() - a, with);
 }
 
-// Text inside <script>: "</script" would end the element early.
+// Our own code (app.js) inside <script>: a "</script" in any letter case would end the element
+// early. Written as "<\/script", which means the same inside a JavaScript string or regex.
 std::string script_safe(std::string text) {
-  for (std::size_t at = text.find("</script"); at != std::string::npos;
-       at = text.find("</script", at))
-    text.replace(at, 2, "<\\/");
+  const auto lower = [](char c) { return c >= 'A' && c <= 'Z' ? static_cast<char>(c + 32) : c; };
+  for (std::size_t at = 0; at + 8 <= text.size(); ++at) {
+    static constexpr char kClose[] = "</script";
+    bool match = true;
+    for (std::size_t k = 0; k < 8 && match; ++k) match = lower(text[at + k]) == kClose[k];
+    if (match) text.replace(at, 2, "<\\/");
+  }
   return text;
 }
 
 }  // namespace
+
+std::string json_for_html(std::string_view json) {
+  std::string out;
+  out.reserve(json.size());
+  for (std::size_t i = 0; i < json.size(); ++i) {
+    const char c = json[i];
+    if (c == '<') {
+      out += "\\u003c";
+    } else if (c == '>') {
+      out += "\\u003e";
+    } else if (c == '&') {
+      out += "\\u0026";
+    } else if (c == '\xE2' && i + 2 < json.size() && json[i + 1] == '\x80' &&
+               (json[i + 2] == '\xA8' || json[i + 2] == '\xA9')) {
+      out += json[i + 2] == '\xA8' ? "\\u2028" : "\\u2029";  // UTF-8 E2 80 A8 / E2 80 A9
+      i += 2;
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
 
 std::string base64(const std::string& bytes) {
   static constexpr char kAlphabet[] =
@@ -173,8 +200,8 @@ std::string export_html(ClientSession& client, const std::string& web_dir, doubl
       "\",\"three/addons/controls/OrbitControls.js\":\"" + data_url(orbit) +
       "\",\"softevo/plots.js\":\"" + data_url(plots) + "\"}}</script>\n<style>\n" + style +
       "\n</style>\n<script type=\"application/json\" id=\"softevo-hello\">" +
-      script_safe(client.hello()) +
-      "</script>\n<script type=\"application/json\" id=\"softevo-ended\">" + script_safe(ended) +
+      json_for_html(client.hello()) +
+      "</script>\n<script type=\"application/json\" id=\"softevo-ended\">" + json_for_html(ended) +
       "</script>\n<script type=\"text/plain\" id=\"softevo-frames\">" +
       base64(deflate_zlib(packed)) + "</script>\n";
   page = replace_marked(page, "head", head);

@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "view/client_session.hpp"
@@ -28,6 +29,12 @@ std::string pack_frames(const Session& session, double fps);
 // zlib format (RFC 1950), the "deflate" of the Compression Streams standard.
 std::string deflate_zlib(const std::string& bytes);
 std::string base64(const std::string& bytes);
+
+// JSON text made safe to embed in HTML (inside <script>, or in an attribute) by one rule, not by
+// matching tags: every '<', '>', '&' and the line separators U+2028/U+2029 written as \uXXXX.
+// Valid JSON has these only inside strings, where \uXXXX means the same character, so the
+// page's JSON.parse gives back exactly what was escaped; no robot name can end the element.
+std::string json_for_html(std::string_view json);
 
 // The page with everything embedded: the client's session simulated to its end, its hello and
 // end note as the live page gets them. Throws std::runtime_error naming a missing page file.

@@ -4,6 +4,7 @@
 //   2. a directed champion steered from 0 to +40 degrees and back: the walking direction turns
 //      towards the target and back;
 //   3. an --export-html file from file:// with the network off: it plays;
+//   3b. exports of robots with hostile names (closing </SCRIPT> and the like): no script runs;
 //   4. malformed WebSocket messages: each is answered with an error, the server keeps serving.
 // Prints the measurements (simulation speed vs real time, render frame rate, socket bytes/s,
 // exported size). Exit 77 (skipped) when the reference champions or chromium are absent.
@@ -290,6 +291,30 @@ try {
   check(ex.coloured > 2000, `the exported page draws the robot (${ex.coloured} coloured pixels)`);
   check(fetched.length === 0, `no network request (${fetched.join(' ') || 'none'})`);
   if (shots) await offline.screenshot({ path: path.join(shots, 'export-offline.png') });
+
+  // ------------------------------------------------------------ 3b. hostile names, exported
+  // A shared robot file's name must never run as script in the page exported from it.
+  const champion = JSON.parse(fs.readFileSync(gaitBot, 'utf8'));
+  const hostile = [
+    'x</SCRIPT><img src=x onerror="window.__pwned=1">',
+    'x</script ><svg onload="window.__pwned=2">',
+    '<!--<script>window.__pwned=3</script>',
+    'x\u2028</ScRiPt><img src=x onerror="window.__pwned=4">',
+  ];
+  for (const [i, name] of hostile.entries()) {
+    const bot = path.join(tmp, `hostile-${i}.robot.json`);
+    fs.writeFileSync(bot, JSON.stringify({ ...champion, name }));
+    const out = path.join(tmp, `hostile-${i}.html`);
+    execFileSync(binary, ['view', bot, '--seconds', '0.5', '--export-html', out], { stdio: 'ignore' });
+    const page = await browser.newPage();
+    let dialogs = 0;
+    page.on('dialog', (d) => { dialogs++; d.dismiss(); });
+    await page.goto(`file://${out}`);
+    await waitFor(page, () => window.softevo && window.softevo.frames > 0, undefined, 30000);
+    const got = await page.evaluate(() => ({ pwned: window.__pwned, name: window.softevo.hello && window.softevo.hello.name }));
+    check(got.pwned === undefined && dialogs === 0, `hostile name ${i}: no script runs in the exported page`);
+    await page.close();
+  }
 } catch (e) {
   console.log(`FAIL ${e.stack || e}`);
   failures++;

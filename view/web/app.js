@@ -265,7 +265,13 @@ function renderFitness(f) {
       rows.push(['archived fitness of unit 0 (shown)', num(hello.archived.unit_fitness)]);
   }
   if (hello.trace_fitness !== undefined) rows.push(['traced fitness', num(hello.trace_fitness)]);
-  $('fitness').innerHTML = '<table>' + rows.map((r) => `<tr><td>${r[0]}</td><td>${r[1]}</td></tr>`).join('') + '</table>';
+  // Built as nodes with textContent: no name from a file or server ever becomes markup.
+  const table = document.createElement('table');
+  for (const r of rows) {
+    const tr = table.insertRow();
+    for (const cell of r) tr.insertCell().textContent = String(cell);
+  }
+  $('fitness').replaceChildren(table);
 }
 
 function ended(e) {

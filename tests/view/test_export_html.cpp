@@ -1,0 +1,121 @@
+// The exported page (view/export_html.hpp): strings embedded in it are escaped by one rule, so a
+// hostile robot name never ends its <script> element; the page's JSON reads back the same name.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "tests/io/tmp_dir.hpp"
+#include "tests/view/view_test_robot.hpp"
+#include "view/client_session.hpp"
+#include "view/export_html.hpp"
+
+using namespace softevo;
+using nlohmann::json;
+
+namespace {
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+// The text of <script ... id="ID"> ... </script> in `page`.
+std::string element_text(const std::string& page, const std::string& id) {
+  const auto open = page.find("id=\"" + id + "\">");
+  EXPECT_NE(open, std::string::npos) << id;
+  const auto start = page.find('>', open) + 1;
+  const auto end = lower(page).find("</script", start);
+  return page.substr(start, end - start);
+}
+
+const char* const kHostile[] = {
+    "x</SCRIPT><img src=x onerror=alert(1)>",
+    "x</script><script>alert(1)</script>",
+    "x</ScRiPt  ><svg onload=alert(1)>",
+    "<!--<script>",
+    "a&amp;b&lt;/script&gt;",
+    "line\xE2\x80\xA8sep\xE2\x80\xA9para",
+    "quote\"back\\slash'",
+};
+
+}  // namespace
+
+TEST(ViewExportHtml, JsonForHtmlEscapesEveryMarkupCharacterAndReadsBackTheSame) {
+  for (const char* name : kHostile) {
+    const std::string text = json{{"name", name}}.dump();
+    const std::string safe = view::json_for_html(text);
+    for (char c : {'<', '>', '&'}) EXPECT_EQ(safe.find(c), std::string::npos) << name;
+    EXPECT_EQ(safe.find("\xE2\x80\xA8"), std::string::npos);
+    EXPECT_EQ(safe.find("\xE2\x80\xA9"), std::string::npos);
+    EXPECT_EQ(json::parse(safe)["name"], name);
+  }
+}
+
+TEST(ViewExportHtml, RandomNamesNeverLeaveTheirElement) {
+  // Fuzz: names drawn from the characters that matter in HTML and JSON, and UTF-8 separators.
+  const std::string alphabet[] = {
+      "<",  ">",      "/",      "&",      "!", "-", "\"",           "'",
+      "\\", "script", "SCRIPT", "ScRiPt", " ", "=", "\xE2\x80\xA8", "\xE2\x80\xA9",
+      "a",  "\n"};
+  std::mt19937 rng(29);
+  for (int trial = 0; trial < 2000; ++trial) {
+    std::string name;
+    const int parts = static_cast<int>(rng() % 24);
+    for (int k = 0; k < parts; ++k) name += alphabet[rng() % std::size(alphabet)];
+    const std::string safe = view::json_for_html(json{{"name", name}}.dump());
+    ASSERT_EQ(lower(safe).find("</script"), std::string::npos) << name;
+    ASSERT_EQ(safe.find('<'), std::string::npos) << name;
+    ASSERT_EQ(json::parse(safe)["name"], name);
+  }
+}
+
+// A stand-in for view/web (the real one needs npm ci): the page's markers, and an app.js whose
+// string holds a closing tag in capitals, which must not end its element either.
+struct FakeWeb {
+  test::TmpDir dir;
+  FakeWeb() {
+    const auto put = [&](const std::string& name, const std::string& text) {
+      std::filesystem::create_directories(std::filesystem::path(dir.file(name)).parent_path());
+      std::ofstream(dir.file(name)) << text;
+    };
+    put("index.html",
+        "<html><head><!-- softevo:head --><!-- /softevo:head --></head><body>"
+        "<!-- softevo:app --><!-- /softevo:app --></body></html>");
+    put("app.js", "const s = '</SCRIPT><b>';\n");
+    put("plots.js", "export {};\n");
+    put("style.css", "body {}\n");
+    put("node_modules/three/build/three.module.min.js", "export {};\n");
+    put("node_modules/three/examples/jsm/controls/OrbitControls.js", "export {};\n");
+  }
+};
+
+TEST(ViewExportHtml, HostileRobotNamesStayInsideTheExportedPage) {
+  const FakeWeb fake;
+  const std::string web = fake.dir.path;
+  for (const char* name : kHostile) {
+    view::ViewInput in = test::block_input(TaskKind::gait, 0.1);
+    in.name = name;
+    in.robot.name = name;
+    view::ClientSession client(in, {});
+    const std::string page = view::export_html(client, web, 30.0);
+    const std::string hello = element_text(page, "softevo-hello");
+    EXPECT_EQ(hello.find('<'), std::string::npos) << name;
+    EXPECT_EQ(json::parse(hello)["name"], name);
+    // Every "</script" of the page closes one of the page's own elements: as many as it opens.
+    const std::string l = lower(page);
+    std::size_t opens = 0, closes = 0;
+    for (auto at = l.find("<script"); at != std::string::npos; at = l.find("<script", at + 1))
+      ++opens;
+    for (auto at = l.find("</script"); at != std::string::npos; at = l.find("</script", at + 1))
+      ++closes;
+    EXPECT_EQ(opens, closes) << name;
+  }
+}
