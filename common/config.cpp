@@ -64,6 +64,9 @@ KeyDef only_when(KeyDef def, bool (*when)(const Config&), const char* why) {
   def.settable_text = why;
   return def;
 }
+bool failed_generations_not_default(const Config& c) {
+  return c.run.stop_after_failed_generations != RunConfig{}.stop_after_failed_generations;
+}
 bool terrain_not_flat(const Config& c) {
   return c.terrain.kind != "flat";
 }
@@ -118,6 +121,18 @@ std::vector<KeyDef> schema(Config& c) {
       {"run", "generations", &r.generations, 0, 1.0e7},
       {"run", "eval_timeout_seconds", &r.eval_timeout_seconds, 0, kInf, {}, 1.0, "s"},
       {"run", "on_failure", &r.on_failure, 0, 0, {"killed", "abort"}},
+      {"run",
+       "stop_after_failed_generations",
+       &r.stop_after_failed_generations,
+       0,
+       1.0e7,
+       {},
+       1.0,
+       "",
+       0,
+       false,
+       std::nullopt,
+       failed_generations_not_default},
 
       {"task", "kind", &t.kind, 0, 0, task_kind_names()},
       {"task", "control", &t.control, 0, 0, {"open", "closed"}},
@@ -635,6 +650,22 @@ void check_consistency(const Config& c, const std::string& source) {
   const Location at{source, 0};
   if (c.physics.youngs_modulus_min > c.physics.youngs_modulus_max) {
     fail(at, "physics.youngs_modulus_min must be <= physics.youngs_modulus_max");
+  }
+  // Ground that cannot work: a tread shorter than a voxel puts a riser under every voxel centre
+  // (physics/terrain.cpp refuses it, so every evaluation would fail), and value noise of cells
+  // below a voxel is sampled less than once per cell (far below, it reads as flat ground).
+  if (c.terrain.kind == "heightfield" && c.terrain.heightfield == "steps" &&
+      !(c.terrain.step_spacing >= c.physics.voxel_size)) {
+    fail(at, "terrain.step_spacing = " + format_double(c.terrain.step_spacing) +
+                 " m must be at least one voxel (physics.voxel_size = " +
+                 format_double(c.physics.voxel_size) + " m)");
+  }
+  if (c.terrain.kind == "heightfield" && c.terrain.heightfield == "bumps" &&
+      !(c.terrain.correlation_length >= c.physics.voxel_size)) {
+    fail(at, "terrain.correlation_length = " + format_double(c.terrain.correlation_length) +
+                 " m must be at least one voxel (physics.voxel_size = " +
+                 format_double(c.physics.voxel_size) +
+                 " m): finer noise is not resolved by the voxel contacts");
   }
   if (c.controller.freq_min > c.controller.freq_max) {
     fail(at, "controller.freq_min must be <= controller.freq_max");

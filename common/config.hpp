@@ -27,6 +27,11 @@ struct RunConfig {
   // What a worker-side failure (exception, non-finite state, timeout) scores: "killed" scores it
   // like a killed robot (fitness 0) and the run goes on; "abort" ends the run with an error.
   std::string on_failure = "killed";
+  // The run stops (exit code 1, the cause printed and recorded as the archive's stop_reason)
+  // after this many generations in a row in which no evaluation succeeded: each one diverged,
+  // failed, timed out or had an invalid body (a config that cannot work, not evolution). The
+  // default stops at the first such generation (generation 0 included); 0 = never stop.
+  std::int64_t stop_after_failed_generations = 1;
 };
 
 // The task a run evolves robots for (§7). Parsed once, here at the config boundary; the rest of

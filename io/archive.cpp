@@ -61,6 +61,8 @@ void write_run_info(const h5::File& file, const RunInfo& info) {
   file.write_string_attribute("experiment", info.experiment, Charset::utf8);
   file.write_string_attribute("state", info.state, Charset::utf8);
   file.write_attribute<std::int64_t>("generations_done", info.generations_done);
+  if (!info.stop_reason.empty() || file.has_attribute("stop_reason"))  // "" clears it (--resume)
+    file.write_string_attribute("stop_reason", info.stop_reason, Charset::utf8);
 }
 
 // Calls the fault-injection hook (archive.hpp) before a write step.
@@ -724,6 +726,8 @@ RunInfo Archive::info() const {
         f.has_attribute("experiment") ? f.read_string_attribute("experiment", kStringBytes) : "";
     r.state = f.read_string_attribute("state", kStringBytes);
     r.generations_done = f.read_attribute<std::int64_t>("generations_done");
+    if (f.has_attribute("stop_reason"))
+      r.stop_reason = f.read_string_attribute("stop_reason", kStringBytes);
     if (r.generations_done < 0 || r.generations_done > ArchiveLimits::generations)
       throw ArchiveError(path_ +
                          ": /: attribute generations_done = " + std::to_string(r.generations_done) +

@@ -82,6 +82,9 @@ struct RunInfo {
   std::string experiment;         // "gait-open" | "gait-closed" | "dir-open" | "dir-closed"
   std::string state = "running";  // "running" | "complete" | "interrupted"
   std::int64_t generations_done = 0;
+  // Why the run stopped on its own before its end (e.g. run.stop_after_failed_generations); ""
+  // otherwise, and while running. Written only when set (older archives have none).
+  std::string stop_reason;
 };
 
 // One evaluated generation: one row per individual, sorted by id.

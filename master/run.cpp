@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -300,6 +301,7 @@ void RunLoop::open() {
     if (run_.resumed) {
       info.state = "running";
       info.end_time.clear();
+      info.stop_reason.clear();
       if (run_.run_length_changed)
         io::update_run_config(out, info, run_.config_text, run_.options.archive_fault);
       else
@@ -542,7 +544,45 @@ void RunLoop::end_generation() {
     }
     progress_.generation_finished(summary);
     scheduler_.reset();
+    check_failed_generations(rec, evaluated);
   });
+}
+
+void RunLoop::check_failed_generations(const GenerationRecord& rec,
+                                       const std::vector<GenomeOutcome>& evaluated) {
+  // Killed robots (flipped, exploded) are evolution's verdict; these say the setup cannot work.
+  const auto failure = [](std::uint8_t s) {
+    const auto status = static_cast<EvalStatus>(s);
+    return status == EvalStatus::diverged || status == EvalStatus::failed ||
+           status == EvalStatus::timeout || status == EvalStatus::invalid_body;
+  };
+  const bool all_failed =
+      !rec.status.empty() && std::all_of(rec.status.begin(), rec.status.end(), failure);
+  failed_generations_ = all_failed ? failed_generations_ + 1 : 0;
+  const std::int64_t limit = run_.config.run.stop_after_failed_generations;
+  if (limit == 0 || failed_generations_ < limit) return;
+  std::array<std::size_t, 7> counts{};
+  for (std::uint8_t s : rec.status)
+    if (s < counts.size()) ++counts[s];
+  std::string statuses;
+  for (std::size_t s = 0; s < counts.size(); ++s)
+    if (counts[s] > 0)
+      statuses += (statuses.empty() ? "" : ", ") + std::to_string(counts[s]) + " " +
+                  to_string(static_cast<EvalStatus>(s));
+  std::string cause;
+  for (const GenomeOutcome& o : evaluated)
+    if (!o.message.empty()) {
+      cause = o.message.substr(0, 1000);
+      break;
+    }
+  std::string reason =
+      "no evaluation of generation " + std::to_string(rec.generation) +
+      (limit > 1 ? " (nor of the " + std::to_string(limit - 1) + " before it)" : std::string()) +
+      " succeeded (" + statuses + ")";
+  if (!cause.empty()) reason += "; first cause: " + cause;
+  reason += "; the run stops (run.stop_after_failed_generations = " + std::to_string(limit) + ")";
+  run_.info.stop_reason = reason;
+  throw RunError(reason);
 }
 
 RunOutcome RunLoop::close(RunOutcome outcome) {

@@ -170,6 +170,10 @@ class RunLoop {
   void guarded(const Step& step);
   // RunError naming the first failed unit of `scheduler` under run.on_failure = "abort".
   void check_failures(const GenerationScheduler& scheduler) const;
+  // RunError (recorded as the archive's stop_reason) after run.stop_after_failed_generations
+  // generations in a row in which no evaluation succeeded; `evaluated` gives the first cause.
+  void check_failed_generations(const io::GenerationRecord& rec,
+                                const std::vector<GenomeOutcome>& evaluated);
 
   using Clock = std::chrono::steady_clock;
   PreparedRun& run_;
@@ -186,6 +190,7 @@ class RunLoop {
   Clock::time_point t_eval_;
   bool archive_written_ = false;
   bool state_recorded_ = false;
+  std::int64_t failed_generations_ = 0;  // generations in a row without one successful evaluation
 };
 
 // Helpers shared with the tools.

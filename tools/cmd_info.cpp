@@ -179,6 +179,8 @@ void register_info(CLI::App& app, int& exit_code) {
       j["config_hash"] = info.config_hash;
       j["experiment"] = info.experiment;
       j["state"] = info.state;
+      j["stop_reason"] = info.stop_reason.empty() ? nlohmann::ordered_json()
+                                                  : nlohmann::ordered_json(info.stop_reason);
       j["lock_holder"] = holder ? nlohmann::ordered_json(*holder) : nlohmann::ordered_json();
       j["state_note"] = note ? nlohmann::ordered_json(*note) : nlohmann::ordered_json();
       j["generations_done"] = info.generations_done;
@@ -239,6 +241,8 @@ void register_info(CLI::App& app, int& exit_code) {
                   static_cast<long long>(info.generations_done),
                   holder ? (" (written now by " + shown(*holder) + ")").c_str() : "");
       if (note) std::printf("                 %s\n", note->c_str());
+      if (!info.stop_reason.empty())
+        std::printf("stopped          %s\n", shown(info.stop_reason).c_str());
       std::printf("written by       softevo %s (commit %s), %d ranks on %s\n",
                   shown(info.version).c_str(), shown(info.git_commit).c_str(), info.ranks,
                   shown(info.host).c_str());

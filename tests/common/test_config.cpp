@@ -151,7 +151,13 @@ TEST(Config, TerrainKeysEnterTheTextOnlyOffFlatGround) {
         {"[terrain]\nkind = \"hills\"\n", "\"heightfield\""},
         {"[terrain]\nkind = \"heightfield\"\nheightfield = \"slope\"\nslope_angle = 70\n",
          "out of range"},
-        {"[terrain]\nkind = \"rows\"\nresample = \"sometimes\"\n", "per_evaluation"}}) {
+        {"[terrain]\nkind = \"rows\"\nresample = \"sometimes\"\n", "per_evaluation"},
+        // Ground that cannot work is refused here, not found out by every evaluation failing.
+        {"[terrain]\nkind = \"heightfield\"\nheightfield = \"steps\"\nstep_spacing = 0.005\n",
+         "terrain.step_spacing = 0.005 m must be at least one voxel (physics.voxel_size = 0.01 m)"},
+        {"[terrain]\nkind = \"heightfield\"\nheightfield = \"bumps\"\n"
+         "correlation_length = 1e-15\n",
+         "terrain.correlation_length = 1e-15 m must be at least one voxel"}}) {
     expect_config_error(text_in, "t.toml", needle);
   }
 }
@@ -396,6 +402,18 @@ TEST(Config, BrokenConfigsGiveTheirExactError) {
     ++checked;
   }
   EXPECT_GE(checked, 10);
+}
+
+// run.stop_after_failed_generations: absent from the text at its default (every existing config
+// hash stays), parsed, ranged.
+TEST(Config, StopAfterFailedGenerationsEntersTheTextOnlyOffItsDefault) {
+  EXPECT_EQ(Config{}.run.stop_after_failed_generations, 1);
+  EXPECT_EQ(canonical_text(Config{}).find("stop_after_failed_generations"), std::string::npos);
+  const Config c = parse_config("[run]\nstop_after_failed_generations = 0\n", "s.toml");
+  EXPECT_EQ(c.run.stop_after_failed_generations, 0);
+  EXPECT_NE(canonical_text(c).find("stop_after_failed_generations = 0"), std::string::npos);
+  EXPECT_EQ(canonical_text(parse_config(canonical_text(c), "canonical")), canonical_text(c));
+  expect_config_error("[run]\nstop_after_failed_generations = -1\n", "s.toml", "out of range");
 }
 
 }  // namespace softevo

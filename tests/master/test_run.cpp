@@ -466,5 +466,67 @@ TEST(RunArchive, ResumeClosesARunThatDiedAfterItsLastGeneration) {
   EXPECT_EQ(io::content_digest(Archive(out)), io::content_digest(Archive(ref)));
 }
 
+// A run in which no evaluation succeeds stops (a config that cannot work must not burn an
+// allocation): the cause is in the error and in the archive's stop_reason, and the archive is
+// marked interrupted. With the threshold at 0 the run goes on.
+TEST(RunStop, AGenerationWhoseEvaluationsAllFailStopsTheRun) {
+  test::TmpDir dir;
+  Config config = small_config();
+  const auto failing = [](const EvalRequest& request) {
+    EvalResult r = fake_evaluation(request);
+    r.status = EvalStatus::failed;
+    r.fitness = 0.0;
+    r.message = "terrain: the ground cannot be built";
+    return r;
+  };
+  const auto run = [&](const Config& c, const std::string& out) {
+    RunOptions options;
+    options.out_path = out;
+    PreparedRun prepared = prepare_run(c, options, 1);
+    LocalExecutor executor(failing);
+    ProgressReporter progress = ProgressReporter::silent();
+    return execute_run(prepared, executor, progress);
+  };
+  const std::string out = dir.file("failed.h5");
+  try {
+    run(config, out);
+    FAIL() << "a run whose every evaluation fails went on";
+  } catch (const RunError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("no evaluation of generation 0"), std::string::npos) << what;
+    EXPECT_NE(what.find("the ground cannot be built"), std::string::npos) << what;
+    EXPECT_NE(what.find("run.stop_after_failed_generations"), std::string::npos) << what;
+  }
+  const io::RunInfo info = Archive(out).info();
+  EXPECT_EQ(info.state, "interrupted");
+  EXPECT_EQ(info.generations_done, 1);
+  EXPECT_NE(info.stop_reason.find("the ground cannot be built"), std::string::npos)
+      << info.stop_reason;
+
+  config.run.stop_after_failed_generations = 0;
+  EXPECT_EQ(run(config, dir.file("goes_on.h5")), RunOutcome::complete);
+  config.run.stop_after_failed_generations = 3;
+  EXPECT_THROW(run(config, dir.file("three.h5")), RunError);
+  EXPECT_EQ(Archive(dir.file("three.h5")).info().generations_done, 3);
+}
+
+// Killed robots are evolution's verdict, not a broken setup: a generation of them goes on.
+TEST(RunStop, AGenerationOfKilledRobotsGoesOn) {
+  test::TmpDir dir;
+  const Config config = small_config();
+  RunOptions options;
+  options.out_path = dir.file("killed.h5");
+  PreparedRun prepared = prepare_run(config, options, 1);
+  LocalExecutor executor([](const EvalRequest& request) {
+    EvalResult r = fake_evaluation(request);
+    r.status = EvalStatus::killed_flipped;
+    r.fitness = 0.0;
+    return r;
+  });
+  ProgressReporter progress = ProgressReporter::silent();
+  EXPECT_EQ(execute_run(prepared, executor, progress), RunOutcome::complete);
+  EXPECT_TRUE(Archive(options.out_path).info().stop_reason.empty());
+}
+
 }  // namespace
 }  // namespace softevo::master
