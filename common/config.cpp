@@ -4,6 +4,7 @@
 #include "common/config.hpp"
 #include "common/closest_word.hpp"
 #include "common/config_identity.hpp"
+#include "common/input_file.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -892,12 +893,13 @@ Config load_config(const std::string& path, const std::vector<std::string>& over
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw ConfigError(path + ": is a directory, not a config file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ConfigError(path + ": cannot open config file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw ConfigError(path + ": read error");
-  return parse_config(text.str(), path, overrides);
+  std::string text;
+  try {
+    text = read_input_file(path, InputLimits::config_bytes, "config file");
+  } catch (const InputFileError& e) {
+    throw ConfigError(e.what());
+  }
+  return parse_config(text, path, overrides);
 }
 
 Config apply_overrides(const Config& base, const std::vector<std::string>& overrides) {

@@ -21,6 +21,7 @@
 
 #include "common/config.hpp"
 #include "common/config_identity.hpp"
+#include "common/input_file.hpp"
 #include "common/robot.hpp"
 
 namespace softevo {
@@ -502,12 +503,13 @@ RobotFile parse_robot_json(const std::string& json_text, const std::string& sour
 }
 
 RobotFile read_robot_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw RobotFileError(path + ": cannot open: " + std::strerror(errno));
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw RobotFileError(path + ": read error");
-  return parse_robot_json(text.str(), path);
+  std::string text;
+  try {
+    text = read_input_file(path, InputLimits::robot_file_bytes, "robot file");
+  } catch (const InputFileError& e) {
+    throw RobotFileError(e.what());
+  }
+  return parse_robot_json(text, path);
 }
 
 std::string robot_to_json(const RobotFile& robot) {

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "common/input_file.hpp"
 #include "common/safe_write.hpp"
 #include "tools/commands.hpp"
 #include "view/client_session.hpp"
@@ -42,12 +43,8 @@ struct ViewArgs {
   bool force = false;
 };
 
-std::string read_text(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ": cannot be read");
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
+std::string read_steering_log(const std::string& path) {
+  return read_input_file(path, InputLimits::steering_log_bytes, "steering log");
 }
 
 // The desktop's browser, when there is one (a cluster node has none: the URL is printed anyway).
@@ -73,7 +70,8 @@ int run_view(const ViewArgs& args) {
   const view::ViewInput input = view::load_view_input(args.input, args.request);
 
   if (!args.save_trace.empty()) {
-    view::Session session(input, view::parse_steering_log(read_text(args.steering), args.steering));
+    view::Session session(
+        input, view::parse_steering_log(read_steering_log(args.steering), args.steering));
     while (session.advance()) {
     }
     session.save(args.save_trace, overwrite);

@@ -30,6 +30,7 @@ from __future__ import annotations
 import collections.abc
 import concurrent.futures
 import os
+import stat
 import sys
 from typing import Iterable, Mapping, Sequence
 
@@ -86,13 +87,17 @@ __all__ = [
 TASKS = ("gait", "directed", "rotate")
 
 
-def _existing_file(path: str | os.PathLike, what: str) -> str:
+def _existing_file(path: str | os.PathLike, what: str,
+                   error: type[Exception] = ValueError) -> str:
     """The path as a string; FileNotFoundError naming it when there is no such file."""
     text = os.fspath(path)
     if not os.path.exists(text):
         raise FileNotFoundError(2, f"{what} not found", text)
     if os.path.isdir(text):
         raise IsADirectoryError(21, f"{what} is a directory", text)
+    # A FIFO would block the open below forever, a device (/dev/zero) would be read without end.
+    if not stat.S_ISREG(os.stat(text).st_mode):
+        raise error(f"{text}: not a regular file (a FIFO, socket or device), not a {what}")
     return text
 
 
@@ -115,7 +120,7 @@ def load_robot(path: str | os.PathLike) -> Robot:
     kind (a run archive, an image) raises RobotFileError naming the file and what it is. A
     missing file raises FileNotFoundError.
     """
-    text = _existing_file(path, "robot file")
+    text = _existing_file(path, "robot file", RobotFileError)
     with open(text, "rb") as f:
         head = f.read(16)
     for magic, what in _FILE_KINDS:
@@ -224,7 +229,8 @@ def load_config(path: str | os.PathLike,
     ValueError) naming the file, line, key and the allowed values; a missing file raises
     FileNotFoundError.
     """
-    return _softevo._load_config(_existing_file(path, "config file"), _override_list(overrides))
+    return _softevo._load_config(_existing_file(path, "config file", ConfigError),
+                                 _override_list(overrides))
 
 
 def default_config(task: str = "gait",

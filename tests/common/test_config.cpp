@@ -330,7 +330,8 @@ TEST(Config, MissingFileIsAClearError) {
     load_config("/nonexistent/x.toml");
     FAIL();
   } catch (const ConfigError& e) {
-    EXPECT_EQ(std::string(e.what()), "/nonexistent/x.toml: cannot open config file");
+    EXPECT_EQ(std::string(e.what()),
+              "/nonexistent/x.toml: cannot open config file: No such file or directory");
   }
 }
 

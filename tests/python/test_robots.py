@@ -2,6 +2,7 @@
 its strict errors as exceptions naming file and key, the controller parameters, develop()."""
 
 import json
+import os
 
 import numpy as np
 import pytest
@@ -35,6 +36,23 @@ def test_save_refuses_an_existing_file_unless_asked(tmp_path):
 def test_missing_file_is_file_not_found(tmp_path):
     with pytest.raises(FileNotFoundError, match="robot file not found"):
         softevo.load_robot(tmp_path / "absent.json")
+
+
+def test_fifos_devices_and_huge_files_are_refused_without_reading(tmp_path):
+    # A FIFO used to block forever, /dev/zero and a 10 GB sparse file to grow without bound.
+    fifo = tmp_path / "pipe.robot.json"
+    os.mkfifo(fifo)
+    for path in (fifo, "/dev/zero"):
+        with pytest.raises(softevo.RobotFileError, match="not a regular file"):
+            softevo.load_robot(path)
+    with pytest.raises(softevo.ConfigError, match="not a regular file"):
+        softevo.load_config(fifo)
+    huge = tmp_path / "huge.robot.json"
+    with open(huge, "wb") as f:
+        f.write(b"{")
+        f.truncate(10_000_000_000)
+    with pytest.raises(softevo.RobotFileError, match="larger than the limit of 64 MiB"):
+        softevo.load_robot(huge)
 
 
 def test_unknown_key_names_file_and_key(tmp_path):
