@@ -72,14 +72,15 @@ from ._softevo import (  # noqa: F401  (re-exported)
     evaluate,
     status_name,
 )
-from ._run import Run, open_run  # noqa: F401
+from ._run import ArchiveIntegrityWarning, Run, open_run  # noqa: F401
 from ._evolve import Evolution, Generation, evolution, evolve  # noqa: F401
 
 __version__ = _build_info.VERSION
 
 __all__ = [
-    "ArchiveError", "Config", "ConfigError", "Controller", "EvalResult", "Evolution",
-    "Generation", "OutputFileError", "Robot", "RobotFileError", "Run", "RunError", "Simulation",
+    "ArchiveError", "ArchiveIntegrityWarning", "Config", "ConfigError", "Controller", "EvalResult",
+    "Evolution", "Generation", "OutputFileError", "Robot", "RobotFileError", "Run", "RunError",
+    "Simulation",
     "TASKS", "__version__", "default_config", "develop", "evaluate", "evaluate_many", "evolution",
     "evolve", "load_config", "load_robot", "open_run", "parse_config", "status_name",
 ]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import warnings
 
 import numpy as np
 
@@ -37,20 +38,42 @@ def _table(columns: dict[str, np.ndarray], names: list[str]):
 
 # The methods that read the archive (a closed Run refuses them).
 _ARCHIVE_USERS = frozenset(("info", "config", "generations", "individuals", "stats", "genome",
-                            "best", "lineage", "fitness_digest", "_all_columns"))
+                            "best", "lineage", "fitness_digest", "verify", "_all_columns"))
+
+
+class ArchiveIntegrityWarning(UserWarning):
+    """open_run(path, verify="warn") found an archive that fails its integrity checks."""
+
+
+def _integrity_message(path: str, report: dict) -> str:
+    n = len(report["problems"])
+    return (f"{path}: integrity FAILED: {n} problem(s); generations 0.."
+            f"{report['consistent_generations'] - 1} consistent (`softevo info` reports the "
+            f"same; open_run(path, verify=False) reads it anyway)\n{report['description']}")
 
 
 class Run:
     """One run archive, opened read-only (see softevo.open_run). A context manager: `with
     softevo.open_run(path) as run:` closes the file at the end of the block."""
 
-    def __init__(self, path: str | os.PathLike):
+    def __init__(self, path: str | os.PathLike, verify: bool | str = True):
+        if verify not in (True, False, "warn"):
+            raise ValueError(f"verify must be True, False or 'warn', not {verify!r}")
         text = os.fspath(path)
         if not os.path.exists(text):
             raise FileNotFoundError(2, "run archive not found", text)
         self.path = text
         self._archive = _softevo.Archive(text)
         self._columns = None
+        if verify:
+            report = self._archive.check()
+            if not report["ok"]:
+                if verify == "warn":
+                    warnings.warn(_integrity_message(text, report), ArchiveIntegrityWarning,
+                                  stacklevel=3)
+                else:
+                    self._archive = None
+                    raise _softevo.ArchiveError(_integrity_message(text, report))
 
     def __enter__(self) -> "Run":
         return self
@@ -83,7 +106,8 @@ class Run:
     @property
     def info(self) -> dict:
         """The root attributes: format, version, git_commit, seed, ranks, host, start_time,
-        end_time, config_hash, experiment, state, generations_done, physics_revision."""
+        end_time, config_hash, experiment, state, generations_done, physics_revision,
+        stop_reason ("" unless the run stopped on its own, e.g. every evaluation failed)."""
         return self._archive.info
 
     @property
@@ -217,12 +241,28 @@ class Run:
         """The archive's fitness digest (16 hex digits, as `softevo info --json`)."""
         return self._archive.fitness_digest()
 
+    def verify(self, raise_error: bool = True) -> dict:
+        """Runs the integrity checks `softevo info` runs (docs/archive.md "Integrity checks"):
+        every generation's stored digest against its data, ids, statistics, the checkpoint.
+        Returns {"ok", "generations_checked", "generations_with_digest",
+        "consistent_generations", "problems": [{"generation", "check", "message"}],
+        "description"}; raises ArchiveError when a check fails, unless raise_error=False."""
+        report = self._archive.check()
+        if raise_error and not report["ok"]:
+            raise _softevo.ArchiveError(_integrity_message(self.path, report))
+        return report
 
-def open_run(path: str | os.PathLike) -> Run:
+
+def open_run(path: str | os.PathLike, verify: bool | str = True) -> Run:
     """Open a run archive (softevo.run/1) read-only with the C++ reader.
 
     run.config, run.info, run.individuals(), run.stats(), run.genome(id), run.lineage(id).
     A missing file raises FileNotFoundError; a file that is not a run archive, or a malformed
     one, ArchiveError (an OSError) naming the file and the object.
+
+    verify: True (default) runs the integrity checks `softevo info` runs (run.verify()) before
+    anything is read, and raises ArchiveError when one fails: a flipped bit or an edited value
+    is never served as data. "warn" issues an ArchiveIntegrityWarning instead and reads on;
+    False skips the checks (they read the whole archive once: large archives open faster).
     """
-    return Run(path)
+    return Run(path, verify)

@@ -12,6 +12,7 @@
 #include "common/config.hpp"
 #include "evo/genome.hpp"
 #include "io/archive.hpp"
+#include "master/archive_check.hpp"
 #include "python/src/bindings.hpp"
 #include "worker/evaluate.hpp"
 
@@ -37,6 +38,28 @@ py::dict info_dict(const io::RunInfo& i) {
   d["experiment"] = i.experiment;
   d["state"] = i.state;
   d["generations_done"] = i.generations_done;
+  d["stop_reason"] = i.stop_reason;
+  return d;
+}
+
+// The integrity checks `softevo info` runs (master/archive_check.hpp), as a dict.
+py::dict check_dict(const io::Archive& archive) {
+  const master::ArchiveCheck check = master::check_archive(archive);
+  py::list problems;
+  for (const master::ArchiveProblem& p : check.problems) {
+    py::dict d;
+    d["generation"] = p.generation;
+    d["check"] = p.check;
+    d["message"] = p.message;
+    problems.append(d);
+  }
+  py::dict d;
+  d["ok"] = check.ok();
+  d["generations_checked"] = check.generations_checked;
+  d["generations_with_digest"] = check.generations_with_digest;
+  d["consistent_generations"] = check.consistent_generations;
+  d["problems"] = problems;
+  d["description"] = check.describe(archive.path());
   return d;
 }
 
@@ -196,7 +219,8 @@ void bind_archive(py::module_& m) {
       .def("individual_columns", &individual_columns)
       .def("stats_columns", &stats_columns)
       .def("robot", &archived_robot, "id"_a, "generation"_a = py::none())
-      .def("fitness_digest", [](const io::Archive& a) { return hash_hex(io::fitness_digest(a)); });
+      .def("fitness_digest", [](const io::Archive& a) { return hash_hex(io::fitness_digest(a)); })
+      .def("check", &check_dict);
 }
 
 }  // namespace softevo::python

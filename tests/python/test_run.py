@@ -3,6 +3,7 @@ table (pandas or numpy), stats, genomes as robots (re-evaluated to their archive
 lineages, and bad archives as exceptions."""
 
 import builtins
+import struct
 
 import numpy as np
 import pytest
@@ -127,3 +128,48 @@ def test_run_as_a_context_manager(tiny_run):
     assert run.closed
     with pytest.raises(ValueError, match="closed"):
         run.stats()
+
+
+def _tampered_copy(tiny_run, tmp_path):
+    """A copy of the archive with one robot's fitness changed to 123.456 in place (every copy of
+    the float64's bytes: the fitness column and its component): what an edit with h5py does."""
+    with softevo.open_run(tiny_run) as run:
+        fitness = run.individuals()["fitness"]
+    data = bytearray(tiny_run.read_bytes())
+    best = float(max(fitness))
+    for value in fitness:
+        needle = struct.pack("<d", float(value))
+        if value != 0 and value != best and data.count(needle) >= 1:
+            data = bytearray(bytes(data).replace(needle, struct.pack("<d", 123.456)))
+            break
+    else:
+        pytest.skip("no fitness value found in the archive's bytes")
+    bad = tmp_path / "tampered.h5"
+    bad.write_bytes(bytes(data))
+    return bad
+
+
+def test_a_tampered_archive_raises_by_default(tiny_run, tmp_path):
+    # `softevo info` reported integrity FAILED for such a file, while Python served it silently.
+    bad = _tampered_copy(tiny_run, tmp_path)
+    with pytest.raises(softevo.ArchiveError, match="integrity FAILED") as e:
+        softevo.open_run(bad)
+    assert "tampered.h5" in str(e.value) and "digest" in str(e.value)
+    with pytest.warns(softevo.ArchiveIntegrityWarning, match="integrity FAILED"):
+        run = softevo.open_run(bad, verify="warn")
+    assert 123.456 in set(run.individuals()["fitness"].tolist())
+    run = softevo.open_run(bad, verify=False)
+    report = run.verify(raise_error=False)
+    assert not report["ok"] and report["problems"][0]["check"] == "digest"
+    with pytest.raises(softevo.ArchiveError, match="integrity FAILED"):
+        run.verify()
+    with pytest.raises(ValueError, match="verify must be"):
+        softevo.open_run(tiny_run, verify="sometimes")
+
+
+def test_an_intact_archive_verifies(tiny_run):
+    with softevo.open_run(tiny_run) as run:
+        report = run.verify()
+        assert report["ok"] and report["problems"] == []
+        assert report["generations_checked"] == 2 and report["generations_with_digest"] == 2
+        assert run.info["stop_reason"] == ""
