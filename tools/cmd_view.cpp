@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "common/input_file.hpp"
+#include "common/printable.hpp"
 #include "common/safe_write.hpp"
 #include "tools/commands.hpp"
 #include "view/client_session.hpp"
@@ -99,8 +100,16 @@ int run_view(const ViewArgs& args) {
   options.web_dir = args.web_dir;
   options.client = client;
   view::Server server(input, options);
-  std::printf("softevo view: %s (%s %s) at %s\n", input.name.c_str(), view::to_string(input.kind),
-              args.input.c_str(), server.url().c_str());
+  // Escaped: a robot name may carry terminal control sequences (title, clear screen).
+  std::printf("softevo view: %s (%s %s) at %s\n", printable(input.name).c_str(),
+              view::to_string(input.kind), printable(args.input).c_str(), server.url().c_str());
+  if (!server.loopback_only())
+    std::fprintf(stderr,
+                 "softevo view: warning: --bind %s is reachable from other machines: anyone who "
+                 "reaches port %d can watch and drive the simulation and save into --save-dir "
+                 "(no password, no encryption); the default 127.0.0.1 with an SSH port forward "
+                 "is safer\n",
+                 args.bind.c_str(), server.port());
   if (args.bind == "127.0.0.1")
     std::printf("  from another machine: ssh -L %d:127.0.0.1:%d THIS_HOST, then open %s\n",
                 server.port(), server.port(), server.url().c_str());

@@ -30,6 +30,30 @@ std::string file_stem(const std::string& name) {
   return s.empty() ? "robot" : s.substr(0, 80);
 }
 
+// `message` with each of `paths` (relative ones too) and every absolute path in it replaced by
+// its last component: what an error may show a page.
+std::string without_paths(std::string message, const std::vector<std::string>& paths) {
+  for (const std::string& p : paths) {
+    const std::string name = fs::path(p).filename().string();
+    if (p.empty() || p == "." || p == name) continue;
+    for (auto at = message.find(p); at != std::string::npos; at = message.find(p, at + 1))
+      message.replace(at, p.size(), name.empty() ? std::string("the save directory") : name);
+  }
+  const auto ends = [](char c) {
+    return c == ' ' || c == '\'' || c == '"' || c == ':' || c == ',';
+  };
+  for (std::size_t at = 0; at < message.size(); ++at) {
+    const bool starts = message[at] == '/' && (at == 0 || ends(message[at - 1]) ||
+                                               message[at - 1] == '(' || message[at - 1] == '=');
+    if (!starts) continue;
+    std::size_t end = at;
+    while (end < message.size() && !ends(message[end]) && message[end] != ')') ++end;
+    const std::string name = fs::path(message.substr(at, end - at)).filename().string();
+    message.replace(at, end - at, name.empty() ? std::string("the save directory") : name);
+  }
+  return message;
+}
+
 }  // namespace
 
 ClientSession::ClientSession(const ViewInput& input, ClientOptions options)
@@ -180,6 +204,7 @@ std::vector<Outgoing> ClientSession::act(const ClientMessage& m) {
       break;
     case MessageType::reset:
       session_ = std::make_unique<Session>(input_);
+      saved_ = false;
       shown_ = -1;
       play_time_ = 0.0;
       end_noted_ = false;
@@ -212,12 +237,25 @@ std::vector<Outgoing> ClientSession::act(const ClientMessage& m) {
       if (!session_->live()) throw std::logic_error("a trace is already saved");
       if (!session_->finished())
         throw std::logic_error("the session is saved when its simulation has ended");
+      // Bounded, so that a page cannot fill the disk: each save writes a whole trace.
+      if (saved_) throw std::logic_error("this session is saved already (reset to save another)");
+      if (saves_ >= options_.max_saves)
+        throw std::logic_error("at most " + std::to_string(options_.max_saves) + " saves per page");
+      const auto now = std::chrono::steady_clock::now();
+      if (last_save_ && std::chrono::duration<double>(now - *last_save_).count() <
+                            options_.min_save_interval_seconds)
+        throw std::logic_error("one save per " + json(options_.min_save_interval_seconds).dump() +
+                               " s; try again in a moment");
+      if (options_.save_budget && options_.save_budget->bytes_left == 0)
+        throw std::logic_error("the server's save budget is used up (restart softevo view)");
       fs::path path;
       do {
         path = fs::path(options_.save_dir) /
                (file_stem(input_.name) + "-view-" + std::to_string(++saves_) + ".h5");
       } while (fs::exists(path) || fs::exists(steering_log_path(path.string())));
-      session_->save(path.string(), Overwrite::refuse);
+      last_save_ = now;
+      save_files(path);
+      saved_ = true;
       // Only the file's name goes back: the page learns nothing of the machine's paths.
       out.push_back(
           text(json{{"type", "saved"},
@@ -229,6 +267,28 @@ std::vector<Outgoing> ClientSession::act(const ClientMessage& m) {
   }
   out.push_back(text(state_json()));
   return out;
+}
+
+void ClientSession::save_files(const fs::path& path) {
+  const std::string log = steering_log_path(path.string());
+  try {
+    session_->save(path.string(), Overwrite::refuse);
+  } catch (const std::exception& e) {
+    // The page learns nothing of the machine's paths: every path in the message is replaced
+    // by the file's name (the error itself, e.g. "No space left on device", stays).
+    throw std::runtime_error("the save failed: " +
+                             without_paths(e.what(), {path.string(), log, options_.save_dir}));
+  }
+  if (options_.save_budget) {
+    std::error_code ec;
+    std::uint64_t bytes = 0;
+    for (const std::string& p : {path.string(), log}) {
+      const auto size = fs::file_size(p, ec);
+      if (!ec) bytes += size;
+    }
+    auto& left = options_.save_budget->bytes_left;
+    left = bytes >= left ? 0 : left - bytes;
+  }
 }
 
 std::vector<Outgoing> ClientSession::tick(double wall_seconds) {

@@ -3,7 +3,11 @@
 // tested without a socket; view/server.cpp only moves its messages.
 #pragma once
 
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,8 +22,19 @@ struct Outgoing {
   std::string bytes;
 };
 
+// What the pages of one server may write with Save, together (shared by their sessions).
+struct SaveBudget {
+  std::uint64_t bytes_left = 1ULL << 30;  // traces and steering logs [bytes], 1 GiB by default
+};
+
 struct ClientOptions {
   std::string save_dir = ".";  // where "save" writes (the page never names a path)
+  // Save is bounded: at most this many saves per page, not two within min_save_interval
+  // seconds, never the same unchanged session twice, and all pages together within the
+  // budget (nullptr: no total bound, for tests and --steering replays).
+  int max_saves = 8;
+  double min_save_interval_seconds = 2.0;
+  std::shared_ptr<SaveBudget> save_budget;
   // Live simulation per tick at most this long [s] of wall clock, so that a slow robot cannot
   // stall the server's other work.
   double max_simulation_seconds_per_tick = 0.05;
@@ -53,6 +68,8 @@ class ClientSession {
   void note_end(std::vector<Outgoing>& out);
   std::string ended_json() const;
   std::string state_json() const;
+  // Writes the trace and steering log; an error names no path of the machine.
+  void save_files(const std::filesystem::path& path);
 
   const ViewInput& input_;
   ClientOptions options_;
@@ -63,6 +80,8 @@ class ClientSession {
   int shown_ = -1;
   bool end_noted_ = false;
   int saves_ = 0;
+  bool saved_ = false;  // this session (since its last reset) is saved
+  std::optional<std::chrono::steady_clock::time_point> last_save_;
 };
 
 }  // namespace softevo::view

@@ -30,7 +30,23 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr auto kTick = std::chrono::microseconds(1'000'000 / 60);
-constexpr auto kHttpTimeout = std::chrono::seconds(30);
+// A connection that does nothing for this long is closed: an HTTP request not completed, a
+// WebSocket handshake not completed, a page that answers no ping. Silent clients cannot hold the
+// --max-clients places for long.
+constexpr auto kHttpTimeout = std::chrono::seconds(20);
+constexpr auto kIdleTimeout = std::chrono::seconds(20);
+// A page whose socket takes no data for this long (a write in flight that does not finish) is
+// dropped: it does not read.
+constexpr auto kWriteStall = std::chrono::seconds(20);
+// Memory of the messages waiting to be sent (text replies included): per page and for all pages
+// together. A page beyond either is dropped and its memory freed; so a client that sends and
+// never reads cannot grow the server.
+constexpr std::size_t kMaxQueuedBytesPerClient = 8u << 20;
+constexpr std::size_t kMaxQueuedBytesTotal = 32u << 20;
+constexpr std::size_t kMessageOverheadBytes = 64;  // a queued message's own allocations
+// After an accept error (no descriptors left: EMFILE), wait this long before the next accept
+// instead of failing again at once in a loop.
+constexpr auto kAcceptBackoff = std::chrono::milliseconds(200);
 // Binary frames waiting to be sent beyond this are dropped (the oldest first): a slow link sees
 // fewer frames, never a growing queue.
 constexpr std::size_t kMaxQueuedFrames = 4;
@@ -87,9 +103,15 @@ struct Server::Impl {
   std::map<std::string, WebFile> files;
   std::atomic<int> clients{0};
   int bound_port = 0;
+  std::size_t queued_bytes = 0;  // of every page's queue
+  asio::steady_timer accept_backoff{io};
+  bool accept_error_reported = false;
 
-  Impl(const ViewInput& in, ServerOptions opts) : input(in), options(std::move(opts)) {}
+  Impl(const ViewInput& in, ServerOptions opts) : input(in), options(std::move(opts)) {
+    if (!options.client.save_budget) options.client.save_budget = std::make_shared<SaveBudget>();
+  }
   void accept();
+  bool allowed_origin(std::string_view origin) const;
 };
 
 namespace {
@@ -100,11 +122,18 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
  public:
   SocketSession(tcp::socket socket, Server::Impl& server)
       : ws_(std::move(socket)), timer_(ws_.get_executor()), server_(server) {}
-  ~SocketSession() { --server_.clients; }
+  ~SocketSession() {
+    --server_.clients;
+    server_.queued_bytes -= queued_bytes_;
+  }
 
   void start(http::request<http::string_body> request) {
     ++server_.clients;
-    ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
+    websocket::stream_base::timeout timeouts{};
+    timeouts.handshake_timeout = kIdleTimeout;
+    timeouts.idle_timeout = kIdleTimeout;  // a ping at half of it; no answer: closed
+    timeouts.keep_alive_pings = true;
+    ws_.set_option(timeouts);
     // The message limit is checked here (read()), not by Beast: Beast's own limit fails the
     // connection at once, and its teardown in Boost 1.74 closes the socket after one read with
     // the rest of the big message unread, so the kernel answers with a reset and the page sees
@@ -137,6 +166,7 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
                           if (ec) {  // closed, or the connection broke: all released
                             self->closed_ = true;
                             self->timer_.cancel();
+                            self->read_delay_.cancel();
                             return;
                           }
                           if (self->buffer_.size() > kMaxWireMessageBytes)
@@ -144,9 +174,61 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
                           if (!self->ws_.is_message_done()) return self->read();
                           const std::string text = beast::buffers_to_string(self->buffer_.data());
                           self->buffer_.consume(self->buffer_.size());
+                          const auto t0 = std::chrono::steady_clock::now();
                           self->queue(self->client_->handle(text, self->ws_.got_text()));
-                          self->read();
+                          self->read_after(std::chrono::steady_clock::now() - t0);
                         });
+  }
+
+  // Fairness: a message that kept the server's one thread busy (a reset, a long seek) delays
+  // this page's next read by as long, so one page's message loop takes at most about half of
+  // the thread and every other page keeps its ticks.
+  void read_after(std::chrono::steady_clock::duration busy) {
+    if (closed_) return;
+    if (busy < std::chrono::milliseconds(2)) return read();
+    read_delay_.expires_after(busy);
+    read_delay_.async_wait([self = shared_from_this()](beast::error_code ec) {
+      if (!ec && !self->closed_) self->read();
+    });
+  }
+
+  // Drops the page at once (it does not read, or is over its memory budget): the socket is
+  // closed, the pending operations end, and the queue is freed but for the write in flight,
+  // whose buffer the socket still holds until its handler runs.
+  void drop() {
+    if (dropped_) return;
+    dropped_ = true;
+    closed_ = true;
+    timer_.cancel();
+    read_delay_.cancel();
+    while (queue_.size() > (writing_ ? 1u : 0u)) pop_back();
+    buffer_.clear();
+    buffer_.shrink_to_fit();
+    beast::error_code ignored;
+    beast::get_lowest_layer(ws_).socket().shutdown(tcp::socket::shutdown_both, ignored);
+    beast::get_lowest_layer(ws_).socket().close(ignored);
+  }
+
+  static std::size_t cost(const Outgoing& m) { return m.bytes.capacity() + kMessageOverheadBytes; }
+  void push_back(Outgoing m) {
+    queued_bytes_ += cost(m);
+    server_.queued_bytes += cost(m);
+    queue_.push_back(std::move(m));
+  }
+  void pop_front() {
+    queued_bytes_ -= cost(queue_.front());
+    server_.queued_bytes -= cost(queue_.front());
+    queue_.pop_front();
+  }
+  void pop_back() {
+    queued_bytes_ -= cost(queue_.back());
+    server_.queued_bytes -= cost(queue_.back());
+    queue_.pop_back();
+  }
+  void erase(std::deque<Outgoing>::iterator it) {
+    queued_bytes_ -= cost(*it);
+    server_.queued_bytes -= cost(*it);
+    queue_.erase(it);
   }
 
   // A close is a write for Beast (one at a time): it goes after the write in flight, and what
@@ -154,7 +236,7 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
   void close(websocket::close_code code) {
     close_code_ = code;
     buffer_.consume(buffer_.size());
-    while (queue_.size() > (writing_ ? 1u : 0u)) queue_.pop_back();
+    while (queue_.size() > (writing_ ? 1u : 0u)) pop_back();
     write_next();
   }
 
@@ -163,6 +245,7 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
     timer_.async_wait([self = shared_from_this()](beast::error_code ec) {
       if (ec || self->closed_) return;
       const auto now = std::chrono::steady_clock::now();
+      if (self->writing_ && now - self->write_started_ > kWriteStall) return self->drop();
       const double dt = std::chrono::duration<double>(now - self->last_tick_).count();
       self->last_tick_ = now;
       self->queue(self->client_->tick(dt));
@@ -171,6 +254,7 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
   }
 
   void queue(std::vector<Outgoing> messages) {
+    if (closed_) return;
     for (auto& m : messages) {
       if (m.binary) {
         std::size_t frames = 0;
@@ -179,13 +263,15 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
         if (frames >= kMaxQueuedFrames) {
           for (auto it = queue_.begin() + (writing_ ? 1 : 0); it != queue_.end(); ++it)
             if (it->binary) {
-              queue_.erase(it);
+              erase(it);
               break;
             }
         }
       }
-      queue_.push_back(std::move(m));
+      push_back(std::move(m));
     }
+    if (queued_bytes_ > kMaxQueuedBytesPerClient || server_.queued_bytes > kMaxQueuedBytesTotal)
+      return drop();
     write_next();
   }
 
@@ -201,6 +287,7 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
     }
     if (queue_.empty()) return;
     writing_ = true;
+    write_started_ = std::chrono::steady_clock::now();
     ws_.binary(queue_.front().binary);
     ws_.async_write(asio::buffer(queue_.front().bytes),
                     [self = shared_from_this()](beast::error_code ec, std::size_t) {
@@ -208,22 +295,28 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
                       if (ec) {
                         self->closed_ = true;
                         self->timer_.cancel();
+                        self->read_delay_.cancel();
+                        while (!self->queue_.empty()) self->pop_back();
                         return;
                       }
-                      self->queue_.pop_front();
+                      self->pop_front();
                       self->write_next();
                     });
   }
 
   websocket::stream<beast::tcp_stream> ws_;
   asio::steady_timer timer_;
+  asio::steady_timer read_delay_{ws_.get_executor()};
   Server::Impl& server_;
   std::unique_ptr<ClientSession> client_;
   http::request<http::string_body> upgrade_;
   beast::flat_buffer buffer_;
   std::deque<Outgoing> queue_;
+  std::size_t queued_bytes_ = 0;  // cost() of queue_
   bool writing_ = false;
   bool closed_ = false;
+  bool dropped_ = false;
+  std::chrono::steady_clock::time_point write_started_;
   std::optional<websocket::close_code> close_code_;  // a close to send after the write in flight
   std::chrono::steady_clock::time_point last_tick_;
 };
@@ -249,12 +342,13 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   }
 
  private:
-  // Same origin only: a page of another site may not open the socket.
+  // Pages of this server only: a page of another site may not open the socket. Compared with
+  // the address the server was started for, never with the request's own Host header (a page
+  // of a DNS-rebinding site sends a Host that matches its own Origin).
   bool same_origin() const {
     const auto origin = request_.find(http::field::origin);
     if (origin == request_.end()) return true;  // not a browser page (a tool, a test)
-    const std::string expected = "http://" + std::string(request_[http::field::host]);
-    return std::string(origin->value()) == expected;
+    return server_.allowed_origin(std::string_view(origin->value().data(), origin->value().size()));
   }
 
   void answer() {
@@ -310,12 +404,51 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 
 }  // namespace
 
+bool Server::Impl::allowed_origin(std::string_view origin) const {
+  return origin_allowed(origin, options.bind, bound_port);
+}
+
+bool origin_allowed(std::string_view origin, const std::string& bind, int port) {
+  // "http://HOST:PORT" with this server's port, HOST "localhost" or an IP address literal: the
+  // address bound, or any literal when bound to every interface (0.0.0.0, ::). A DNS name other
+  // than localhost is never allowed: that is what a rebinding attack needs.
+  const std::string scheme = "http://";
+  if (origin.substr(0, scheme.size()) != scheme) return false;
+  std::string_view rest = origin.substr(scheme.size());
+  const auto colon = rest.rfind(':');
+  if (colon == std::string_view::npos || rest.substr(colon + 1) != std::to_string(port))
+    return false;
+  std::string host(rest.substr(0, colon));
+  if (host.size() > 2 && host.front() == '[' && host.back() == ']')
+    host = host.substr(1, host.size() - 2);
+  beast::error_code ec;
+  const auto bound = asio::ip::make_address(bind, ec);
+  if (ec) return false;
+  if (host == "localhost") return bound.is_loopback() || bound.is_unspecified();
+  const auto address = asio::ip::make_address(host, ec);
+  if (ec) return false;  // a DNS name
+  if (bound.is_unspecified()) return true;
+  return address == bound || (bound.is_loopback() && address.is_loopback());
+}
+
 void Server::Impl::accept() {
   acceptor.async_accept([this](beast::error_code ec, tcp::socket socket) {
     if (ec) {
-      if (ec != asio::error::operation_aborted) accept();
+      if (ec == asio::error::operation_aborted) return;
+      // Out of descriptors (EMFILE, ENFILE) or memory: accepting again at once fails again at
+      // once, a loop at full CPU. Wait, then try again (the idle timeouts free descriptors).
+      if (!accept_error_reported) {
+        std::fprintf(stderr, "softevo view: cannot accept a connection (%s); retrying\n",
+                     ec.message().c_str());
+        accept_error_reported = true;
+      }
+      accept_backoff.expires_after(kAcceptBackoff);
+      accept_backoff.async_wait([this](beast::error_code e) {
+        if (!e) accept();
+      });
       return;
     }
+    accept_error_reported = false;
     std::make_shared<HttpSession>(std::move(socket), *this)->read();
     accept();
   });
@@ -350,6 +483,12 @@ std::string Server::url() const {
   return "http://" + (v6 ? "[" + host + "]" : host) + ":" + std::to_string(port()) + "/";
 }
 
+bool Server::loopback_only() const {
+  beast::error_code ec;
+  const auto address = asio::ip::make_address(impl_->options.bind, ec);
+  return !ec && address.is_loopback();
+}
+
 int Server::clients() const {
   return impl_->clients;
 }
@@ -364,6 +503,7 @@ void Server::stop() {
   asio::post(impl_->io, [this] {
     beast::error_code ignored;
     impl_->acceptor.close(ignored);
+    impl_->accept_backoff.cancel();
     impl_->signals.cancel(ignored);
     impl_->io.stop();
   });

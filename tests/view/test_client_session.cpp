@@ -147,7 +147,55 @@ TEST(ViewClientSession, SavesIntoTheSaveDirectoryAndTellsOnlyTheNames) {
   EXPECT_EQ(saved["steering"], "block-view-1.steering.json");
   EXPECT_TRUE(std::filesystem::exists(dir.file("block-view-1.h5")));
   EXPECT_TRUE(std::filesystem::exists(dir.file("block-view-1.steering.json")));
-  // A second save does not replace the first.
-  c.handle(R"({"type":"save"})", true);
-  EXPECT_TRUE(std::filesystem::exists(dir.file("block-view-2.h5")));
+  // The same session is not saved twice (each save writes a whole trace: a page could fill the
+  // disk); after a reset and a new run, the next save does not replace the first.
+  EXPECT_NE(first_error(c.handle(R"({"type":"save"})", true)).find("saved already"),
+            std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("block-view-2.h5")));
+  c.handle(R"({"type":"reset"})", true);
+  c.handle(R"({"type":"seek","frame":1000})", true);
+  EXPECT_NE(first_error(c.handle(R"({"type":"save"})", true)).find("one save per 2"),
+            std::string::npos);
+}
+
+// Save is bounded per page (count, rate) and for all pages together (bytes), and its errors
+// never show the page a path of the machine.
+TEST(ViewClientSession, SavesAreBoundedAndTheirErrorsNameNoPath) {
+  const test::TmpDir dir;
+  const view::ViewInput in = test::block_input(TaskKind::gait, 0.1);
+  view::ClientOptions options = unbounded();
+  options.save_dir = dir.path;
+  options.min_save_interval_seconds = 0.0;
+  options.max_saves = 2;
+  options.save_budget = std::make_shared<view::SaveBudget>();
+  const auto saved_one = [](view::ClientSession& c) {
+    c.handle(R"({"type":"reset"})", true);
+    c.handle(R"({"type":"seek","frame":1000})", true);
+    return first_error(c.handle(R"({"type":"save"})", true));
+  };
+  view::ClientSession c(in, options);
+  c.start();
+  EXPECT_EQ(saved_one(c), "");
+  EXPECT_EQ(saved_one(c), "");
+  EXPECT_NE(saved_one(c).find("at most 2 saves per page"), std::string::npos);
+  const std::uint64_t used = (1ULL << 30) - options.save_budget->bytes_left;
+  EXPECT_GT(used, std::filesystem::file_size(dir.file("block-view-1.h5")));
+
+  // The budget is shared: a page of a server whose budget is spent saves nothing.
+  options.save_budget->bytes_left = 1;
+  options.max_saves = 8;
+  view::ClientSession d(in, options);
+  d.start();
+  EXPECT_EQ(saved_one(d), "");  // within the budget when it starts; the budget is then spent
+  EXPECT_NE(saved_one(d).find("save budget is used up"), std::string::npos);
+
+  // A save directory that cannot be written: the error says why, without the path.
+  const std::string secret = dir.file("secret-place/deeper");
+  view::ClientOptions bad = unbounded();
+  bad.save_dir = secret;
+  view::ClientSession e(in, bad);
+  e.start();
+  const std::string error = saved_one(e);
+  EXPECT_NE(error.find("the save failed"), std::string::npos) << error;
+  EXPECT_EQ(error.find('/'), std::string::npos) << error;
 }
