@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """All figures and tables of an experiment grid from a folder of softevo run archives.
 
-    python3 analysis/figures.py RUNS_DIR -o OUT_DIR [--generation G] [--compare A,B]
+    python3 analysis/figures.py RUNS_DIR -o OUT_DIR [--generation G] [--compare A,B] [--no-verify]
 
 Writes (PNG and PDF for every figure, CSV for every table):
   fitness_gait.*, fitness_directed.*   mean and best fitness over generations per experiment,
@@ -393,6 +393,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="generation of the open/closed comparison (default: last common)")
     ap.add_argument("--compare", default=None, metavar="A,B",
                     help="compare experiments A and B of the grid instead of the default pairs")
+    ap.add_argument("--no-verify", action="store_true",
+                    help="read archives that fail softevo info's integrity checks (default: "
+                         "skip them with the reason)")
     args = ap.parse_args(argv)
     if args.compare is not None:
         pair = tuple(e.strip() for e in args.compare.split(","))
@@ -403,7 +406,7 @@ def main(argv: list[str] | None = None) -> int:
         TASKS[name] = pair
         TASK_TITLES[name] = f"{pair[0]} vs {pair[1]}"
 
-    runs, skipped = find_runs(args.runs_dir)
+    runs, skipped = find_runs(args.runs_dir, verify=not args.no_verify)
     for msg in skipped:
         print(f"figures: skipped {msg}", file=sys.stderr)
     if not runs:

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Ancestry of an individual of a softevo run archive.
 
-    python3 analysis/lineage.py RUN.h5 [--generation G] [--id ID | --best] [--csv]
+    python3 analysis/lineage.py RUN.h5 [--generation G] [--id ID | --best] [--csv] [--no-verify]
 
 Starts at the individual (default: the best of the last generation) and follows parent1 (the
 first parent: the fitter one in a crossover, or the only one after mutation) back to the initial
@@ -38,9 +38,11 @@ def main(argv: list[str] | None = None) -> int:
     sel.add_argument("--id", type=int, default=None)
     sel.add_argument("--best", action="store_true", help="the generation's best (default)")
     ap.add_argument("--csv", action="store_true", help="comma-separated output")
+    ap.add_argument("--no-verify", action="store_true",
+                    help="read an archive that fails softevo info's integrity checks")
     args = ap.parse_args(argv)
     try:
-        run = softevo.open_run(args.archive)
+        run = softevo.open_run(args.archive, verify=not args.no_verify)
         if not run.generations:
             print(f"lineage: {args.archive} has no generation yet", file=sys.stderr)
             return 2

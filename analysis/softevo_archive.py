@@ -41,12 +41,14 @@ class Generation:
 
 
 class Run:
-    """One run archive and its experiment (root attribute `experiment`, else from /config)."""
+    """One run archive and its experiment (root attribute `experiment`, else from /config).
+    `verify`: run `softevo info`'s integrity checks first and refuse an archive that fails them
+    (ArchiveError naming every problem); False reads a damaged or hand-made archive anyway."""
 
-    def __init__(self, path: str | pathlib.Path):
+    def __init__(self, path: str | pathlib.Path, verify: bool = True):
         self.path = pathlib.Path(path)
         try:
-            self.run = softevo.open_run(self.path)
+            self.run = softevo.open_run(self.path, verify=verify)
             self.experiment = self.run.info["experiment"] or self.run.config.experiment
         except (OSError, ValueError) as e:
             raise ArchiveError(f"{self.path}: {e}") from e
@@ -118,9 +120,10 @@ def evaluations_per_generation(run: Run) -> tuple[np.ndarray, np.ndarray]:
     return gens, counts
 
 
-def find_runs(folder: str | pathlib.Path) -> tuple[list[Run], list[str]]:
+def find_runs(folder: str | pathlib.Path, verify: bool = True) -> tuple[list[Run], list[str]]:
     """Every run archive under `folder` (recursive, *.h5 / *.hdf5), sorted by path, plus a
-    message for every HDF5 file that is not a run archive (traces, broken files)."""
+    message for every HDF5 file that is not a run archive (traces, broken files) or, with
+    `verify`, fails the integrity checks."""
     runs: list[Run] = []
     skipped: list[str] = []
     root = pathlib.Path(folder)
@@ -130,7 +133,7 @@ def find_runs(folder: str | pathlib.Path) -> tuple[list[Run], list[str]]:
                    and not p.parent.name.endswith((".h5.d", ".hdf5.d")))
     for p in paths:
         try:
-            runs.append(Run(p))
+            runs.append(Run(p, verify=verify))
         except ArchiveError as e:
             skipped.append(str(e))
     return runs, skipped

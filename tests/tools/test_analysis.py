@@ -27,7 +27,7 @@ ANALYSIS = REPO / "analysis"
 sys.path.insert(0, str(ANALYSIS))
 import figures  # noqa: E402
 import lineage  # noqa: E402
-from softevo_archive import Run, experiment_from_config  # noqa: E402
+from softevo_archive import ArchiveError, Run, experiment_from_config  # noqa: E402
 
 EXPERIMENT_CONFIG = {
     "gait-open": ("gait", "open"), "gait-closed": ("gait", "closed"),
@@ -121,6 +121,12 @@ def run_figures(runs_dir: pathlib.Path, out: pathlib.Path, *extra: str) -> subpr
                            *extra], capture_output=True, text=True, timeout=300)
 
 
+def run_figures_synthetic(runs_dir: pathlib.Path, out: pathlib.Path, *extra: str) -> subprocess.CompletedProcess:
+    """figures.py over hand-made archives: they carry a placeholder config hash and no usable
+    checkpoint, so they fail the integrity checks and are read with --no-verify."""
+    return run_figures(runs_dir, out, "--no-verify", *extra)
+
+
 class MixedConfigs(unittest.TestCase):
     """Two gait-open archives of different configs (3 s and 1.5 s robots) are two experiments:
     figures.py says so and does not pool them."""
@@ -134,7 +140,7 @@ class MixedConfigs(unittest.TestCase):
                                (3, "eval_seconds = 1.5\n")):
                 write_synthetic_archive(runs / f"gait-open-{seed:02d}.h5", "gait-open", seed,
                                         generations=3, pop=4, level=10.0, task_keys=keys)
-            result = run_figures(runs, tmp / "figs")
+            result = run_figures_synthetic(runs, tmp / "figs")
             self.assertEqual(result.returncode, 0, result.stderr)
             self.assertIn("experiment gait-open covers 2 different configs", result.stderr)
             self.assertIn("gait-open-03.h5", result.stderr)
@@ -154,7 +160,7 @@ class MixedConfigs(unittest.TestCase):
             for seed in (1, 2):
                 write_synthetic_archive(runs / f"gait-open-{seed:02d}.h5", "gait-open", seed,
                                         generations=3, pop=4, level=10.0)
-            result = run_figures(runs, tmp / "figs")
+            result = run_figures_synthetic(runs, tmp / "figs")
             self.assertEqual(result.returncode, 0, result.stderr)
             self.assertNotIn("different configs", result.stderr)
             self.assertIn("runs: gait-open x2", result.stdout)
@@ -184,7 +190,7 @@ class SyntheticGrid(unittest.TestCase):
         with h5py.File(cls.runs / "gait-open-01.h5.d" / "gen-000009.h5", "w") as f:
             f.attrs["format"] = "softevo.segment/1"
         cls.out = cls.tmp / "figs"
-        cls.result = run_figures(cls.runs, cls.out)
+        cls.result = run_figures_synthetic(cls.runs, cls.out)
 
     @classmethod
     def tearDownClass(cls):
@@ -218,9 +224,9 @@ class SyntheticGrid(unittest.TestCase):
         self.assertGreater(float(gait["mean_open"]), float(gait["mean_closed"]) + 10)
         # Same numbers through scipy directly, from the archives.
         from scipy import stats
-        a = [float(np.mean(Run(self.runs / p).generation(3).fitness))
+        a = [float(np.mean(Run(self.runs / p, verify=False).generation(3).fitness))
              for p in ("gait-open-01.h5", "nested/gait-open-02.h5")]
-        b = [float(np.mean(Run(self.runs / p).generation(3).fitness))
+        b = [float(np.mean(Run(self.runs / p, verify=False).generation(3).fitness))
              for p in ("gait-closed-01.h5", "nested/gait-closed-02.h5")]
         self.assertAlmostEqual(float(gait["welch_p"]), stats.ttest_ind(a, b, equal_var=False).pvalue, places=9)
         self.assertAlmostEqual(float(gait["mannwhitney_p"]),
@@ -242,17 +248,17 @@ class SyntheticGrid(unittest.TestCase):
     def test_experiment_from_config_text(self):
         self.assertEqual(experiment_from_config('[task]\nkind = "directed"\ncontrol = "closed"\n'),
                          "dir-closed")
-        with Run(self.runs / "nested" / "dir-closed-02.h5") as run:
+        with Run(self.runs / "nested" / "dir-closed-02.h5", verify=False) as run:
             self.assertEqual(run.experiment, "dir-closed")
 
     def test_lineage_follows_parent1_to_the_initial_population(self):
-        with Run(self.runs / "gait-open-01.h5") as run:
+        with Run(self.runs / "gait-open-01.h5", verify=False) as run:
             line = lineage.lineage(run, 3, 19)
         # 19 <- 14 <- 9 <- 4 (parent1 = id - pop + 1), 4 is in generation 0.
         self.assertEqual([(e["generation"], e["id"]) for e in line], [(3, 19), (2, 14), (1, 9), (0, 4)])
         self.assertEqual([e["chambers"] for e in line], [4, 3, 2, 1])
         out = subprocess.run([sys.executable, str(ANALYSIS / "lineage.py"),
-                              str(self.runs / "gait-open-01.h5"), "--best"],
+                              str(self.runs / "gait-open-01.h5"), "--best", "--no-verify"],
                              capture_output=True, text=True, timeout=60)
         self.assertEqual(out.returncode, 0, out.stderr)
         self.assertIn("lineage of id 19", out.stdout)
@@ -264,6 +270,19 @@ class SyntheticGrid(unittest.TestCase):
         result = run_figures(empty, self.tmp / "none")
         self.assertEqual(result.returncode, 2)
         self.assertIn("no run archive", result.stderr)
+
+    def test_archives_failing_the_integrity_checks_are_skipped_with_the_reason(self):
+        result = run_figures(self.runs, self.tmp / "verified")
+        self.assertEqual(result.returncode, 2, result.stderr)
+        self.assertIn("integrity FAILED", result.stderr)
+        self.assertIn("config_hash attribute is 0123456789abcdef", result.stderr)
+        with self.assertRaises(ArchiveError):
+            Run(self.runs / "gait-open-01.h5")
+        out = subprocess.run([sys.executable, str(ANALYSIS / "lineage.py"),
+                              str(self.runs / "gait-open-01.h5")],
+                             capture_output=True, text=True, timeout=60)
+        self.assertEqual(out.returncode, 2, out.stdout)
+        self.assertIn("integrity FAILED", out.stderr)
 
 
 class LearningRuns(unittest.TestCase):
@@ -280,7 +299,8 @@ class LearningRuns(unittest.TestCase):
                                         generations=10, pop=4, level=10.0)
                 write_synthetic_archive(runs / f"learn-{seed}.h5", "gait-closed-learn", seed,
                                         generations=2, pop=4, level=12.0, learning=True)
-            result = run_figures(runs, tmp / "figs", "--compare", "gait-closed,gait-closed-learn")
+            result = run_figures_synthetic(runs, tmp / "figs", "--compare",
+                                           "gait-closed,gait-closed-learn")
             self.assertEqual(result.returncode, 0, result.stderr)
             self.assertIn("runs: gait-closed x2, gait-closed-learn x2", result.stdout)
             for name in ("learning.png", "learning.pdf", "learning.csv"):
@@ -294,7 +314,7 @@ class LearningRuns(unittest.TestCase):
             self.assertLessEqual(max(float(r["x"]) for r in best), 35.0)
             gains = [r for r in rows if r["series"] == "mean_gain"]
             self.assertEqual([float(r["mean"]) for r in gains], [0.0, 1.0, 2.0])
-            run = Run(runs / "learn-1.h5")
+            run = Run(runs / "learn-1.h5", verify=False)
             self.assertEqual(run.experiment, "gait-closed-learn")
             from softevo_archive import evaluations_per_generation
             self.assertEqual(evaluations_per_generation(run)[1].tolist(), [20, 15])
@@ -339,6 +359,14 @@ class RealGrid(unittest.TestCase):
                 rows = list(csv.DictReader(f))
             self.assertEqual(len(rows), 4)
             self.assertEqual({int(r["generations"]) for r in rows}, {2})
+            # An archive changed after the run (a fitness rewritten) is skipped, with the reason.
+            with h5py.File(runs / "gait-open-01.h5", "r+") as f:
+                f["generations/000001/fitness"][0] = 123.456
+            result = run_figures(runs, tmp / "figs-tampered")
+            self.assertEqual(result.returncode, 0, result.stderr)
+            self.assertIn("gait-open-01.h5", result.stderr)
+            self.assertIn("integrity FAILED", result.stderr)
+            self.assertIn("gait-open x1", result.stdout)
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
 
