@@ -38,7 +38,7 @@ class Rng {
 std::uint64_t splitmix64(std::uint64_t& state);
 
 // Seed of one evaluation / one stream, independent of rank count and arrival order
-// (ARCHITECTURE.md section 3): mixes the four ids through SplitMix64 in a fixed order.
+// (docs/architecture.md §3): mixes the four ids through SplitMix64 in a fixed order.
 // direction = -1 for "no direction".
 std::uint64_t derive_seed(std::uint64_t run_seed, std::int64_t generation, std::int64_t genome_id,
                           std::int64_t direction);

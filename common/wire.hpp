@@ -1,5 +1,5 @@
 // Wire format: messages are bytes with a fixed header, then fields written one by one in
-// little-endian order (ARCHITECTURE.md section 4). Never memcpy a struct: every field is
+// little-endian order (docs/architecture.md §4). Never memcpy a struct: every field is
 // spelled out, so the bytes are the same on every platform and compiler.
 //
 // Header (16 bytes): magic u32 = 0x4F564553 ("SEVO" read as little-endian bytes 'S','E','V','O'),

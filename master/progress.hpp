@@ -1,4 +1,4 @@
-// Progress reporter: observes the generation loop (ARCHITECTURE.md section 3: reporters, not
+// Progress reporter: observes the generation loop (docs/architecture.md §3: reporters, not
 // print statements inside the loop). One line per evaluated generation on `out` (elapsed time,
 // fitness with its unit, the count of each status), a warning on `warn` when a whole generation
 // is killed or none of its robots moved, and a live line within the generation (carriage

@@ -4,7 +4,7 @@
 // are handed out to whoever asks next, the ones predicted to take longest first (so the slowest
 // robots do not start last and leave the other workers idle at the generation's end); results
 // are stored by (genome id, unit), never by arrival or hand-out order, so the combined outcome
-// is the same for any order, any number of workers and any timing (ARCHITECTURE.md section 4).
+// is the same for any order, any number of workers and any timing (docs/architecture.md §4).
 #pragma once
 
 #include <cstdint>

@@ -1,7 +1,7 @@
 // Immutable description of one simulated robot body: voxels, links, materials, constants.
 //
 // Built once from a BodyPlan + PhysicsConfig by build_model() and never changed afterwards (the
-// MuJoCo split of ARCHITECTURE.md §2): flat arrays indexed by voxel id or link id, cross
+// MuJoCo split of docs/architecture.md §2): flat arrays indexed by voxel id or link id, cross
 // references as integer ids / CSR offsets, no pointers. Everything that changes during a
 // simulation lives in State (physics/state.hpp), per-step buffers in Scratch (physics/step.hpp).
 //

@@ -19,7 +19,7 @@
 // half angle a voxel turns in one step and the half angle of a link's bend, both below pi.
 //
 // Coefficients: Chebyshev fits (mpmath.chebyfit) rounded to double, see
-// tools/derive_math_coefficients.py:
+// tools/dev/derive_math_coefficients.py:
 //   asin(y) = y + y z P(z),              z = y^2 in [0, 1/4], 13 coefficients
 //   sin(r)  = r + r z S(z),              z = r^2 in [0, (pi/4)^2], 7 coefficients
 //   cos(r)  = 1 - z/2 + z^2 C(z),        z = r^2 in [0, (pi/4)^2], 7 coefficients

@@ -26,7 +26,7 @@ namespace softevo::physics {
 
 enum class TerrainKind : std::uint8_t {
   flat = 0,   // the plane z = 0 (bit-identical to the floor before terrain existed)
-  rows = 1,   // the reference's 10 rows of fixed voxels (pneuvox-model.md, main loop step 3)
+  rows = 1,   // the thesis system's 10 rows of fixed voxels (docs/model.md §2.8a)
   bumps = 2,  // height field: smooth random bumps
   steps = 3,  // height field: a staircase rising along +x
   slope = 4,  // height field: an inclined plane in front of the robot
@@ -46,7 +46,7 @@ struct TerrainParams {
   double slope_direction = 0.0;     // slope: uphill direction, from +x towards +y [deg]
 };
 
-// The reference's rows (pneuvox-model.md, main loop setup step 3), in lattice cells.
+// The thesis system's rows of fixed voxels (docs/model.md §2.8a), in lattice cells.
 inline constexpr int kRowCount = 10;
 inline constexpr int kRowFirstOffsetCells = 10;  // first row at x = lattice x extent + 10
 inline constexpr int kRowGapMinCells = 5;        // next row 5 .. 20 cells further

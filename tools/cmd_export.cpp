@@ -1,6 +1,6 @@
 // `softevo export RUN.h5 [--generation G] [--best | --id ID] -o robot.json [--json]`: one
 // archived individual as a `softevo.robot/1` file. The body is re-developed from the archived
-// genome with the archived config (record inputs, not outputs: ARCHITECTURE.md section 1). The
+// genome with the archived config (record inputs, not outputs: docs/architecture.md §1). The
 // default (and --best) is the highest fitness of the generation, the lowest id winning ties
 // (§8.1 step 5: first wins), as for render and replay. The file's `evaluation` block carries the
 // run's config, its hashes and the archived fitness and status, so that `softevo eval` gives the

@@ -1,4 +1,4 @@
-// Architecture rules (ARCHITECTURE.md section 1) that the compiler cannot see: physics/ and evo/
+// Architecture rules (docs/architecture.md §1) that the compiler cannot see: physics/ and evo/
 // never include MPI or HDF5, evo/ never includes physics/, physics/ never includes evo/; only
 // mpi/ includes or calls MPI; master/ and worker/ never include each other.
 // The CMake target links enforce the same rules at link time.

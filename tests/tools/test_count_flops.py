@@ -1,4 +1,4 @@
-"""Tests of tools/count_flops.py, the instrumented FLOP count of the physics step
+"""Tests of tools/dev/count_flops.py, the instrumented FLOP count of the physics step
 (docs/scaling.md): the classification of instructions by lanes, and the reading of a callgrind
 dump (self cost only; other objects apart). The objdump side is replaced by a fixed table.
 

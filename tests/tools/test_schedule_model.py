@@ -1,4 +1,4 @@
-"""Tests of tools/schedule_model.py, the discrete-event model of softevo-mpi's schedule
+"""Tests of tools/dev/schedule_model.py, the discrete-event model of softevo-mpi's schedule
 (docs/scaling.md): schedules small enough to work out by hand, and the reading of an archive's
 unit times (a synthetic softevo.run/1 archive written with h5py, docs/archive.md).
 

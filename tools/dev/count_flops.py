@@ -13,8 +13,8 @@ and logic are not counted. The step passes are built with -mno-fma and -ffp-cont
       --collect-atstart=no '--toggle-collect=softevo::physics::step(*' \\
       '--dump-before=softevo::physics::build_model*' --callgrind-out-file=cg.out \\
       build/bin/softevo bench physics --scene block10x10x10 --steps 200 --runs 1 --simd avx2
-  tools/count_flops.py cg.out.2 build/bin/softevo --voxel-steps 200000     # pneuvox
-  tools/count_flops.py cg.out build/bin/softevo --voxel-steps 200000       # symplectic
+  tools/dev/count_flops.py cg.out.2 build/bin/softevo --voxel-steps 200000     # pneuvox
+  tools/dev/count_flops.py cg.out build/bin/softevo --voxel-steps 200000       # symplectic
 
 (--dump-before splits the profile at each model the bench builds: part 2 holds the pneuvox
 steps, the final file the symplectic ones.) Instructions of other objects (libm, libc) are

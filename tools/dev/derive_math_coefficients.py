@@ -7,7 +7,7 @@ error of the rounded polynomials, evaluated in double exactly as the header does
 scheme since physics revision 3, no FMA), against mpmath, and prints the constants of the pi/2
 reductions.
 
-    python3 tools/derive_math_coefficients.py        (needs python3-mpmath)
+    python3 tools/dev/derive_math_coefficients.py        (needs python3-mpmath)
 """
 import random
 

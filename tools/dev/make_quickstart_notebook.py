@@ -110,7 +110,7 @@ def main() -> None:
     nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
     for kind, text in CELLS:
         nb.cells.append(new_markdown_cell(text) if kind == "md" else new_code_cell(text))
-    path = pathlib.Path(__file__).resolve().parents[1] / "examples" / "quickstart.ipynb"
+    path = pathlib.Path(__file__).resolve().parents[2] / "examples" / "quickstart.ipynb"
     nbformat.write(nb, path)
     print("wrote", path)
 
