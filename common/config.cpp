@@ -961,6 +961,45 @@ std::string experiment_text(const std::string& canonical_config_text) {
   return out;
 }
 
+namespace {
+
+// "section.key" -> value of each "key = value" line of a canonical text, in text order.
+std::vector<std::pair<std::string, std::string>> canonical_entries(const std::string& text) {
+  std::vector<std::pair<std::string, std::string>> entries;
+  std::string section;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    if (line.starts_with("[")) {
+      section = line.substr(1, line.find(']') - 1);
+      continue;
+    }
+    const std::size_t eq = line.find(" = ");
+    if (eq == std::string::npos) continue;
+    entries.emplace_back(section + "." + line.substr(0, eq), line.substr(eq + 3));
+  }
+  return entries;
+}
+
+}  // namespace
+
+std::vector<KeyDifference> config_differences(const std::string& first, const std::string& second) {
+  const auto a = canonical_entries(first);
+  const auto b = canonical_entries(second);
+  const auto find = [](const auto& entries, const std::string& key) -> const std::string* {
+    for (const auto& [k, v] : entries)
+      if (k == key) return &v;
+    return nullptr;
+  };
+  std::vector<KeyDifference> out;
+  for (const auto& [key, value] : a) {
+    const std::string* other = find(b, key);
+    if (other == nullptr || *other != value) out.push_back({key, value, other ? *other : ""});
+  }
+  for (const auto& [key, value] : b)
+    if (find(a, key) == nullptr) out.push_back({key, "", value});
+  return out;
+}
+
 std::uint64_t experiment_hash_of_text(const std::string& canonical_config_text) {
   return text_hash(experiment_text(canonical_config_text));
 }

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "common/config.hpp"
 
@@ -23,5 +24,16 @@ std::uint64_t text_hash(const std::string& text);
 std::string experiment_text(const std::string& canonical_config_text);
 std::uint64_t experiment_hash_of_text(const std::string& canonical_config_text);
 std::uint64_t experiment_hash(const Config& config);
+
+// One key whose value differs between two canonical texts: "neat.pop_size", the value in each
+// ("" where the text has no such key: one written by a build that knew fewer keys).
+struct KeyDifference {
+  std::string key;
+  std::string first;
+  std::string second;
+};
+// Every differing key of two canonical texts, in the order of `first` (then keys only in
+// `second`), so a refused --resume can name all of them rather than two hashes.
+std::vector<KeyDifference> config_differences(const std::string& first, const std::string& second);
 
 }  // namespace softevo

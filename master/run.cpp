@@ -195,20 +195,24 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
         throw StartupError(out + ": cannot resume: the archive fails its integrity checks:\n" +
                            check.describe(out) + repair_hint(out, check));
       const RunInfo old = archive.info();
-      // The experiment (everything but run length and seed) must be the archive's; the run
-      // length may grow: the generations evolve the same whatever the target.
+      // Everything but the run length must be the archive's (the experiment and the seed): the
+      // generations evolve the same whatever the target, so only run.generations may grow.
       const std::string old_text = archive.config_text();
-      if (experiment_text(old_text) != experiment_text(run.config_text))
-        throw StartupError(out + ": cannot resume: the archive was written with experiment hash " +
-                           hash_hex(experiment_hash_of_text(old_text)) + ", this run has " +
-                           info.experiment_hash +
-                           " (use the same config file and --set overrides; only --generations "
-                           "may differ)");
-      if (old.seed != config.run.seed)
-        throw StartupError(out + ": cannot resume: the archive was written with --seed " +
-                           std::to_string(old.seed) + ", this run has --seed " +
-                           std::to_string(config.run.seed) +
-                           " (another seed is another run: give it its own --out)");
+      std::string differing;
+      int count = 0;
+      for (const KeyDifference& d : config_differences(old_text, run.config_text)) {
+        if (d.key == "run.generations") continue;
+        differing += std::string(count++ == 0 ? "" : "; ") + d.key + ": archive " +
+                     (d.first.empty() ? "(no such key)" : d.first) + ", this run " +
+                     (d.second.empty() ? "(no such key)" : d.second);
+      }
+      if (count > 0)
+        throw StartupError(
+            out + ": cannot resume: this run's config differs from the archive's in " +
+            std::to_string(count) + (count == 1 ? " key" : " keys") + " (" + differing +
+            "); only run.generations (--generations) may change on resume: leave out --config "
+            "and the overrides to continue with the archive's config, or give the run "
+            "another --out");
       run.run_length_changed = old_text != run.config_text;
       if (old.physics_revision != physics::kPhysicsRevision)
         throw StartupError(

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 
 #include "common/config.hpp"
 #include "common/launcher_watch.hpp"
+#include "io/archive.hpp"
 #include "master/signals.hpp"
 
 #ifndef SOFTEVO_DEFAULT_SOURCE_DIR
@@ -31,14 +33,35 @@ std::string default_out_path(const std::string& config_path, std::int64_t seed) 
   return "runs/" + fs::path(config_path).stem().string() + "-" + seed_text + ".h5";
 }
 
-// The config of one run: `path` with the overrides and shorthands (and `seed` if >= 0).
-Config run_config(const RunCommandOptions& o, const std::string& path, std::int64_t seed) {
+// The overrides and shorthands of one run (and `seed` if >= 0).
+std::vector<std::string> run_overrides(const RunCommandOptions& o, std::int64_t seed) {
   std::vector<std::string> overrides = o.overrides;
   if (o.seed >= 0) overrides.push_back("run.seed=" + std::to_string(o.seed));
   if (seed >= 0) overrides.push_back("run.seed=" + std::to_string(seed));
   if (o.generations >= 0) overrides.push_back("run.generations=" + std::to_string(o.generations));
   if (o.population >= 0) overrides.push_back("neat.pop_size=" + std::to_string(o.population));
-  return load_config(path, overrides);
+  return overrides;
+}
+
+// The config of one run: `path` with the overrides and shorthands (and `seed` if >= 0).
+Config run_config(const RunCommandOptions& o, const std::string& path, std::int64_t seed) {
+  return load_config(path, run_overrides(o, seed));
+}
+
+// --resume of an existing archive without --config: the config the archive was written with
+// (its /config), with only the overrides given now, so a resume needs no repeated --set.
+std::optional<Config> archived_config(const RunCommandOptions& o) {
+  std::error_code ec;
+  if (!o.resume || !o.config_paths.empty() || !o.seeds.empty() || o.out_path.empty() ||
+      !fs::exists(o.out_path, ec))
+    return std::nullopt;
+  std::string text;
+  try {
+    text = io::Archive(o.out_path).config_text();
+  } catch (const std::exception& e) {
+    throw master::StartupError(o.out_path + ": cannot resume: cannot read its config: " + e.what());
+  }
+  return parse_config(text, o.out_path + " (its /config)", run_overrides(o, -1));
 }
 
 master::RunOptions run_options(const RunCommandOptions& o, std::string out_path) {
@@ -128,6 +151,12 @@ std::vector<std::int64_t> parse_seeds(const std::string& spec) {
 }
 
 std::vector<master::PreparedRun> prepare_runs(RunCommandOptions& o, int ranks) {
+  if (const std::optional<Config> config = archived_config(o)) {
+    o.from_archive = true;
+    std::vector<master::PreparedRun> runs;
+    runs.push_back(master::prepare_run(*config, run_options(o, o.out_path), ranks));
+    return runs;
+  }
   if (o.config_paths.empty()) o.config_paths.push_back(kDefaultRunConfig);
   for (std::string& path : o.config_paths) path = resolve_config_path(path);
   std::vector<master::PreparedRun> runs;
@@ -170,6 +199,7 @@ std::vector<master::PreparedRun> prepare_runs(RunCommandOptions& o, int ranks) {
 }
 
 std::string config_paths_text(const RunCommandOptions& o) {
+  if (o.from_archive) return o.out_path + " (the archive's config)";
   std::string text;
   for (const std::string& p : o.config_paths) text += (text.empty() ? "" : ", ") + p;
   return text;

@@ -33,8 +33,9 @@ struct RunCommandOptions {
   bool verbose = false;
   bool no_reuse = false;
   bool fixed_order = false;
-  std::string seeds;    // "1-10", "1,3,5-7": several runs in one job (one per config x seed)
-  std::string out_dir;  // their archives: <out-dir>/<config name>-<seed, 2 digits>.h5
+  std::string seeds;          // "1-10", "1,3,5-7": several runs in one job (one per config x seed)
+  std::string out_dir;        // their archives: <out-dir>/<config name>-<seed, 2 digits>.h5
+  bool from_archive = false;  // set by prepare_runs: --resume without --config took /config
 };
 
 // Adds the run options to `app` (softevo-mpi's app, or the `evolve` subcommand).
@@ -44,8 +45,9 @@ void add_run_options(CLI::App& app, RunCommandOptions& o);
 std::vector<std::int64_t> parse_seeds(const std::string& spec);
 
 // The start-up of the runs: one, or one per config x seed with --seeds. Resolves the config
-// paths in `o`. Throws ConfigError, master::StartupError; a failure releases the runs prepared
-// before it (their locks).
+// paths in `o`; --resume of an existing --out without --config takes the archive's config
+// (with the overrides given now) and sets o.from_archive. Throws ConfigError, master::StartupError;
+// a failure releases the runs prepared before it (their locks).
 std::vector<master::PreparedRun> prepare_runs(RunCommandOptions& o, int ranks);
 
 // "configs/a.toml" or "configs/a.toml, configs/b.toml": the header's config.

@@ -349,6 +349,51 @@ TEST(SoftevoMpi, ExtendingAFinishedRunEqualsOneLongerRun) {
   EXPECT_EQ(digests(extended).content, a.content);
 }
 
+// --resume of an existing archive needs no --config and no repeated overrides: the archive's
+// /config is continued (issue 30), with only the overrides given now. One that changes more than
+// the run length is refused, and the message names every differing key with both values.
+TEST(SoftevoMpi, ResumeTakesTheConfigFromTheArchive) {
+  TempDir dir;
+  const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
+  const int np = world_size();
+  const std::string longer = dir.file("longer.h5");
+  const std::string resumed = dir.file("resumed.h5");
+  const std::vector<std::string> experiment = {"--config", cfg,     "--population",
+                                               "5",        "--set", "task.eval_seconds=0.08"};
+  std::vector<std::string> args = experiment;
+  args.insert(args.end(), {"--out", longer, "--generations", "2"});
+  ASSERT_EQ(run_on(np, args), 0);
+  args = experiment;
+  args.insert(args.end(), {"--out", resumed, "--generations", "1"});
+  ASSERT_EQ(run_on(np, args), 0);
+  // Neither the config file nor the overrides are repeated.
+  ASSERT_EQ(run_on(np, {"--out", resumed, "--resume", "--generations", "2"}), 0);
+  const Digests a = digests(longer);
+  const Digests b = digests(resumed);
+  EXPECT_EQ(b.generations_done, 2);
+  EXPECT_EQ(b.state, "complete");
+  EXPECT_EQ(b.fitness, a.fitness);
+  EXPECT_EQ(b.content, a.content);
+  // A complete archive resumed with nothing but --resume is left as it is.
+  EXPECT_EQ(run_on(np, {"--out", resumed, "--resume"}), 0);
+  EXPECT_EQ(digests(resumed).content, a.content);
+  // Conflicting overrides: refused, every differing key named with both values.
+  if (world_rank() == 0) testing::internal::CaptureStderr();
+  EXPECT_EQ(run_on(np, {"--out", resumed, "--resume", "--generations", "3", "--population", "6",
+                        "--seed", "9", "--set", "task.eval_seconds=0.1"}),
+            2);
+  if (world_rank() == 0) {
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_NE(err.find("differs from the archive's in 3 keys"), std::string::npos) << err;
+    EXPECT_NE(err.find("run.seed: archive 7, this run 9"), std::string::npos) << err;
+    EXPECT_NE(err.find("task.eval_seconds: archive 0.08, this run 0.1"), std::string::npos) << err;
+    EXPECT_NE(err.find("neat.pop_size: archive 5, this run 6"), std::string::npos) << err;
+    EXPECT_EQ(err.find("run.generations"), err.find("run.generations (--generations) may"))
+        << "the run length is not a conflict: " << err;
+  }
+  EXPECT_EQ(digests(resumed).content, a.content);
+}
+
 // The reuse marks of every generation (not part of the digests).
 std::vector<std::vector<std::int64_t>> reused_columns(const std::string& path) {
   const Archive a(path);
@@ -637,9 +682,10 @@ TEST(SoftevoMpi, StartupErrorsFailFastAndTouchNothing) {
       {{"--config", unknown_key, "--out", out}, "bogus_key"},
       {{"--config", broken, "--out", out}, "broken.toml"},
       {{"--config", cfg, "--out", out}, "exists"},
-      {{"--config", cfg, "--out", out, "--resume", "--seed", "8"}, "--seed 8"},
+      {{"--config", cfg, "--out", out, "--resume", "--seed", "8"},
+       "run.seed: archive 7, this run 8"},
       {{"--config", cfg, "--out", out, "--resume", "--set", "task.eval_seconds=0.2"},
-       "experiment hash"},
+       "task.eval_seconds: archive 0.1, this run 0.2"},
       // A missing folder of --out is created; one under a file cannot be.
       {{"--config", cfg, "--out", out + "/no/dir/run.h5"}, "does not exist"},
       {{"--config", cfg, "--out", dir.path}, "directory"},
