@@ -622,12 +622,52 @@ void update_run_config(const std::string& path, const RunInfo& info, const std::
   update_root(path, info, config_text, hook);
 }
 
+namespace {
+
+// The bytes a pack of `source` (at `path`) may write: the root and every file it links. The
+// packed file holds the same groups, so it is no larger than that, give or take HDF5's headers.
+std::uint64_t bytes_to_pack(const std::string& path, const Archive& source) {
+  std::error_code ec;
+  std::uint64_t total = fs::file_size(path, ec);
+  std::vector<std::string> counted;
+  for (const GenerationStorage& s : source.generation_storage()) {
+    if (s.file.empty() || std::find(counted.begin(), counted.end(), s.file) != counted.end())
+      continue;
+    counted.push_back(s.file);
+    const std::uintmax_t size = fs::file_size(fs::path(directory_of(path)) / s.file, ec);
+    if (!ec) total += size;
+  }
+  return total;
+}
+
+// Refuses to pack when the file system of `path` cannot take the packed copy. libhdf5 1.10
+// crashed (SIGSEGV in H5Ocopy) when the disk filled during the copy (issue 29); a write that is
+// never started cannot fail there, and the archive stays readable as a root with segments.
+void require_room_to_pack(const std::string& path, const Archive& source) {
+  // HDF5's own overhead (headers, free-space tracking, the checkpoint) on top of the groups.
+  constexpr std::uint64_t kMarginBytes = std::uint64_t{64} << 10;
+  const std::uint64_t needed = bytes_to_pack(path, source);
+  const std::uint64_t wanted = needed + needed / 8 + kMarginBytes;
+  const std::string dir = directory_of(path);
+  struct statvfs vfs {};
+  if (::statvfs(dir.c_str(), &vfs) != 0) return;  // unknown: the pack's own errors will say
+  const std::uint64_t free_bytes =
+      static_cast<std::uint64_t>(vfs.f_bavail) * static_cast<std::uint64_t>(vfs.f_frsize);
+  if (free_bytes < wanted)
+    throw ArchiveError(path + ": not packed into one file: " + std::strerror(ENOSPC) + ": " + dir +
+                       " has " + std::to_string(free_bytes) + " bytes free, the pack needs about " +
+                       std::to_string(wanted));
+}
+
+}  // namespace
+
 void finish_archive(const std::string& path, const RunInfo& info, const WriteStepHook& hook) {
   const WriteSteps steps(hook);
   archive_update(path, [&] {
     const PartSteps step(steps, "pack");
     {
       const Archive source(path);
+      require_room_to_pack(path, source);
       RootContent c;
       c.info = source.info();
       require_generations_done(path, c, info);

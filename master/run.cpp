@@ -612,20 +612,25 @@ RunOutcome RunLoop::close(RunOutcome outcome) {
 }
 
 void RunLoop::mark_interrupted() noexcept {
-  // Leave the archive marked as not running, in one file if possible (best effort: it already
-  // holds the last consistent checkpoint whatever happens here).
+  // Leave the archive marked as not running (best effort: it already holds the last consistent
+  // checkpoint whatever happens here). This is the path of a failed write, usually a full disk,
+  // so it writes as little as it can: the small root with the new state, never the pack (a
+  // second copy of every generation; libhdf5 crashed in H5Ocopy when the disk filled during it,
+  // issue 29). --resume packs the archive when it ends (docs/archive.md, "Failures").
   if (!archive_written_ || state_recorded_) return;
   state_recorded_ = true;
   RunInfo& info = run_.info;
   info.state = "interrupted";
   try {
     info.end_time = iso8601_now();
-    finish_archive(run_.options.out_path, info, run_.options.archive_fault);
+    // The segment and temporaries of the update that failed are unreferenced: freeing their
+    // space first often leaves room for the root on a full disk. We hold the run lock.
+    remove_archive_debris(run_.options.out_path);
   } catch (...) {
-    try {
-      update_run_info(run_.options.out_path, info, run_.options.archive_fault);
-    } catch (...) {
-    }
+  }
+  try {
+    update_run_info(run_.options.out_path, info, run_.options.archive_fault);
+  } catch (...) {
   }
 }
 

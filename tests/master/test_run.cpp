@@ -165,10 +165,12 @@ TEST(RunArchive, FailureAtEveryWriteOfAGenerationLeavesAResumableArchive) {
         const io::RunInfo info = a.info();
         EXPECT_EQ(info.generations_done, kept);
         EXPECT_EQ(static_cast<std::int64_t>(a.generations().size()), kept);
-        // With space again at once, the stop packs the archive into one file; on a disk that
-        // stays full it stays a root with its segments, state "running".
+        // The stop after a failed write records the state in a new small root when there is
+        // room again (on a disk that stays full, state "running"), and never packs: the pack
+        // is a second copy of every generation, and libhdf5 crashed (SIGSEGV in H5Ocopy) when
+        // the disk filled during it (issue 29).
         EXPECT_EQ(info.state, stays_full ? "running" : "interrupted");
-        EXPECT_EQ(a.self_contained(), !stays_full);
+        EXPECT_FALSE(a.self_contained());
         ASSERT_TRUE(a.checkpoint().has_value());
         EXPECT_EQ(a.checkpoint()->generation, kept);
       }
@@ -260,10 +262,11 @@ TEST(RunArchive, KillAtEveryWriteStepLeavesAResumableArchive) {
   const std::string expected_fitness = fitness_digest_of(ref);
   const std::string expected_content = hash_hex(io::content_digest(Archive(ref)));
 
-  // A self-contained archive of generations 0-1 (a failed write of generation 2, then the
-  // stop's pack).
+  // A self-contained archive of generations 0-1 (a failed write of generation 2, then a pack
+  // as a stop by signal makes).
   const std::string packed = dir.file("packed.h5");
   EXPECT_THROW(run_once(config, packed, false, FullDisk(2, 0, false)), RunError);
+  io::finish_archive(packed, Archive(packed).info());
   ASSERT_TRUE(Archive(packed).self_contained());
   ASSERT_EQ(Archive(packed).info().generations_done, 2);
 
