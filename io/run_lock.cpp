@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -60,8 +61,14 @@ std::string lock_path_for(const std::string& archive_path) {
 
 RunLock::RunLock(const std::string& archive_path, const std::string& host)
     : path_(lock_path_for(archive_path)) {
-  // O_NOFOLLOW: a planted symlink must not make us create or truncate another file.
-  fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
+  // O_NOFOLLOW: a planted symlink must not make us create or truncate another file. Created
+  // exclusively when absent, so abandon() knows whether the file is this start's to remove.
+  for (int attempt = 0; attempt < 3 && fd_ < 0; ++attempt) {
+    fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0644);
+    created_ = fd_ >= 0;
+    if (fd_ < 0 && errno == EEXIST) fd_ = ::open(path_.c_str(), O_RDWR | O_CLOEXEC | O_NOFOLLOW);
+    if (fd_ < 0 && errno != ENOENT) break;  // ENOENT: removed between the two opens
+  }
   if (fd_ < 0)
     throw RunLockError(path_ + ": cannot open the run lock of " + archive_path + ": " +
                        std::strerror(errno));
@@ -85,6 +92,14 @@ RunLock::RunLock(const std::string& archive_path, const std::string& host)
     throw RunLockError(path_ + ": cannot lock the run lock of " + archive_path + ": " +
                        std::strerror(err));
   }
+  // A start that failed (abandon()) may have removed the file while we waited for its lock: a
+  // lock on a removed file excludes no one, so take the lock of the file now at the path.
+  struct stat st {};
+  if (::fstat(fd_, &st) == 0 && st.st_nlink == 0) {
+    ::close(std::exchange(fd_, -1));
+    *this = RunLock(archive_path, host);
+    return;
+  }
   const std::string me = "pid " + std::to_string(::getpid()) + " on " + host + "\n";
   // Best effort: the lock is what protects the archive, the text only names the holder.
   if (::ftruncate(fd_, 0) == 0) {
@@ -97,14 +112,23 @@ RunLock::~RunLock() {
   if (fd_ >= 0) ::close(fd_);  // releases the flock
 }
 
+void RunLock::abandon() noexcept {
+  if (fd_ < 0) return;
+  if (created_) ::unlink(path_.c_str());  // still locked: no one else takes it in between
+  ::close(std::exchange(fd_, -1));
+}
+
 RunLock::RunLock(RunLock&& other) noexcept
-    : path_(std::move(other.path_)), fd_(std::exchange(other.fd_, -1)) {}
+    : path_(std::move(other.path_)),
+      fd_(std::exchange(other.fd_, -1)),
+      created_(std::exchange(other.created_, false)) {}
 
 RunLock& RunLock::operator=(RunLock&& other) noexcept {
   if (this != &other) {
     if (fd_ >= 0) ::close(fd_);
     path_ = std::move(other.path_);
     fd_ = std::exchange(other.fd_, -1);
+    created_ = std::exchange(other.created_, false);
   }
   return *this;
 }

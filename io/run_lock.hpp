@@ -45,9 +45,15 @@ class RunLock {
 
   const std::string& path() const { return path_; }  // the lock file
 
+  // For a start that fails before its run wrote anything: removes the lock file if this lock
+  // created it (a file that was there before stays), then releases the lock. A process that
+  // opened the file meanwhile finds it locked and is refused, as it would have been.
+  void abandon() noexcept;
+
  private:
   std::string path_;
   int fd_ = -1;
+  bool created_ = false;  // the lock file did not exist before this lock
 };
 
 }  // namespace softevo::io

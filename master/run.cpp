@@ -1,5 +1,6 @@
 #include "master/run.hpp"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -141,6 +142,48 @@ std::optional<std::size_t> LocalExecutor::evaluate_any(
   return a.run;
 }
 
+namespace {
+
+// The descriptors this process has open now (its own, MPI's, libraries'); 0 if unknown.
+std::size_t open_descriptors() {
+  std::error_code ec;
+  std::size_t n = 0;
+  for (auto it = std::filesystem::directory_iterator("/proc/self/fd", ec);
+       !ec && it != std::filesystem::directory_iterator(); it.increment(ec))
+    ++n;
+  return ec ? 0 : n;
+}
+
+}  // namespace
+
+std::size_t descriptors_for_runs(std::size_t runs) {
+  return open_descriptors() + runs + kDescriptorsBesideRunLocks;
+}
+
+void reserve_descriptors(std::size_t runs) {
+  const std::size_t needed = descriptors_for_runs(runs);
+  struct rlimit limit {};
+  if (::getrlimit(RLIMIT_NOFILE, &limit) != 0) return;  // unknown: the opens will say
+  const auto fits = [needed](rlim_t l) { return l == RLIM_INFINITY || l >= needed; };
+  if (fits(limit.rlim_cur)) return;
+  if (fits(limit.rlim_max)) {
+    // The soft limit is this process's to raise up to the hard one: no need to ask the user.
+    limit.rlim_cur = static_cast<rlim_t>(needed);
+    if (::setrlimit(RLIMIT_NOFILE, &limit) == 0) return;
+  }
+  throw StartupError(
+      std::to_string(runs) + " runs in one job need about " + std::to_string(needed) +
+      " open file descriptors (one run lock each for the whole job, plus " +
+      std::to_string(needed - runs) +
+      " for this process, the archives being written and MPI), "
+      "but the limit is " +
+      std::to_string(limit.rlim_cur) + " (hard limit " +
+      (limit.rlim_max == RLIM_INFINITY ? std::string("unlimited")
+                                       : std::to_string(limit.rlim_max)) +
+      "): raise it (ulimit -n " + std::to_string(needed) +
+      " in the job script) or split the seeds over several jobs; nothing was written");
+}
+
 PreparedRun prepare_run(const Config& config, const RunOptions& options, int ranks) {
   if (options.resume && options.overwrite)
     throw StartupError(options.out_path +
@@ -185,6 +228,15 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
   } catch (const io::RunLockError& e) {
     throw StartupError(e.what());
   }
+  // A start that fails from here on leaves no lock file it created (issue 29: a failed --seeds
+  // job left one per run it had prepared). Returns disarm it: only a throw abandons the lock.
+  struct AbandonOnThrow {
+    std::optional<io::RunLock>& lock;
+    const int exceptions = std::uncaught_exceptions();
+    ~AbandonOnThrow() {
+      if (std::uncaught_exceptions() > exceptions && lock) lock->abandon();
+    }
+  } abandon_on_throw{run.lock};
   // Only now, under the lock, is "does the archive exist" an answer that stays true.
   const bool exists = fs::exists(out, ec);
   if (exists && options.resume) {

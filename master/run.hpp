@@ -119,11 +119,21 @@ struct PreparedRun {
   ResultMemory memory;
 };
 
+// Descriptors a job needs beside one run lock per run: this process's configs, the archive
+// files open while one is written, HDF5's probe pipes, stdio (MPI's are counted as open).
+inline constexpr std::size_t kDescriptorsBesideRunLocks = 64;
+// The open file descriptors a job of `runs` runs needs (each holds its run lock throughout).
+std::size_t descriptors_for_runs(std::size_t runs);
+// Makes RLIMIT_NOFILE hold a job of `runs` runs, raising the soft limit up to the hard one if
+// that suffices; throws StartupError naming the limit and the number needed otherwise. Call
+// before any run is prepared: a job that cannot hold its locks must not take any.
+void reserve_descriptors(std::size_t runs);
+
 // Start-up: validates the output path, takes the run lock (a second run on the same archive
 // fails here, naming the holder), loads the checkpoint for --resume (the experiment hash and
 // the seed must match the archive's: a finished run can be extended with more generations),
 // creates the population. Throws StartupError (nothing touched) or
-// ConfigError. Writes nothing but the lock file.
+// ConfigError. Writes nothing but the lock file, which a failure removes again if it created it.
 PreparedRun prepare_run(const Config& config, const RunOptions& options, int ranks);
 // The loop. Creates or updates the archive; throws RunError (the archive then holds the last
 // consistent checkpoint; its state is set to "interrupted" when possible).

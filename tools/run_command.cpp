@@ -178,22 +178,35 @@ std::vector<master::PreparedRun> prepare_runs(RunCommandOptions& o, int ranks) {
         "<out-dir>/<config name>-<seed>.h5)");
   if (o.seed >= 0) throw ConfigError("--seed and --seeds contradict each other; give one of them");
   const std::vector<std::int64_t> seeds = parse_seeds(o.seeds);
+  // Every run holds its lock's descriptor for the whole job: check before the first is taken
+  // (issue 29: 1,100 seeds under ulimit -n 1024 failed midway, misleadingly, leaving locks).
+  master::reserve_descriptors(seeds.size() * o.config_paths.size());
   const std::string dir = o.out_dir.empty() ? "runs" : o.out_dir;
   std::error_code ec;
+  const bool dir_existed = fs::exists(dir, ec);
   fs::create_directories(dir, ec);
-  std::vector<std::string> outs;
-  for (const std::string& path : o.config_paths) {
-    for (const std::int64_t seed : seeds) {
-      char name[64];
-      std::snprintf(name, sizeof name, "-%02lld.h5", static_cast<long long>(seed));
-      const std::string out = (fs::path(dir) / (fs::path(path).stem().string() + name)).string();
-      if (std::find(outs.begin(), outs.end(), out) != outs.end())
-        throw ConfigError(out +
-                          ": two runs of this job would write it (two --config files of "
-                          "the same name)");
-      outs.push_back(out);
-      runs.push_back(master::prepare_run(run_config(o, path, seed), run_options(o, out), ranks));
+  try {
+    std::vector<std::string> outs;
+    for (const std::string& path : o.config_paths) {
+      for (const std::int64_t seed : seeds) {
+        char name[64];
+        std::snprintf(name, sizeof name, "-%02lld.h5", static_cast<long long>(seed));
+        const std::string out = (fs::path(dir) / (fs::path(path).stem().string() + name)).string();
+        if (std::find(outs.begin(), outs.end(), out) != outs.end())
+          throw ConfigError(out +
+                            ": two runs of this job would write it (two --config files of "
+                            "the same name)");
+        outs.push_back(out);
+        runs.push_back(master::prepare_run(run_config(o, path, seed), run_options(o, out), ranks));
+      }
     }
+  } catch (...) {
+    // A job that does not start leaves nothing behind: the lock files its runs created, and
+    // the folder it created (fs::remove removes only an empty one).
+    for (master::PreparedRun& run : runs)
+      if (run.lock) run.lock->abandon();
+    if (!dir_existed) fs::remove(dir, ec);
+    throw;
   }
   return runs;
 }

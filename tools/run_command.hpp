@@ -47,7 +47,9 @@ std::vector<std::int64_t> parse_seeds(const std::string& spec);
 // The start-up of the runs: one, or one per config x seed with --seeds. Resolves the config
 // paths in `o`; --resume of an existing --out without --config takes the archive's config
 // (with the overrides given now) and sets o.from_archive. Throws ConfigError, master::StartupError;
-// a failure releases the runs prepared before it (their locks).
+// a failure releases the runs prepared before it and removes the lock files (and the --out-dir)
+// it created. With --seeds the descriptors for every run's lock are checked (and the soft limit
+// raised) before the first lock is taken.
 std::vector<master::PreparedRun> prepare_runs(RunCommandOptions& o, int ranks);
 
 // "configs/a.toml" or "configs/a.toml, configs/b.toml": the header's config.

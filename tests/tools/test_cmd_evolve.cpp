@@ -198,5 +198,41 @@ TEST_F(CmdEvolve, StartupErrorsExitTwoAndTouchNothing) {
   EXPECT_NE(help.output.find("evolve"), std::string::npos) << help.output;
 }
 
+// A --seeds job that cannot hold a lock descriptor per run is refused before it takes any,
+// naming the limit and the number needed; the soft limit is raised when the hard one suffices;
+// a job that fails while preparing its runs leaves no lock file and no folder it created
+// (issue 29: 1,100 seeds under ulimit -n 1024 said "cannot open config file" and left 1,004
+// lock files).
+TEST_F(CmdEvolve, PackedStartChecksDescriptorsAndLeavesNothingOnFailure) {
+  const std::string dir = file("many");
+  // `softevo evolve --seeds SEEDS` into `dir` under the shell's descriptor limits `limits`.
+  const auto evolve_limited = [&](const std::string& limits, const std::string& seeds) {
+    return test::run_command(limits + " && exec " + binary("softevo") +
+                             " evolve --progress never --workers 1 --generations 1" +
+                             join({"--config", config_, "--seeds", seeds, "--out-dir", dir}));
+  };
+  const test::CommandResult tight = evolve_limited("ulimit -Sn 60 && ulimit -Hn 60", "1-200");
+  EXPECT_EQ(tight.code, 2) << tight.output;
+  EXPECT_NE(tight.output.find("file descriptors"), std::string::npos) << tight.output;
+  EXPECT_NE(tight.output.find("the limit is 60"), std::string::npos) << tight.output;
+  EXPECT_FALSE(fs::exists(dir)) << tight.output;
+
+  // Soft limit 40, hard limit enough: the job raises its own soft limit and gets to the runs;
+  // the third archive exists (no --resume) and stops the start: no lock file is left.
+  fs::create_directories(dir);
+  const std::string stem = fs::path(config_).stem().string();
+  ASSERT_EQ(evolve({"--config", config_, "--out", (fs::path(dir) / (stem + "-03.h5")).string(),
+                    "--generations", "1"})
+                .code,
+            0);
+  fs::remove((fs::path(dir) / (stem + "-03.h5.lock")));
+  const test::CommandResult raised = evolve_limited("ulimit -Sn 40", "1-3");
+  EXPECT_EQ(raised.code, 2) << raised.output;
+  EXPECT_NE(raised.output.find("--resume"), std::string::npos) << raised.output;
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
+  EXPECT_EQ(left, std::vector<std::string>{stem + "-03.h5"});
+}
+
 }  // namespace
 }  // namespace softevo
