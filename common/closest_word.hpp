@@ -7,7 +7,8 @@
 
 namespace softevo {
 
-// Levenshtein distance: insertions, deletions and substitutions of one character each count 1.
+// Edit distance (optimal string alignment): insertions, deletions, substitutions of one
+// character and swaps of two adjacent ones each count 1.
 std::size_t edit_distance(const std::string& a, const std::string& b);
 // The candidate nearest to `word` within max(1, |word| / 3) edits (first of equals), "" if none
 // is that near: a typo, not another word.

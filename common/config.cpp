@@ -961,9 +961,6 @@ std::string experiment_text(const std::string& canonical_config_text) {
   return out;
 }
 
-namespace {
-
-// "section.key" -> value of each "key = value" line of a canonical text, in text order.
 std::vector<std::pair<std::string, std::string>> canonical_entries(const std::string& text) {
   std::vector<std::pair<std::string, std::string>> entries;
   std::string section;
@@ -979,8 +976,6 @@ std::vector<std::pair<std::string, std::string>> canonical_entries(const std::st
   }
   return entries;
 }
-
-}  // namespace
 
 std::vector<KeyDifference> config_differences(const std::string& first, const std::string& second) {
   const auto a = canonical_entries(first);

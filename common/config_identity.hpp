@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/config.hpp"
@@ -24,6 +25,9 @@ std::uint64_t text_hash(const std::string& text);
 std::string experiment_text(const std::string& canonical_config_text);
 std::uint64_t experiment_hash_of_text(const std::string& canonical_config_text);
 std::uint64_t experiment_hash(const Config& config);
+
+// ("section.key", TOML value text) of every "key = value" line of a canonical text, in order.
+std::vector<std::pair<std::string, std::string>> canonical_entries(const std::string& text);
 
 // One key whose value differs between two canonical texts: "neat.pop_size", the value in each
 // ("" where the text has no such key: one written by a build that knew fewer keys).

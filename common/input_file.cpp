@@ -7,6 +7,8 @@
 
 #include <cerrno>
 #include <cstring>
+#include <fstream>
+#include <string_view>
 
 namespace softevo {
 
@@ -75,6 +77,22 @@ std::string read_input_file(const std::string& path, std::uint64_t limit, const 
   bytes.resize(have);
   if (have > limit) throw InputFileError(too_large + " (it grew while being read)");
   return bytes;
+}
+
+FileMagic file_magic(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return FileMagic::unknown;
+  std::ifstream in(path, std::ios::binary);
+  char head[16] = {};
+  in.read(head, sizeof head);
+  const std::string_view bytes(head, static_cast<std::size_t>(in.gcount()));
+  if (bytes.starts_with("\x89HDF\r\n\x1a\n")) return FileMagic::hdf5;
+  if (bytes.starts_with("\x89PNG")) return FileMagic::png;
+  if (bytes.starts_with("PK\x03\x04")) return FileMagic::zip;
+  if (bytes.starts_with("\x1f\x8b")) return FileMagic::gzip;
+  const std::size_t first = bytes.find_first_not_of(" \t\r\n");
+  if (first != std::string_view::npos && bytes[first] == '{') return FileMagic::json;
+  return FileMagic::unknown;
 }
 
 }  // namespace softevo

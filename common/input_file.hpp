@@ -28,4 +28,9 @@ struct InputLimits {
 // larger than `limit`. Never blocks on a FIFO (it is opened without waiting for a writer).
 std::string read_input_file(const std::string& path, std::uint64_t limit, const std::string& what);
 
+// What a regular file is by its first bytes, so that a command given a file of the wrong kind
+// can say what it got and which command takes that ("a robot file", not "not an HDF5 file").
+enum class FileMagic { unknown, hdf5, json, png, zip, gzip };
+FileMagic file_magic(const std::string& path);  // unknown also for a missing or special file
+
 }  // namespace softevo

@@ -503,6 +503,22 @@ RobotFile parse_robot_json(const std::string& json_text, const std::string& sour
 }
 
 RobotFile read_robot_file(const std::string& path) {
+  // A file of another kind: say what it is and what takes it, not a JSON parse error at byte 1.
+  switch (file_magic(path)) {
+    case FileMagic::hdf5:
+      throw RobotFileError(path +
+                           ": not a robot file: it is an HDF5 file (a run archive or a "
+                           "trace); `softevo export RUN.h5 -o robot.json` writes a robot of a "
+                           "run archive, and `softevo render`, `view` and `replay` take the "
+                           "archive itself");
+    case FileMagic::png:
+      throw RobotFileError(path + ": not a robot file: it is a PNG image");
+    case FileMagic::zip:
+    case FileMagic::gzip:
+      throw RobotFileError(path + ": not a robot file: it is a compressed file");
+    default:
+      break;
+  }
   std::string text;
   try {
     text = read_input_file(path, InputLimits::robot_file_bytes, "robot file");

@@ -18,6 +18,7 @@
 
 #include "common/config.hpp"
 #include "common/config_identity.hpp"  // hash_hex
+#include "common/input_file.hpp"
 #include "common/safe_write.hpp"
 #include "io/h5.hpp"
 
@@ -721,9 +722,38 @@ void remove_archive(const std::string& path) {
 }
 
 // ---- Archive (reader) --------------------------------------------------------------------------
+namespace {
+
+// A file of another kind than a run archive: what it is and what takes it ("" if not told).
+std::string other_kind_of_file(const std::string& path) {
+  switch (file_magic(path)) {
+    case FileMagic::json:
+      return path +
+             ": not a run archive: it is JSON text, a robot file (softevo.robot/1) if softevo "
+             "wrote it; `softevo eval`, `render` and `view` take robot files (a run archive is "
+             "the .h5 that `softevo evolve` or softevo-mpi writes)";
+    case FileMagic::png:
+    case FileMagic::zip:
+    case FileMagic::gzip:
+      return path + ": not a run archive: it is " +
+             (file_magic(path) == FileMagic::png ? "a PNG image" : "a compressed file") +
+             " (a run archive is the .h5 that `softevo evolve` or softevo-mpi writes)";
+    default:
+      return "";
+  }
+}
+
+}  // namespace
+
 Archive::Archive(const std::string& path) : path_(path) {
+  if (const std::string other = other_kind_of_file(path); !other.empty()) throw ArchiveError(other);
   archive_errors([&] {
     file_ = std::make_unique<h5::File>(h5::File::open(path));
+    if (!file_->has_attribute("format") && file_->has_link("positions"))
+      throw ArchiveError(path +
+                         ": not a run archive: it is a simulation trace (`softevo eval "
+                         "--trace`, `view --save-trace`); `softevo render` and `view` take "
+                         "traces");
     if (!file_->has_attribute("format"))
       throw ArchiveError(path + ": not a softevo run archive (no format attribute)");
     const std::string format = file_->read_string_attribute("format", kStringBytes);

@@ -1,12 +1,17 @@
 #include "master/progress.hpp"
 
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <map>
+#include <sstream>
+#include <string>
 #include <utility>
 
 namespace softevo::master {
@@ -108,6 +113,49 @@ StreamKind stream_kind(int fd) {
   return StreamKind::other;
 }
 
+namespace {
+
+pid_t parent_of(pid_t pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+  // "pid (comm) state ppid ...": comm may hold spaces and parentheses, so after the last ')'.
+  const std::size_t close = text.rfind(')');
+  if (close == std::string::npos) return 0;
+  std::istringstream rest(text.substr(close + 1));
+  std::string state;
+  long long ppid = 0;
+  rest >> state >> ppid;
+  return static_cast<pid_t>(ppid);
+}
+
+// Linux's terminal character devices: pseudo-terminals (majors 136-143), virtual consoles and
+// serial lines (4), /dev/tty and /dev/console (5). /dev/null (1) is no person.
+bool is_terminal_device(dev_t device) {
+  const unsigned m = major(device);
+  return m == 4 || m == 5 || (m >= 136 && m <= 143);
+}
+
+}  // namespace
+
+StreamKind forwarded_stream_kind(int fd) {
+  const StreamKind kind = stream_kind(fd);
+  if (kind != StreamKind::pipe) return kind;
+  pid_t pid = ::getppid();
+  // A few levels: mpirun itself, or orted/prted and the mpirun above it.
+  for (int level = 0; level < 4 && pid > 1; ++level) {
+    struct stat st {};
+    const std::string path = "/proc/" + std::to_string(pid) + "/fd/" + std::to_string(fd);
+    if (::stat(path.c_str(), &st) != 0) return StreamKind::pipe;
+    if (S_ISFIFO(st.st_mode) || S_ISSOCK(st.st_mode)) {
+      pid = parent_of(pid);
+      continue;
+    }
+    return S_ISCHR(st.st_mode) && is_terminal_device(st.st_rdev) ? StreamKind::terminal
+                                                                 : StreamKind::other;
+  }
+  return StreamKind::pipe;
+}
+
 bool show_live_line(ProgressMode mode, StreamKind stderr_kind,
                     const std::function<const char*(const char*)>& env) {
   if (mode != ProgressMode::automatic) return mode == ProgressMode::always;
@@ -150,12 +198,17 @@ const std::map<std::string, std::string> kLaunchEnvironment = launch_environment
 
 ProgressReporter ProgressReporter::console(std::int64_t total_generations, ProgressMode mode,
                                            bool quiet, std::string label) {
-  const bool live =
-      !quiet &&
-      show_live_line(mode, stream_kind(STDERR_FILENO), [](const char* name) -> const char* {
-        const auto it = kLaunchEnvironment.find(name);
-        return it == kLaunchEnvironment.end() ? nullptr : it->second.c_str();
-      });
+  const auto env = [](const char* name) -> const char* {
+    const auto it = kLaunchEnvironment.find(name);
+    return it == kLaunchEnvironment.end() ? nullptr : it->second.c_str();
+  };
+  // Under a launcher (a launcher variable set), a pipe is judged by where the launcher sends
+  // it; any other pipe (`| tee log`) stays a pipe, which auto never decorates.
+  StreamKind kind = stream_kind(STDERR_FILENO);
+  if (kind == StreamKind::pipe && mode == ProgressMode::automatic &&
+      show_live_line(mode, kind, env))
+    kind = forwarded_stream_kind(STDERR_FILENO);
+  const bool live = !quiet && show_live_line(mode, kind, env);
   return ProgressReporter(quiet ? nullptr : stdout, live ? stderr : nullptr, stderr,
                           total_generations, std::move(label));
 }

@@ -67,6 +67,12 @@ std::optional<ProgressMode> parse_progress_mode(const std::string& text);  // au
 // How rank 0's stderr is connected.
 enum class StreamKind : std::uint8_t { terminal, pipe, other };
 StreamKind stream_kind(int fd);
+// For a pipe from an MPI launcher: where the launcher forwards it. The ranks' stderr is a pipe
+// to mpirun (or orted), which writes what comes through to its own stderr: a terminal, or the
+// log of `nohup mpirun ... > log 2>&1`, where carriage returns and ESC sequences are clutter.
+// Follows the same descriptor up the ancestors (/proc/PID/fd) while it is a pipe; `pipe` when
+// that cannot be told (another host's launcher, no /proc).
+StreamKind forwarded_stream_kind(int fd);
 // Whether to show the live line. auto: stderr is a terminal, or it is a pipe to an MPI launcher
 // (Open MPI's mpirun: OMPI_COMM_WORLD_SIZE; PMIx: PMIX_RANK; MPICH/Hydra: PMI_RANK; srun:
 // SLURM_STEP_ID) that forwards it to the user's terminal, i.e. not inside a batch job

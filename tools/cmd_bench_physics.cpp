@@ -70,9 +70,8 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
   auto runs = std::make_shared<int>(3);
   auto only = std::make_shared<std::string>();
   cmd->add_flag("--json", *json, "print a JSON list of result objects");
-  cmd->add_option("--steps", *steps, "steps per run (default 3000)")->check(CLI::PositiveNumber);
-  cmd->add_option("--runs", *runs, "runs per figure, best is kept (default 3)")
-      ->check(CLI::PositiveNumber);
+  cmd->add_option("--steps", *steps, "steps per run (default 3000)")->check(at_least(1));
+  cmd->add_option("--runs", *runs, "runs per figure, best is kept (default 3)")->check(at_least(1));
   cmd->add_option("--scene", *only, "only scenes whose name contains this");
   auto simd_name = std::make_shared<std::string>("best");
   std::vector<std::string> simd_choices = physics::simd_names();

@@ -22,10 +22,10 @@ void register_bench_xor(CLI::App& app, int& exit_code) {
   auto seed = std::make_shared<std::uint64_t>(1);
   auto max_generations = std::make_shared<std::int64_t>(500);
   auto json = std::make_shared<bool>(false);
-  cmd->add_option("--runs", *runs, "number of runs (seeds S .. S+N-1)")->check(CLI::PositiveNumber);
+  cmd->add_option("--runs", *runs, "number of runs (seeds S .. S+N-1)")->check(at_least(1));
   cmd->add_option("--seed", *seed, "first seed");
   cmd->add_option("--max-generations", *max_generations, "give up a run after this many")
-      ->check(CLI::PositiveNumber);
+      ->check(at_least(1));
   cmd->add_flag("--json", *json, "print one JSON object");
   cmd->callback([&exit_code, runs, seed, max_generations, json] {
     const evo::XorSummary s = evo::run_xor_benchmark(*runs, *seed, *max_generations);

@@ -54,7 +54,7 @@ struct EvalArgs {
   std::string robot;
   std::string task;
   std::string integrator;
-  std::string seconds;  // TOML value text of task.eval_seconds ("" = the config's)
+  std::optional<double> seconds;  // task.eval_seconds (none = the config's)
   std::vector<std::string> ablate;
   bool json = false;
   std::string trace;
@@ -78,7 +78,7 @@ int run_eval(const EvalArgs& a) {
   worker::RobotEvalSettings settings;
   settings.config_path = a.config_file;
   settings.overrides = a.overrides;
-  if (!a.seconds.empty()) settings.overrides.push_back("task.eval_seconds=" + a.seconds);
+  if (a.seconds) settings.overrides.push_back("task.eval_seconds=" + toml_number(*a.seconds));
   if (!a.direction.empty()) settings.overrides.push_back("task.directions=[" + a.direction + "]");
   if (!a.timeout.empty()) settings.overrides.push_back("run.eval_timeout_seconds=" + a.timeout);
   settings.task = a.task;
@@ -231,8 +231,7 @@ void register_eval(CLI::App& app, int& exit_code) {
       ->check(CLI::IsMember(task_names));
   cmd->add_option("--integrator", a->integrator, "physics integrator")
       ->check(CLI::IsMember({"pneuvox", "symplectic"}));
-  cmd->add_option("--seconds", a->seconds,
-                  "simulated seconds: sets task.eval_seconds (default 10, at most 3600)");
+  add_seconds_option(*cmd, a->seconds, "simulated seconds");
   cmd->add_option("--ablate", a->ablate, "feed zeros to the oscillator or the pressure sensors")
       ->check(CLI::IsMember({"oscillator", "sensors"}));
   cmd->add_option("--direction", a->direction,

@@ -37,10 +37,12 @@ void register_export(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<Args>();
   cmd->add_option("RUN", a->path, "run archive (.h5)")->required();
   cmd->add_option("--generation,-g", a->generation,
-                  "generation (default: the last archived generation)");
+                  "generation (default: the last archived generation)")
+      ->check(at_least(0));
   auto* best =
       cmd->add_flag("--best", a->best, "the best individual of the generation (the default)");
-  auto* id = cmd->add_option("--id", a->id, "the individual with this genome id");
+  auto* id =
+      cmd->add_option("--id", a->id, "the individual with this genome id")->check(at_least(0));
   best->excludes(id);
   cmd->add_option("-o,--output,--out", a->out, "output robot file (.json)")->required();
   cmd->add_flag("--force", a->force, "replace an existing output file");

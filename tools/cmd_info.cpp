@@ -22,6 +22,7 @@
 #include "io/run_lock.hpp"
 #include "master/archive_check.hpp"
 #include "master/run_state.hpp"
+#include "tasks/task.hpp"
 #include "tools/commands.hpp"
 
 namespace softevo::cli {
@@ -101,8 +102,11 @@ void register_info(CLI::App& app, int& exit_code) {
     // "running" is what a live run and a dead one both leave; the run lock tells them apart.
     const std::optional<std::string> holder = io::lock_holder(*path);
     std::optional<std::int64_t> generations;  // the run's target, if its config parses
+    std::string fitness_unit = "task units";  // the table's unit, if its config parses
     try {
-      generations = parse_config(archive.config_text(), *path + ":/config").run.generations;
+      const Config config = parse_config(archive.config_text(), *path + ":/config");
+      generations = config.run.generations;
+      fitness_unit = tasks::make_task(config)->fitness_unit();
     } catch (const std::exception&) {
     }
     const std::optional<std::string> note = master::previous_run_note(info, holder, generations);
@@ -252,9 +256,9 @@ void register_info(CLI::App& app, int& exit_code) {
       std::printf("robots           %s (all generations)\n", status_text(all_statuses).c_str());
       std::printf("                 %s (last generation)\n", status_text(last_statuses).c_str());
       if (champion)
-        std::printf("champion         generation %lld id %lld, fitness %.6g, status %s%s\n",
+        std::printf("champion         generation %lld id %lld, fitness %.6g %s, status %s%s\n",
                     static_cast<long long>(champion->generation),
-                    static_cast<long long>(champion->id), champion->fitness,
+                    static_cast<long long>(champion->id), champion->fitness, fitness_unit.c_str(),
                     champion->status.c_str(),
                     champion->status == "ok" ? "" : "  <- NOT ok: its fitness is 0 by rule");
       if (champion && champion->fitness_before)
@@ -281,10 +285,12 @@ void register_info(CLI::App& app, int& exit_code) {
         std::printf("integrity        FAILED: %zu problem(s); generations 0..%lld consistent\n%s",
                     check.problems.size(), static_cast<long long>(check.consistent_generations) - 1,
                     printable(check.describe(*path), Newlines::keep).c_str());
-      std::printf("\n%10s %12s %12s %12s %8s %10s\n", "generation", "best", "mean", "sd", "species",
-                  "eval/s");
+      // The unit in every header that has one (fitness in the task's unit, cm or rad).
+      const std::string in_unit = " [" + fitness_unit + "]";
+      std::printf("\n%10s %14s %14s %14s %8s %10s\n", "generation", ("best" + in_unit).c_str(),
+                  ("mean" + in_unit).c_str(), ("sd" + in_unit).c_str(), "species", "eval/s");
       for (const auto& s : stats)
-        std::printf("%10lld %12.6g %12.6g %12.6g %8lld %10.3g\n",
+        std::printf("%10lld %14.6g %14.6g %14.6g %8lld %10.3g\n",
                     static_cast<long long>(s.generation), s.best, s.mean, s.sd,
                     static_cast<long long>(s.species_count), s.evaluations_per_second);
       if (*verbose)

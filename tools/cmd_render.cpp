@@ -258,7 +258,7 @@ void register_render(CLI::App& app, int& exit_code) {
       "file, an `eval --trace` file or a run archive");
   auto args = std::make_shared<RenderArgs>();
   cmd->add_option("INPUT", args->input, "ROBOT.json, TRACE.h5 or RUN.h5")->required();
-  cmd->add_option("-o,--output", args->output, "OUT.png or OUT.mp4")->required();
+  cmd->add_option("-o,--output,--out", args->output, "OUT.png or OUT.mp4")->required();
   cmd->add_option("--view", args->view, "side | top | iso (default side)")
       ->check(CLI::IsMember({"side", "top", "iso"}));
   cmd->add_option("--timelapse", args->timelapse,
@@ -291,11 +291,10 @@ void register_render(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1, 4));
   cmd->add_option("--fps", args->fps, "video frame rate (default 30)")
       ->check(finite_in(0.01, 1000.0));
-  cmd->add_option("--seconds", args->seconds,
-                  "simulated seconds when re-simulating: task.eval_seconds (default 10, at most "
-                  "3600)");
-  cmd->add_option("--generation", args->generation, "archive: generation (default the last)");
-  auto* id_opt = cmd->add_option("--id", args->id, "archive: individual id");
+  add_seconds_option(*cmd, args->seconds, "simulated seconds when re-simulating");
+  cmd->add_option("--generation", args->generation, "archive: generation (default the last)")
+      ->check(at_least(0));
+  auto* id_opt = cmd->add_option("--id", args->id, "archive: individual id")->check(at_least(0));
   cmd->add_flag("--best", args->best, "archive: the generation's best individual (default)")
       ->excludes(id_opt);
   cmd->add_option("--config", args->config_file,

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "common/input_file.hpp"
 #include "common/printable.hpp"
 #include "common/safe_write.hpp"
@@ -42,6 +44,7 @@ struct ViewArgs {
   std::string steering;    // steering log to replay headless
   std::string save_trace;  // where that replay's trace goes
   bool force = false;
+  bool json = false;  // one JSON object per result (a saved file, the server's address)
 };
 
 std::string read_steering_log(const std::string& path) {
@@ -76,6 +79,16 @@ int run_view(const ViewArgs& args) {
     while (session.advance()) {
     }
     session.save(args.save_trace, overwrite);
+    if (args.json) {
+      nlohmann::ordered_json j;
+      j["trace"] = args.save_trace;
+      j["steering_log"] = view::steering_log_path(args.save_trace);
+      j["records"] = session.records();
+      j["status"] = to_string(session.status());
+      j["fitness"] = session.result()->fitness;
+      std::printf("%s\n", j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
+      return kExitOk;
+    }
     std::printf("wrote %s and %s (%d records, status %s, fitness %.17g)\n", args.save_trace.c_str(),
                 view::steering_log_path(args.save_trace).c_str(), session.records(),
                 to_string(session.status()), session.result()->fitness);
@@ -88,6 +101,15 @@ int run_view(const ViewArgs& args) {
     view::ClientSession session(input, client);
     const std::string page = view::export_html(session, args.web_dir, args.fps);
     write_file_atomically(args.export_html, page, overwrite);
+    if (args.json) {
+      nlohmann::ordered_json j;
+      j["html"] = args.export_html;
+      j["bytes"] = page.size();
+      j["records"] = session.session().records();
+      j["fps"] = args.fps;
+      std::printf("%s\n", j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
+      return kExitOk;
+    }
     std::printf("wrote %s (%.2f MB, %d records shown at %.0f fps)\n", args.export_html.c_str(),
                 static_cast<double>(page.size()) / 1e6, session.session().records(), args.fps);
     return kExitOk;
@@ -101,8 +123,9 @@ int run_view(const ViewArgs& args) {
   options.client = client;
   view::Server server(input, options);
   // Escaped: a robot name may carry terminal control sequences (title, clear screen).
-  std::printf("softevo view: %s (%s %s) at %s\n", printable(input.name).c_str(),
-              view::to_string(input.kind), printable(args.input).c_str(), server.url().c_str());
+  if (!args.json)
+    std::printf("softevo view: %s (%s %s) at %s\n", printable(input.name).c_str(),
+                view::to_string(input.kind), printable(args.input).c_str(), server.url().c_str());
   if (!server.loopback_only())
     std::fprintf(stderr,
                  "softevo view: warning: --bind %s is reachable from other machines: anyone who "
@@ -110,10 +133,24 @@ int run_view(const ViewArgs& args) {
                  "(no password, no encryption); the default 127.0.0.1 with an SSH port forward "
                  "is safer\n",
                  args.bind.c_str(), server.port());
-  if (args.bind == "127.0.0.1")
-    std::printf("  from another machine: ssh -L %d:127.0.0.1:%d THIS_HOST, then open %s\n",
-                server.port(), server.port(), server.url().c_str());
-  std::printf("  Ctrl-C stops the server\n");
+  if (args.json) {
+    // One line on start, for a script that starts the server and then connects to it (with
+    // --port 0 it is the only way to learn the port).
+    nlohmann::ordered_json j;
+    j["url"] = server.url();
+    j["bind"] = args.bind;
+    j["port"] = server.port();
+    j["input"] = args.input;
+    j["name"] = input.name;
+    j["kind"] = view::to_string(input.kind);
+    j["loopback_only"] = server.loopback_only();
+    std::printf("%s\n", j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
+  } else {
+    if (args.bind == "127.0.0.1")
+      std::printf("  from another machine: ssh -L %d:127.0.0.1:%d THIS_HOST, then open %s\n",
+                  server.port(), server.port(), server.url().c_str());
+    std::printf("  Ctrl-C stops the server\n");
+  }
   std::fflush(stdout);
   if (args.open) open_browser(server.url());
   server.run();
@@ -130,8 +167,10 @@ void register_view(CLI::App& app, int& exit_code) {
   auto args = std::make_shared<ViewArgs>();
   cmd->add_option("INPUT", args->input, "ROBOT.json, RUN.h5 or TRACE.h5")->required();
   cmd->add_option("--generation", args->request.generation,
-                  "archive: generation (default the last)");
-  auto* id_opt = cmd->add_option("--id", args->request.id, "archive: individual id");
+                  "archive: generation (default the last)")
+      ->check(at_least(0));
+  auto* id_opt =
+      cmd->add_option("--id", args->request.id, "archive: individual id")->check(at_least(0));
   cmd->add_flag("--best", args->best, "archive: the generation's best individual (default)")
       ->excludes(id_opt);
   cmd->add_option("--config", args->request.config_file,
@@ -141,8 +180,7 @@ void register_view(CLI::App& app, int& exit_code) {
   cmd->add_option("--task", args->request.task,
                   "robot file: task (gait | directed | rotate; default: the one the controller's "
                   "inputs fit)");
-  cmd->add_option("--seconds", args->request.seconds,
-                  "simulated seconds (task.eval_seconds, default 10)");
+  add_seconds_option(*cmd, args->request.seconds, "simulated seconds");
   cmd->add_option("--direction", args->request.direction_deg,
                   "directed task: initial target direction [deg, counter-clockwise]")
       ->check(finite_in(-180.0, 180.0));
@@ -153,6 +191,9 @@ void register_view(CLI::App& app, int& exit_code) {
   cmd->add_option("--bind", args->bind,
                   "address to listen on (default 127.0.0.1: this machine only; use an SSH port "
                   "forward from elsewhere)");
+  cmd->add_flag("--json", args->json,
+                "print one JSON object: the server's url, bind and port on start (one line), or "
+                "what --export-html / --save-trace wrote");
   cmd->add_flag("--open", args->open, "open the page in the desktop's browser (xdg-open)");
   cmd->add_option("--max-clients", args->max_clients, "pages connected at once (default 4)")
       ->check(CLI::Range(1, 64));

@@ -8,10 +8,13 @@
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
+
+#include "tools/cli_checks.hpp"
 
 namespace softevo::cli {
 
@@ -40,6 +43,25 @@ inline CLI::Validator finite_in(double lo, double hi) {
         return "";
       },
       "FINITE in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+}
+
+// --seconds of eval, render and view: simulated time, one type and one range everywhere, that
+// of the key it sets (task.eval_seconds: more than 0, at most 3600), checked before anything is
+// loaded and named like the config's own range errors.
+inline CLI::Option* add_seconds_option(CLI::App& cmd, std::optional<double>& seconds,
+                                       const std::string& what) {
+  const CLI::Validator in_range(
+      [](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || !std::isfinite(v) || v <= 0 || v > 3600)
+          return "task.eval_seconds = " + text + " is out of range (more than 0, at most 3600 s)";
+        return "";
+      },
+      "FLOAT in (0, 3600]");
+  return cmd.add_option("--seconds", seconds, what + " (task.eval_seconds, default 10)")
+      ->type_name("FLOAT")
+      ->check(in_range);
 }
 
 // The sample robots of the repository (robots/, robots/README.md): `champions` and `bench eval`

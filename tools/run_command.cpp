@@ -5,10 +5,12 @@
 #include <filesystem>
 #include <optional>
 
+#include "common/closest_word.hpp"
 #include "common/config.hpp"
 #include "common/launcher_watch.hpp"
 #include "io/archive.hpp"
 #include "master/signals.hpp"
+#include "tools/cli_checks.hpp"
 
 #ifndef SOFTEVO_DEFAULT_SOURCE_DIR
 #define SOFTEVO_DEFAULT_SOURCE_DIR "."
@@ -83,10 +85,38 @@ master::RunOptions run_options(const RunCommandOptions& o, std::string out_path)
 
 }  // namespace
 
+std::string option_suggestions(const CLI::App& app) {
+  // The options of the command that failed: the innermost parsed subcommand.
+  const CLI::App* failing = &app;
+  for (bool deeper = true; deeper;) {
+    deeper = false;
+    for (const CLI::App* sub : failing->get_subcommands())
+      if (sub->parsed()) {
+        failing = sub;
+        deeper = true;
+        break;
+      }
+  }
+  std::vector<std::string> names;
+  for (const CLI::Option* opt : failing->get_options()) {
+    for (const std::string& l : opt->get_lnames()) names.push_back("--" + l);
+  }
+  std::string out;
+  for (const std::string& arg : app.remaining(true)) {
+    if (!arg.starts_with("--")) continue;
+    const std::string word = arg.substr(0, arg.find('='));
+    const std::string guess = closest_word(word, names);
+    if (!guess.empty()) out += "unknown option " + word + ", did you mean " + guess + "?\n";
+  }
+  return out;
+}
+
 void add_run_options(CLI::App& app, RunCommandOptions& o) {
+  using cli::at_least;
   app.add_option("--config", o.config_paths,
                  "TOML config file (default configs/quickstart.toml); repeatable with --seeds");
-  app.add_option("--seed", o.seed, "run seed (sets run.seed)");
+  // The -1 defaults mean "the config's" (tools/cli_checks.hpp).
+  app.add_option("--seed", o.seed, "run seed (sets run.seed)")->check(at_least(0));
   app.add_option("-o,--output,--out", o.out_path,
                  "run archive (default runs/<config>-<seed, 2 digits>.h5; its folder is created)");
   app.add_option("--seeds", o.seeds,
@@ -94,8 +124,10 @@ void add_run_options(CLI::App& app, RunCommandOptions& o) {
                  "(e.g. 1-10 or 1,3,5-7)");
   app.add_option("--out-dir", o.out_dir,
                  "archives of --seeds: DIR/<config name>-<seed, 2 digits>.h5 (default runs)");
-  app.add_option("--generations", o.generations, "generations to evaluate (run.generations)");
-  app.add_option("--population", o.population, "population size (neat.pop_size)");
+  app.add_option("--generations", o.generations, "generations to evaluate (run.generations)")
+      ->check(at_least(1));
+  app.add_option("--population", o.population, "population size (neat.pop_size)")
+      ->check(at_least(1));
   app.add_option("--set", o.overrides, "override a key: section.key=value (repeatable)");
   app.add_flag("--resume", o.resume,
                "continue the archive from its newest checkpoint (a new run if it does not exist)");

@@ -38,6 +38,11 @@ struct RunCommandOptions {
   bool from_archive = false;  // set by prepare_runs: --resume without --config took /config
 };
 
+// "did you mean" lines for the mistyped options of a failed parse of `app` (its subcommands
+// included): "unknown option --jsno, did you mean --json?\n" per option that is close to one
+// the (sub)command has; "" when none is.
+std::string option_suggestions(const CLI::App& app);
+
 // Adds the run options to `app` (softevo-mpi's app, or the `evolve` subcommand).
 void add_run_options(CLI::App& app, RunCommandOptions& o);
 

@@ -8,6 +8,7 @@
 
 #include "common/closest_word.hpp"
 #include "tools/commands.hpp"
+#include "tools/run_command.hpp"
 
 namespace softevo::cli {
 
@@ -29,6 +30,11 @@ std::string closest_subcommand(const CLI::App& app, const std::string& word) {
 int main(int argc, char** argv) {
   CLI::App app{"softevo: co-evolution of pneumatic soft robot bodies and brains (single process)"};
   app.require_subcommand(1);
+  app.footer(
+      "Start with `softevo evolve` (an evolution on this machine's cores). On a cluster the same "
+      "options, archive and results come from the MPI program softevo-mpi, built next to this "
+      "one: `mpirun -np N softevo-mpi --config FILE ...` (softevo-mpi --help; docs/mpi-local.md, "
+      "docs/archive.md).");
   int exit_code = softevo::cli::kExitOk;
   softevo::cli::register_evolve(app, exit_code);
   softevo::cli::register_version(app, exit_code);
@@ -66,6 +72,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     // One prefix for every error: CLI11's own messages get it too.
     std::fprintf(stderr, "softevo: error: %s\n", e.what());
+    const std::string hints = softevo::option_suggestions(app);
+    if (!hints.empty()) std::fprintf(stderr, "%s", hints.c_str());
     const CLI::App* failing = &app;
     for (const CLI::App* sub : app.get_subcommands())
       if (sub->parsed()) failing = sub;

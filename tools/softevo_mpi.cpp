@@ -53,9 +53,9 @@ int softevo_mpi_main(int argc, char** argv, MPI_Comm parent, const MpiMainHooks&
     if (e.get_exit_code() == 0) return comm.rank() == 0 ? app.exit(e) : 0;
     if (comm.rank() == 0)
       std::fprintf(stderr,
-                   "softevo-mpi: error: %s\nrun with --help for more information (softevo-mpi "
+                   "softevo-mpi: error: %s\n%srun with --help for more information (softevo-mpi "
                    "--help)\n",
-                   e.what());
+                   e.what(), option_suggestions(app).c_str());
     return 2;
   }
   master::install_stop_handlers();

@@ -255,5 +255,68 @@ TEST(SoftevoCli, VersionTyposAndErrorsFollowOneConvention) {
   EXPECT_EQ(bad_file.output.rfind("softevo: error: ", 0), 0u) << bad_file.output;
 }
 
+// Issue 30: one option vocabulary. Suggestions for mistyped options and transposed commands,
+// ranges checked (a negative count is not "the config's"), -o/--output with --out, --json on
+// config show, --seconds of one type, the help naming softevo-mpi, and a file of the wrong kind
+// named for what it is.
+TEST_F(CmdEval, OneOptionVocabularyAcrossCommands) {
+  const std::string softevo = binary("softevo");
+  const auto expect = [](const test::CommandResult& r, int code, const std::string& text) {
+    EXPECT_EQ(r.code, code) << r.output;
+    EXPECT_NE(r.output.find(text), std::string::npos) << r.output;
+  };
+  expect(run_command(softevo + " inof x.h5"), 2, "unknown command 'inof', did you mean info?");
+  expect(run_command(softevo + " info x.h5 --jsno"), 2,
+         "unknown option --jsno, did you mean --json?");
+  expect(run_command(softevo + " evolve --progres never"), 2,
+         "unknown option --progres, did you mean --progress?");
+  expect(run_command(softevo + " evolve --generations -5"), 2,
+         "--generations: -5 is not an integer >= 1");
+  expect(run_command(softevo + " evolve --population 0"), 2,
+         "--population: 0 is not an integer >= 1");
+  expect(run_command(softevo + " export x.h5 --generation -1 -o x.json"), 2,
+         "--generation: -1 is not an integer >= 0");
+  // render takes --out as every other writer does: the error is about the input, not --out.
+  expect(run_command(softevo + " render " + (dir_ / "none.json").string() + " --out " +
+                     (dir_ / "x.png").string()),
+         2, "none.json");
+  // The tests run in the source tree.
+  const auto shown =
+      run_command(softevo + " config show configs/quickstart.toml --set neat.pop_size=7 --json");
+  ASSERT_EQ(shown.code, 0) << shown.output;
+  const auto j = nlohmann::json::parse(shown.output);
+  EXPECT_EQ(j["config"]["neat"]["pop_size"], 7);
+  EXPECT_EQ(j["config_hash"].get<std::string>().size(), 16u);
+  for (const char* command : {"eval", "render"}) {
+    const auto help = run_command(softevo + " " + command + " --help");
+    EXPECT_NE(help.output.find("--seconds FLOAT"), std::string::npos) << command << help.output;
+  }
+  expect(run_command(softevo + " eval " + robot_.string() + " --seconds 1e10"), 2,
+         "task.eval_seconds = 1e10 is out of range");
+  const auto help = run_command(softevo + " --help");
+  expect(help, 0, "evolve");
+  expect(help, 0, "softevo-mpi");
+  // view: --json says what --export-html wrote (on start, the server's url and port).
+  if (run_command(softevo + " view --help").code == 0) {
+    const fs::path html = dir_ / "page.html";
+    const auto page = run_command(softevo + " view " + robot_.string() +
+                                  " --seconds 0.2 --json --export-html " + html.string());
+    // Without the page's npm packages (`npm ci` in view/web) there is no page to write.
+    if (page.output.find("npm ci") == std::string::npos) {
+      ASSERT_EQ(page.code, 0) << page.output;
+      const auto v = nlohmann::json::parse(page.output);
+      EXPECT_EQ(v["html"], html.string());
+      EXPECT_EQ(v["bytes"].get<std::uintmax_t>(), fs::file_size(html));
+    }
+  }
+  // A file of the wrong kind says what it is and which command takes it.
+  expect(run_command(softevo + " info " + robot_.string()), 2,
+         "not a run archive: it is JSON text, a robot file");
+  const fs::path hdf5 = dir_ / "fake.h5";
+  std::ofstream(hdf5, std::ios::binary) << std::string("\x89HDF\r\n\x1a\n", 8) << "rest";
+  expect(run_command(softevo + " eval " + hdf5.string()), 2,
+         "not a robot file: it is an HDF5 file (a run archive or a trace); `softevo export");
+}
+
 }  // namespace
 }  // namespace softevo

@@ -234,5 +234,34 @@ TEST_F(CmdEvolve, PackedStartChecksDescriptorsAndLeavesNothingOnFailure) {
   EXPECT_EQ(left, std::vector<std::string>{stem + "-03.h5"});
 }
 
+// Issue 30: `--progress auto` under mpirun whose output goes to a file (`nohup mpirun ... >
+// log 2>&1`) writes no carriage return or ESC sequence: the ranks' stderr is a pipe to mpirun,
+// which is judged by where mpirun sends it. And `info` gives its table's units.
+TEST_F(CmdEvolve, NoControlSequencesInALogAndUnitsInInfo) {
+#ifndef SOFTEVO_MPIEXEC
+  GTEST_SKIP() << "no mpirun";
+#else
+  const std::string out = file("run.h5");
+  const std::string log = file("log");
+  const std::string command = "env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 " +
+                              std::string(SOFTEVO_MPIEXEC) + " --oversubscribe -np 2 " +
+                              binary("softevo-mpi") + " --progress auto --config '" + config_ +
+                              "' --out '" + out + "' --generations 2 > '" + log + "' 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0) << test::file_bytes(log);
+  const std::string text = test::file_bytes(log);
+  EXPECT_NE(text.find("gen      1/2"), std::string::npos) << text;
+  EXPECT_EQ(text.find('\r'), std::string::npos) << text;
+  EXPECT_EQ(text.find('\033'), std::string::npos) << text;
+  const test::CommandResult info = test::run_command(binary("softevo") + " info '" + out + "'");
+  EXPECT_NE(info.output.find("best [cm]      mean [cm]        sd [cm]"), std::string::npos)
+      << info.output;
+  EXPECT_NE(info.output.find(" cm, status ok"), std::string::npos) << info.output;
+  const test::CommandResult robot = test::run_command(binary("softevo") + " eval '" + out + "'");
+  EXPECT_EQ(robot.code, 2) << robot.output;
+  EXPECT_NE(robot.output.find("not a robot file: it is an HDF5 file"), std::string::npos)
+      << robot.output;
+#endif
+}
+
 }  // namespace
 }  // namespace softevo
