@@ -129,6 +129,27 @@ std::size_t descriptors_for_runs(std::size_t runs);
 // before any run is prepared: a job that cannot hold its locks must not take any.
 void reserve_descriptors(std::size_t runs);
 
+// Memory of a run's master before and during its generations (rank 0 holds the population,
+// its genomes, the work units of a generation and their results): measured at about 9.3 kB
+// per member with the quickstart config (lattices 6^3 and 10^3 alike: bodies are built by the
+// workers, one at a time), rounded up; a learning generation holds `learning.population`
+// candidate controllers per member besides. An estimate, not a bound.
+inline constexpr std::uint64_t kRunBaseBytes = std::uint64_t{32} << 20;
+inline constexpr std::uint64_t kBytesPerMember = 10 * 1024;
+inline constexpr std::uint64_t kBytesPerLearningCandidate = 2 * 1024;
+std::uint64_t estimate_run_memory(const Config& config);
+// What this process may still allocate: /proc/meminfo MemAvailable, or less when a cgroup
+// (v1 or v2) limits the memory; nullopt when neither can be read. `where` says which.
+struct AvailableMemory {
+  std::uint64_t bytes = 0;
+  std::string where;
+};
+std::optional<AvailableMemory> available_memory();
+// Refuses (StartupError naming the keys to lower) a job of `configs` whose estimated memory
+// exceeds `available`, and returns a warning text when it takes more than 3/4 of it ("" else).
+std::string check_run_memory(const std::vector<const Config*>& configs,
+                             const std::optional<AvailableMemory>& available);
+
 // Start-up: validates the output path, takes the run lock (a second run on the same archive
 // fails here, naming the holder), loads the checkpoint for --resume (the experiment hash and
 // the seed must match the archive's: a finished run can be extended with more generations),

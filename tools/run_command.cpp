@@ -182,9 +182,21 @@ std::vector<std::int64_t> parse_seeds(const std::string& spec) {
   return seeds;
 }
 
+namespace {
+
+// The memory estimate of a job before any run is prepared (issue 29: a population of 10^6
+// filled gigabytes before generation 0): refused beyond the machine's memory, warned near it.
+void check_job_memory(const std::vector<const Config*>& configs) {
+  const std::string warning = master::check_run_memory(configs, master::available_memory());
+  if (!warning.empty()) std::fprintf(stderr, "warning: %s\n", warning.c_str());
+}
+
+}  // namespace
+
 std::vector<master::PreparedRun> prepare_runs(RunCommandOptions& o, int ranks) {
   if (const std::optional<Config> config = archived_config(o)) {
     o.from_archive = true;
+    check_job_memory({&*config});
     std::vector<master::PreparedRun> runs;
     runs.push_back(master::prepare_run(*config, run_options(o, o.out_path), ranks));
     return runs;
@@ -199,6 +211,7 @@ std::vector<master::PreparedRun> prepare_runs(RunCommandOptions& o, int ranks) {
     if (!o.out_dir.empty())
       throw ConfigError("--out-dir names the archives of --seeds; one run takes --out");
     const Config config = run_config(o, o.config_paths.front(), -1);
+    check_job_memory({&config});
     const std::string out =
         o.out_path.empty() ? default_out_path(o.config_paths.front(), config.run.seed) : o.out_path;
     runs.push_back(master::prepare_run(config, run_options(o, out), ranks));
@@ -210,6 +223,15 @@ std::vector<master::PreparedRun> prepare_runs(RunCommandOptions& o, int ranks) {
         "<out-dir>/<config name>-<seed>.h5)");
   if (o.seed >= 0) throw ConfigError("--seed and --seeds contradict each other; give one of them");
   const std::vector<std::int64_t> seeds = parse_seeds(o.seeds);
+  {
+    // One config per file (a run's memory does not depend on its seed).
+    std::vector<Config> configs;
+    for (const std::string& path : o.config_paths) configs.push_back(run_config(o, path, -1));
+    std::vector<const Config*> job;
+    for (const Config& c : configs)
+      for (std::size_t i = 0; i < seeds.size(); ++i) job.push_back(&c);
+    check_job_memory(job);
+  }
   // Every run holds its lock's descriptor for the whole job: check before the first is taken
   // (issue 29: 1,100 seeds under ulimit -n 1024 failed midway, misleadingly, leaving locks).
   master::reserve_descriptors(seeds.size() * o.config_paths.size());

@@ -531,5 +531,43 @@ TEST(RunStop, AGenerationOfKilledRobotsGoesOn) {
   EXPECT_TRUE(Archive(options.out_path).info().stop_reason.empty());
 }
 
+// The memory estimate before a run (issue 29: a population of 10^6 grew to 3.6 GB before
+// generation 0): it grows with the population and the learning candidates; a job beyond the
+// available memory is refused naming the keys to lower, one close to it is warned about.
+TEST(RunMemory, EstimateRefusesBeyondAndWarnsNearTheAvailableMemory) {
+  Config c = small_config();
+  c.neat.pop_size = 1000;
+  const std::uint64_t thousand = estimate_run_memory(c);
+  c.neat.pop_size = 1000000;
+  const std::uint64_t million = estimate_run_memory(c);
+  EXPECT_GT(million, std::uint64_t{9} << 30);  // measured: about 9.3 kB per member
+  EXPECT_GT(million, thousand * 100);
+  c.learning.method = "es";
+  EXPECT_GT(estimate_run_memory(c), million);
+  c.learning.method = "none";
+
+  const std::vector<const Config*> one = {&c};
+  try {
+    check_run_memory(one, AvailableMemory{million / 2, "test"});
+    ADD_FAILURE() << "not refused";
+  } catch (const StartupError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("neat.pop_size"), std::string::npos) << m;
+    EXPECT_NE(m.find("--population"), std::string::npos) << m;
+    EXPECT_NE(m.find("available (test)"), std::string::npos) << m;
+  }
+  const std::string near = check_run_memory(one, AvailableMemory{million + million / 10, "test"});
+  EXPECT_NE(near.find("close to"), std::string::npos) << near;
+  EXPECT_EQ(check_run_memory(one, AvailableMemory{million * 2, "test"}), "");
+  EXPECT_EQ(check_run_memory(one, std::nullopt), "");
+  // A --seeds job counts every run.
+  const std::vector<const Config*> ten(10, &c);
+  EXPECT_THROW(check_run_memory(ten, AvailableMemory{million * 5, "test"}), StartupError);
+  // This machine's available memory is known and positive.
+  const std::optional<AvailableMemory> here = available_memory();
+  ASSERT_TRUE(here.has_value());
+  EXPECT_GT(here->bytes, 0u);
+}
+
 }  // namespace
 }  // namespace softevo::master

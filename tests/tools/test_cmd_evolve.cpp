@@ -263,5 +263,17 @@ TEST_F(CmdEvolve, NoControlSequencesInALogAndUnitsInInfo) {
 #endif
 }
 
+// A job whose estimated memory exceeds the machine's is refused before anything is allocated
+// or written, naming the keys to lower (10^6 members x 100 runs: about a terabyte).
+TEST_F(CmdEvolve, JobBeyondTheMachinesMemoryIsRefused) {
+  const std::string dir = file("huge");
+  const test::CommandResult r = evolve(
+      {"--config", config_, "--population", "1000000", "--seeds", "1-100", "--out-dir", dir});
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("of memory"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("neat.pop_size"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir)) << r.output;
+}
+
 }  // namespace
 }  // namespace softevo
