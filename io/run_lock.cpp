@@ -31,6 +31,25 @@ constexpr useconds_t kLockRetryMicroseconds = 20000;
 
 }  // namespace
 
+std::optional<std::string> locked_file_note(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return std::nullopt;
+  int rc = 0;
+  do {
+    rc = ::flock(fd, LOCK_SH | LOCK_NB);
+  } while (rc != 0 && errno == EINTR);
+  const bool locked = rc != 0 && errno == EWOULDBLOCK;
+  if (rc == 0) ::flock(fd, LOCK_UN);
+  ::close(fd);
+  if (!locked) return std::nullopt;
+  const std::optional<std::string> run = lock_holder(path);
+  return path + ": locked by another process" +
+         (run ? " (a running job writes this archive: " + *run + ")"
+              : std::string(" (a program that writes it through libhdf5, e.g. h5py)")) +
+         ", and libhdf5 does not open a locked file; wait until it ends, or copy the file and "
+         "open the copy";
+}
+
 std::optional<std::string> lock_holder(const std::string& archive_path) {
   const std::string path = lock_path_for(archive_path);
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);

@@ -31,6 +31,12 @@ std::string lock_path_for(const std::string& archive_path);
 // makes a starting run fail. Creates nothing.
 std::optional<std::string> lock_holder(const std::string& archive_path);
 
+// libhdf5 refuses to open a file that another process holds an flock on (a program writing it
+// through libhdf5's file locking, e.g. h5py), so such a file looks like no HDF5 file at all.
+// For that case: a message saying that `path` is locked, by which run if its run lock is held,
+// and how to proceed; nullopt when no other process locks `path`.
+std::optional<std::string> locked_file_note(const std::string& path);
+
 class RunLock {
  public:
   // Takes the lock of `archive_path` without waiting and records this process (getpid(),

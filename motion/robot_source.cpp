@@ -10,6 +10,7 @@
 #include "common/eval_types.hpp"
 #include "evo/genome.hpp"
 #include "io/archive.hpp"
+#include "io/run_lock.hpp"
 #include "io/trace.hpp"
 #include "tasks/task.hpp"
 #include "worker/evaluate.hpp"
@@ -423,6 +424,9 @@ Motion load_motion(const std::string& input, const MotionRequest& request) {
     return motion;
   }
   if (io::is_trace(input)) return load_trace(input, request);
+  // A file another process locks looks like no HDF5 file to libhdf5: say that instead.
+  if (const std::optional<std::string> locked = io::locked_file_note(input))
+    throw std::runtime_error(*locked);
   throw std::runtime_error(input +
                            ": neither a run archive (format softevo.run/1) nor a trace "
                            "(/positions); robot files must end in .json");

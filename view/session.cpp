@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/archive.hpp"
+#include "io/run_lock.hpp"
 #include "io/trace.hpp"
 #include "motion/trace_recorder.hpp"
 #include "physics/observables.hpp"
@@ -119,6 +120,9 @@ ViewInput load_view_input(const std::string& path, const ViewRequest& request) {
     }
     return in;
   } else {
+    // A file another process locks looks like no HDF5 file to libhdf5: say that instead.
+    if (const std::optional<std::string> locked = io::locked_file_note(path))
+      throw std::runtime_error(*locked);
     throw std::runtime_error(path +
                              ": neither a robot file (.json), a run archive (format "
                              "softevo.run/1) nor a trace (/positions)");

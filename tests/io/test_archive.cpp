@@ -2,9 +2,12 @@
 // file byte for byte), digests that see every deterministic field and ignore timing fields,
 // the two forms on disk (a root with segments while running, one file once finished).
 #include "io/archive.hpp"
+#include "io/run_lock.hpp"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <hdf5.h>
+#include <sys/file.h>
 #include <sys/mount.h>
 #include <unistd.h>
 
@@ -422,6 +425,37 @@ TEST(Archive, PackRefusedWithoutRoomAndArchiveKept) {
   EXPECT_EQ(content_digest(a), content);
   for (const auto& e : fs::directory_iterator(mnt))
     EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
+}
+
+// An archive another process holds an flock on (libhdf5's file locking of a writer, e.g.
+// h5py) is refused by libhdf5 and looked like "neither a robot file nor a trace" to softevo
+// view (issue 29); the note says it is locked, by which run, and how to proceed.
+TEST(Archive, LockedArchiveIsNamedLocked) {
+  TmpDir d;
+  const std::string p = d.path + "/run.h5";
+  RunInfo info = sample_info();
+  write_three_generations(p, info);
+  EXPECT_FALSE(locked_file_note(p).has_value());
+  // flock locks belong to an open file description: one of our own conflicts like another
+  // process's would.
+  const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX), 0);
+  EXPECT_FALSE(is_run_archive(p));
+  std::optional<std::string> note = locked_file_note(p);
+  ASSERT_TRUE(note.has_value());
+  EXPECT_NE(note->find("locked by another process"), std::string::npos) << *note;
+  EXPECT_NE(note->find("copy the file"), std::string::npos) << *note;
+  {
+    const RunLock run(p, "node7");
+    note = locked_file_note(p);
+    ASSERT_TRUE(note.has_value());
+    EXPECT_NE(note->find("a running job writes this archive: pid"), std::string::npos) << *note;
+    EXPECT_NE(note->find("node7"), std::string::npos) << *note;
+  }
+  ::close(fd);
+  EXPECT_FALSE(locked_file_note(p).has_value());
+  EXPECT_TRUE(is_run_archive(p));
 }
 
 }  // namespace
