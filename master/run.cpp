@@ -14,6 +14,7 @@
 #include <numeric>
 
 #include "common/config_identity.hpp"
+#include "common/safe_write.hpp"
 #include "common/version.hpp"
 #include "evo/genome.hpp"
 #include "master/archive_check.hpp"
@@ -314,13 +315,20 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
   info.state = "running";
 
   std::error_code ec;
+  // Why the archive cannot be written, when a --resume finds it on storage it may not write
+  // (read-only file system, no write permission): a complete, packed archive needs no write
+  // and is reported complete (exit 0, docs/archive.md); anything else fails with this reason.
+  std::optional<std::string> unwritable;
   try {
     check_output_path(out);
   } catch (const ArchiveError& e) {
-    throw StartupError(e.what());
+    if (!(options.resume && fs::exists(out, ec) && ::access(directory_of(out).c_str(), W_OK) != 0))
+      throw StartupError(e.what());
+    unwritable = e.what();
   }
   try {
-    run.lock.emplace(out, info.host);
+    // No lock without write access: no run can write the archive there either.
+    if (!unwritable) run.lock.emplace(out, info.host);
   } catch (const io::RunLockError& e) {
     throw StartupError(e.what());
   }
@@ -374,12 +382,18 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
       // The lock is ours now: a "running" archive was left by a run that died.
       run.previous_run = previous_run_note(old, std::nullopt, config.run.generations);
       if (old.generations_done >= config.run.generations) {
+        if (unwritable && (old.state != "complete" || !archive.self_contained()))
+          throw StartupError(*unwritable +
+                             " (the archive holds every generation, but recording "
+                             "its end needs write access)");
         // Nothing to evaluate: the archive keeps the config it was written with.
+        run.read_only = unwritable.has_value();
         run.already_complete = true;
         run.run_length_changed = false;
         run.info = old;
         return run;
       }
+      if (unwritable) throw StartupError(*unwritable);
       const std::optional<Checkpoint> cp = archive.checkpoint();
       if (old.generations_done > 0) {
         if (!cp || cp->generation != old.generations_done)
@@ -418,6 +432,7 @@ namespace {
 // The end of a run whose every generation is archived, but whose end was not recorded (killed
 // before it, or a full disk then): state complete, packed.
 void finish_complete_run(PreparedRun& run) {
+  if (run.read_only) return;  // complete and packed: nothing to record (prepare_run checked)
   const std::string& out = run.options.out_path;
   try {
     remove_archive_debris(out);

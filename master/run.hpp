@@ -106,6 +106,9 @@ struct PreparedRun {
   io::RunInfo info;
   std::optional<evo::Population> population;
   bool already_complete = false;
+  // --resume of a complete, packed archive on storage this process may not write: nothing is
+  // written, no lock is taken.
+  bool read_only = false;
   bool resumed = false;
   // --resume with another run length than the archive's config (an extended run): the archive's
   // /config and config_hash are replaced by this run's when it starts.

@@ -386,10 +386,7 @@ TEST(Archive, PackRefusedWithoutRoomAndArchiveKept) {
   fs::create_directory(mnt);
   if (::mount("tmpfs", mnt.c_str(), "tmpfs", 0, "size=1m") != 0)
     GTEST_SKIP() << "cannot mount a small tmpfs (" << std::strerror(errno) << "; needs root)";
-  struct Unmount {
-    std::string path;
-    ~Unmount() { ::umount2(path.c_str(), MNT_DETACH); }
-  } unmount{mnt};
+  const test::LazyUnmount unmount{mnt};
   const std::string p = mnt + "/run.h5";
   RunInfo info = sample_info();
   write_three_generations(p, info);

@@ -3,6 +3,7 @@
 // keeps the tests that write an archive hundreds of times fast; what is written is the same).
 #pragma once
 
+#include <sys/mount.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -24,6 +25,12 @@ struct TmpDir {
   TmpDir(const TmpDir&) = delete;
   TmpDir& operator=(const TmpDir&) = delete;
   std::string file(const std::string& name) const { return path + "/" + name; }
+};
+
+// Unmounts (lazily) the file system a test mounted at `path` when it goes out of scope.
+struct LazyUnmount {
+  std::string path;
+  ~LazyUnmount() { ::umount2(path.c_str(), MNT_DETACH); }
 };
 
 }  // namespace softevo::test
