@@ -5,6 +5,7 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -123,10 +124,25 @@ Result evaluate_robot(const RobotFile& robot, const std::optional<Config>& confi
   r.task = to_string(resolved.task.kind);
   r.config_source = worker::to_string(worker::robot_config_source(robot, settings));
   r.names = t->component_names();
+  // Ctrl-C: Python runs its SIGINT handler only when the interpreter gets control, which a
+  // long evaluation without the GIL withholds (issue 29: 14 s). The evaluation asks at most
+  // every kSignalCheckInterval, with the GIL, and stops when a handler raised.
+  constexpr auto kSignalCheckInterval = std::chrono::milliseconds(50);
+  bool interrupted = false;
+  auto last_check = std::chrono::steady_clock::now();
+  opts.abandon = [&] {
+    const auto now = std::chrono::steady_clock::now();
+    if (interrupted || now - last_check < kSignalCheckInterval) return interrupted;
+    last_check = now;
+    const py::gil_scoped_acquire locked;
+    interrupted = PyErr_CheckSignals() != 0;  // the exception stays set for below
+    return interrupted;
+  };
   {
     const py::gil_scoped_release unlocked;
     r.result = worker::evaluate_all_units(resolved, *t, robot.body, robot.controller, opts);
   }
+  if (interrupted) throw py::error_already_set();  // KeyboardInterrupt, as Python raised it
   return r;
 }
 
@@ -359,6 +375,18 @@ class PyController {
         obs["sensor_pressures"]);
     if (!task_inputs || !sensors)
       throw py::value_error("Controller.act: 'task_inputs' and 'sensor_pressures' must be arrays");
+    // A NaN or infinity would enter the recurrent state and stay there until reset(): refused,
+    // naming the field (docs/guide.md, Python).
+    const auto require_finite = [](const auto& a, const char* field) {
+      for (py::ssize_t i = 0; i < a.size(); ++i)
+        if (!std::isfinite(a.data()[i]))
+          throw py::value_error(std::string("Controller.act: '") + field + "'[" +
+                                std::to_string(i) + "] is not finite (" +
+                                std::to_string(a.data()[i]) +
+                                "); the controller's state is unchanged");
+    };
+    require_finite(task_inputs, "task_inputs");
+    require_finite(sensors, "sensor_pressures");
     const std::size_t chambers = static_cast<std::size_t>(sensors.size());
     py::array_t<float> commands({static_cast<py::ssize_t>(chambers), py::ssize_t{2}});
     controller_.act({task_inputs.data(), static_cast<std::size_t>(task_inputs.size())},

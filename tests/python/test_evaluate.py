@@ -132,3 +132,30 @@ def test_result_as_a_dict():
     assert d["components"][0]["fitness"] == r.fitness
     assert set(d) >= {"steps", "voxels", "chambers", "sim_seconds", "wall_seconds", "message"}
     _json.dumps(d)  # plain values
+
+
+def test_ctrl_c_interrupts_a_long_evaluation(tmp_path):
+    # issue 29: a long softevo.evaluate() ignored Ctrl-C for 14 s; it now raises
+    # KeyboardInterrupt within a fraction of a second.
+    script = tmp_path / "long.py"
+    script.write_text(
+        "import sys, time, softevo\n"
+        "sys.path.insert(0, %r)\n"
+        "from conftest import block_robot\n"
+        "print('start', flush=True)\n"
+        "t = time.monotonic()\n"
+        "try:\n"
+        "    softevo.evaluate(block_robot(), seconds=3000)\n"
+        "    print('finished')\n"
+        "except KeyboardInterrupt:\n"
+        "    print('interrupted after %%.2f' %% (time.monotonic() - t))\n" % str(SOURCE_DIR / "tests" / "python"))
+    import os, signal, sys, time
+    p = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, text=True,
+                         env=os.environ.copy())
+    assert p.stdout.readline().strip() == "start"
+    time.sleep(1.0)
+    t = time.monotonic()
+    p.send_signal(signal.SIGINT)
+    out, _ = p.communicate(timeout=60)
+    assert "interrupted" in out, out
+    assert time.monotonic() - t < 3.0

@@ -127,3 +127,16 @@ def test_every_observed_pressure_in_pa():
     assert obs["pressures"].dtype == np.float64 and np.all(obs["pressures"] > 5e4)
     frame = sim.render(64, 48, "iso")
     assert frame.shape == (48, 64, 3)
+
+
+def test_controller_act_refuses_non_finite_observations():
+    # issue 29: a NaN entered the recurrent state and stayed until reset(); now refused, naming
+    # the field, with the state unchanged (the next finite observation acts as if it never came).
+    fresh, probed = softevo.Controller(block_robot(closed=True)), softevo.Controller(block_robot(closed=True))
+    good = {"task_inputs": np.zeros(0, np.float32), "sensor_pressures": np.array([0.1, 0.2], np.float32)}
+    for field, bad in [("sensor_pressures", np.array([np.nan, 0.2], np.float32)),
+                       ("sensor_pressures", np.array([0.1, np.inf], np.float32))]:
+        with pytest.raises(ValueError, match=field):
+            probed.act({**good, field: bad})
+    assert np.array_equal(probed.act(good), fresh.act(good))
+    assert np.all(np.isfinite(probed.act(good)))
