@@ -14,6 +14,10 @@ config=${2:-configs/quickstart.toml}
 sample=${3:-3}
 mpi="$build/bin/softevo-mpi"
 cli="$build/bin/softevo"
+if [ "$(id -u)" != 0 ]; then
+  echo "full_disk_scan.sh: needs root (it mounts tmpfs file systems); skipped"
+  exit 77
+fi
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 work=$(mktemp -d /tmp/full-disk-scan.XXXXXX)
 mnt="$work/mnt"
