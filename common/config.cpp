@@ -4,6 +4,7 @@
 #include "common/config.hpp"
 #include "common/closest_word.hpp"
 #include "common/config_identity.hpp"
+#include "common/fnv1a.hpp"
 #include "common/input_file.hpp"
 
 #include <algorithm>
@@ -929,13 +930,7 @@ std::string canonical_text(const Config& config) {
 }
 
 std::uint64_t text_hash(const std::string& text) {
-  // FNV-1a 64 (offset basis 14695981039346656037, prime 1099511628211).
-  std::uint64_t h = 14695981039346656037ULL;
-  for (unsigned char ch : text) {
-    h ^= ch;
-    h *= 1099511628211ULL;
-  }
-  return h;
+  return fnv1a64(text);
 }
 
 std::uint64_t config_hash(const Config& config) {

@@ -18,6 +18,7 @@
 
 #include "common/config.hpp"
 #include "common/config_identity.hpp"  // hash_hex
+#include "common/fnv1a.hpp"
 #include "common/input_file.hpp"
 #include "common/safe_write.hpp"
 #include "io/h5.hpp"
@@ -94,34 +95,25 @@ std::string with_space_diagnosis(const std::string& message, const std::string& 
          std::to_string(free_bytes) + " bytes free)";
 }
 
-// ---- FNV-1a 64 ---------------------------------------------------------------------------------
+// ---- digests: FNV-1a 64 (common/fnv1a.hpp), values little-endian, containers length-first ----
 class Fnv {
  public:
-  void byte(std::uint8_t b) {
-    h_ ^= b;
-    h_ *= 0x100000001b3ULL;
-  }
-  void u64(std::uint64_t v) {
-    for (int i = 0; i < 8; ++i) byte(static_cast<std::uint8_t>(v >> (8 * i)));
-  }
+  void byte(std::uint8_t b) { h_.byte(b); }
+  void u64(std::uint64_t v) { h_.u64_le(v); }
   void i64(std::int64_t v) { u64(static_cast<std::uint64_t>(v)); }
-  void f64(double v) {
-    std::uint64_t bits = 0;
-    std::memcpy(&bits, &v, sizeof bits);
-    u64(bits);
-  }
+  void f64(double v) { h_.f64_le(v); }
   void bytes(const std::vector<std::uint8_t>& b) {
     u64(b.size());
-    for (std::uint8_t x : b) byte(x);
+    h_.bytes(b.data(), b.size());
   }
   void str(const std::string& s) {
     u64(s.size());
-    for (char c : s) byte(static_cast<std::uint8_t>(c));
+    h_.text(s);
   }
-  std::uint64_t value() const { return h_; }
+  std::uint64_t value() const { return h_.value(); }
 
  private:
-  std::uint64_t h_ = 0xcbf29ce484222325ULL;
+  Fnv1a64 h_;
 };
 
 }  // namespace

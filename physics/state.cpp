@@ -1,5 +1,7 @@
 #include "physics/state.hpp"
 
+#include "common/fnv1a.hpp"
+
 #include <cstring>
 #include <type_traits>
 
@@ -39,20 +41,15 @@ State initial_state(const Model& model) {
 
 namespace {
 
-struct Fnv1a {
-  std::uint64_t h = 14695981039346656037ull;
-  void bytes(const void* p, std::size_t n) {
-    const auto* b = static_cast<const unsigned char*>(p);
-    for (std::size_t i = 0; i < n; ++i) {
-      h ^= b[i];
-      h *= 1099511628211ull;
-    }
-  }
+// The state hash: FNV-1a 64 (common/fnv1a.hpp) over each field's object representation, arrays
+// preceded by their length.
+struct StateHasher {
+  Fnv1a64 f;
   template <class T>
   void value(const T& v) {
-    static_assert(std::is_trivially_copyable_v<T>);
-    bytes(&v, sizeof(T));
+    f.object(v);
   }
+  void bytes(const void* p, std::size_t n) { f.bytes(p, n); }
   void array(const LinkVec3Columns& c) {  // as the array of Vec3
     value(static_cast<std::uint64_t>(c.size()));
     for (std::size_t i = 0; i < c.size(); ++i) {
@@ -75,7 +72,7 @@ static_assert(sizeof(CollisionPair) == 8, "CollisionPair must be unpadded");
 }  // namespace
 
 std::uint64_t state_hash(const State& st) {
-  Fnv1a f;
+  StateHasher f;
   f.value(st.time);
   f.value(st.previous_dt);
   f.array(st.pos);
@@ -99,7 +96,7 @@ std::uint64_t state_hash(const State& st) {
   f.value(st.counters.non_finite_steps);
   f.value(st.counters.collision_rebuilds);
   f.value(st.counters.collision_pair_growths);
-  return f.h;
+  return f.f.value();
 }
 
 }  // namespace softevo::physics

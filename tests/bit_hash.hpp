@@ -11,22 +11,19 @@
 #include <string>
 #include <type_traits>
 
+#include "common/fnv1a.hpp"
+
 namespace softevo::test {
 
 constexpr int kHashedArguments = 1 << 18;
 
-// FNV-1a over the bytes of 64-bit patterns.
+// FNV-1a (common/fnv1a.hpp) over the bytes of 64-bit patterns, least significant first.
 struct BitHash {
-  std::uint64_t h = 0xcbf29ce484222325ull;
-  void add(std::uint64_t bits) {
-    for (int b = 0; b < 8; ++b) {
-      h ^= (bits >> (8 * b)) & 0xff;
-      h *= 0x100000001b3ull;
-    }
-  }
+  Fnv1a64 f;
+  void add(std::uint64_t bits) { f.u64_le(bits); }
   std::string hex() const {
     char buf[32];
-    std::snprintf(buf, sizeof buf, "%016" PRIx64, h);
+    std::snprintf(buf, sizeof buf, "%016" PRIx64, f.value());
     return buf;
   }
 };

@@ -7,6 +7,7 @@
 #include <set>
 #include <unordered_set>
 
+#include "common/fnv1a.hpp"
 #include "common/wire.hpp"
 #include "evo/development.hpp"
 
@@ -49,12 +50,9 @@ EvoParams small_params() {
 }
 
 std::uint64_t fnv1a(const std::vector<std::uint8_t>& bytes) {
-  std::uint64_t h = 1469598103934665603ULL;
-  for (std::uint8_t b : bytes) {
-    h ^= b;
-    h *= 1099511628211ULL;
-  }
-  return h;
+  Fnv1a64 h;
+  h.bytes(bytes.data(), bytes.size());
+  return h.value();
 }
 
 void check_invariants(const Population& pop) {

@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "common/fnv1a.hpp"
 #include "io/archive.hpp"
 #include "master/run.hpp"
 #include "tasks/task.hpp"
@@ -22,8 +23,9 @@ inline Config small_config() {
 
 // A deterministic stand-in for a physics evaluation: fitness from the genome's bytes.
 inline EvalResult fake_evaluation(const EvalRequest& request) {
-  std::uint64_t h = 0xcbf29ce484222325ULL;
-  for (std::uint8_t b : request.genome) h = (h ^ b) * 0x100000001b3ULL;
+  Fnv1a64 fnv;
+  fnv.bytes(request.genome.data(), request.genome.size());
+  const std::uint64_t h = fnv.value();
   EvalResult r;
   r.genome_id = request.genome_id;
   r.unit = request.unit;

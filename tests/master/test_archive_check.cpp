@@ -92,8 +92,9 @@ std::vector<Variant> variants() {
   };
 }
 
-// An interrupted run of 3 of small_config()'s 4 generations (packed into one file by the
-// stop): resumable when undamaged.
+// An interrupted run of 3 of small_config()'s 4 generations, packed into one file (a stop after
+// a failed write leaves the segments as they are, so the test packs it as a finished run would):
+// resumable when undamaged. The damage tests patch bytes of that one file.
 std::string interrupted_run(const test::TmpDir& dir, const std::string& name) {
   const std::string out = dir.file(name);
   const Config config = small_config();
@@ -105,6 +106,7 @@ std::string interrupted_run(const test::TmpDir& dir, const std::string& name) {
     });
   } catch (const RunError&) {
   }
+  io::finish_archive(out, io::Archive(out).info());
   return out;
 }
 
