@@ -33,7 +33,10 @@ constexpr double kPascalPerBar = 1.0e5;
 
 using Target =
     std::variant<double*, std::int64_t*, bool*, std::string*, TaskKind*, std::vector<double>*,
-                 std::vector<std::int64_t>*, std::vector<std::string>*>;
+                 std::vector<std::int64_t>*, std::vector<std::string>*, FailurePolicy*,
+                 ControlLoop*, Integrator*, GroundKind*, HeightfieldKind*, TerrainResample*,
+                 SupplyScaling*, CrossoverMethod*, ControllerInit*, DistanceInput*, LearningMethod*,
+                 Inheritance*>;
 
 struct KeyDef {
   const char* section;
@@ -41,10 +44,11 @@ struct KeyDef {
   Target target;
   double min = -kInf;  // inclusive range of numbers (each element of a number list)
   double max = kInf;
-  std::vector<std::string> allowed = {};  // allowed strings (each element of a string list)
-  double scale = 1.0;                     // config unit -> SI (bar -> Pa)
-  const char* unit = "";                  // config unit, for messages
-  std::size_t list_length = 0;            // exact list length, 0 = any non-empty length
+  // allowed strings (each element of a string list); a choice enum or TaskKind: its names
+  std::vector<std::string> allowed = {};
+  double scale = 1.0;           // config unit -> SI (bar -> Pa)
+  const char* unit = "";        // config unit, for messages
+  std::size_t list_length = 0;  // exact list length, 0 = any non-empty length
   bool min_exclusive = false;
   // A key of one task only: printed (and hashed) only when task.kind is that task, and an error
   // to set for another task. Keys of the tasks that predate this (task.directions and
@@ -70,37 +74,53 @@ bool failed_generations_not_default(const Config& c) {
   return c.run.stop_after_failed_generations != RunConfig{}.stop_after_failed_generations;
 }
 bool terrain_not_flat(const Config& c) {
-  return c.terrain.kind != "flat";
+  return c.terrain.kind != GroundKind::flat;
 }
 bool terrain_heightfield(const Config& c) {
-  return c.terrain.kind == "heightfield";
+  return c.terrain.kind == GroundKind::heightfield;
 }
 bool terrain_bumps(const Config& c) {
-  return terrain_heightfield(c) && c.terrain.heightfield == "bumps";
+  return terrain_heightfield(c) && c.terrain.heightfield == HeightfieldKind::bumps;
 }
 bool terrain_steps(const Config& c) {
-  return terrain_heightfield(c) && c.terrain.heightfield == "steps";
+  return terrain_heightfield(c) && c.terrain.heightfield == HeightfieldKind::steps;
 }
 bool terrain_slope(const Config& c) {
-  return terrain_heightfield(c) && c.terrain.heightfield == "slope";
+  return terrain_heightfield(c) && c.terrain.heightfield == HeightfieldKind::slope;
 }
 bool learning_on(const Config& c) {
-  return c.learning.method != "none";
+  return c.learning.method != LearningMethod::none;
 }
 bool supply_scaled(const Config& c) {
-  return c.pneumatics.supply_pressure_scaling != "none";
+  return c.pneumatics.supply_pressure_scaling != SupplyScaling::none;
 }
 bool oscillator_inputs_removed(const Config& c) {
   return !c.controller.oscillator_inputs;
 }
 bool controller_init_not_random(const Config& c) {
-  return c.controller.init != "random";
+  return c.controller.init != ControllerInit::random;
 }
 
 std::vector<std::string> task_kind_names() {
   std::vector<std::string> names;
   for (TaskKind k : task_kinds()) names.emplace_back(to_string(k));
   return names;
+}
+
+// The strings a string, choice or string-list key accepts (empty: any string).
+std::vector<std::string> allowed_strings(const KeyDef& def) {
+  return std::visit(
+      [&](auto* target) -> std::vector<std::string> {
+        using T = std::remove_pointer_t<decltype(target)>;
+        if constexpr (ConfigChoice<T>) {
+          return choice_names<T>();
+        } else if constexpr (std::is_same_v<T, TaskKind>) {
+          return task_kind_names();
+        } else {
+          return def.allowed;
+        }
+      },
+      def.target);
 }
 
 const std::vector<std::string> kSections = {
@@ -119,266 +139,457 @@ std::vector<KeyDef> schema(Config& c) {
   auto& l = c.learning;
   auto& n = c.neat;
   return {
-      {"run", "seed", &r.seed, 0, 9.0e15},
-      {"run", "generations", &r.generations, 0, 1.0e7},
-      {"run", "eval_timeout_seconds", &r.eval_timeout_seconds, 0, kInf, {}, 1.0, "s"},
-      {"run", "on_failure", &r.on_failure, 0, 0, {"killed", "abort"}},
-      {"run",
-       "stop_after_failed_generations",
-       &r.stop_after_failed_generations,
-       0,
-       1.0e7,
-       {},
-       1.0,
-       "",
-       0,
-       false,
-       std::nullopt,
-       failed_generations_not_default},
+      {.section = "run", .key = "seed", .target = &r.seed, .min = 0, .max = 9.0e15},
+      {.section = "run", .key = "generations", .target = &r.generations, .min = 0, .max = 1.0e7},
+      {.section = "run",
+       .key = "eval_timeout_seconds",
+       .target = &r.eval_timeout_seconds,
+       .min = 0,
+       .unit = "s"},
+      {.section = "run", .key = "on_failure", .target = &r.on_failure},
+      {.section = "run",
+       .key = "stop_after_failed_generations",
+       .target = &r.stop_after_failed_generations,
+       .min = 0,
+       .max = 1.0e7,
+       .printed_if = failed_generations_not_default},
 
-      {"task", "kind", &t.kind, 0, 0, task_kind_names()},
-      {"task", "control", &t.control, 0, 0, {"open", "closed"}},
-      {"task", "eval_seconds", &t.eval_seconds, 0, 3600, {}, 1.0, "s", 0, true},
-      {"task", "control_rate", &t.control_rate, 0, 10000, {}, 1.0, "Hz", 0, true},
-      {"task", "directions", &t.directions, -180, 180, {}, 1.0, "deg"},
-      {"task", "path_penalty_weight", &t.path_penalty_weight, 0, kInf},
-      {"task",
-       "rotate_travel_penalty",
-       &t.rotate_travel_penalty,
-       0,
-       kInf,
-       {},
-       1.0,
-       "rad per body length",
-       0,
-       false,
-       TaskKind::rotate},
+      {.section = "task", .key = "kind", .target = &t.kind},
+      {.section = "task", .key = "control", .target = &t.control},
+      {.section = "task",
+       .key = "eval_seconds",
+       .target = &t.eval_seconds,
+       .min = 0,
+       .max = 3600,
+       .unit = "s",
+       .min_exclusive = true},
+      {.section = "task",
+       .key = "control_rate",
+       .target = &t.control_rate,
+       .min = 0,
+       .max = 10000,
+       .unit = "Hz",
+       .min_exclusive = true},
+      {.section = "task",
+       .key = "directions",
+       .target = &t.directions,
+       .min = -180,
+       .max = 180,
+       .unit = "deg"},
+      {.section = "task", .key = "path_penalty_weight", .target = &t.path_penalty_weight, .min = 0},
+      {.section = "task",
+       .key = "rotate_travel_penalty",
+       .target = &t.rotate_travel_penalty,
+       .min = 0,
+       .unit = "rad per body length",
+       .only_for_task = TaskKind::rotate},
 
-      {"physics", "integrator", &p.integrator, 0, 0, {"pneuvox", "symplectic"}},
-      {"physics", "dt_fraction", &p.dt_fraction, 0, 1.0, {}, 1.0, "", 0, true},
-      {"physics", "voxel_size", &p.voxel_size, 0, 10, {}, 1.0, "m", 0, true},
-      {"physics", "gravity", &p.gravity, 0, 1000, {}, 1.0, "m/s^2"},
-      {"physics", "floor", &p.floor},
-      {"physics", "self_collision", &p.self_collision},
-      {"physics", "static_friction", &p.static_friction, 0, 100},
-      {"physics", "kinetic_friction", &p.kinetic_friction, 0, 100},
-      {"physics", "internal_damping", &p.internal_damping, 0, 10},
-      {"physics", "global_damping", &p.global_damping, 0, 10},
-      {"physics", "collision_damping", &p.collision_damping, 0, 10},
-      {"physics", "youngs_modulus_min", &p.youngs_modulus_min, 0, 1e12, {}, 1.0, "Pa", 0, true},
-      {"physics", "youngs_modulus_max", &p.youngs_modulus_max, 0, 1e12, {}, 1.0, "Pa", 0, true},
-      {"physics", "material_count", &p.material_count, 1, 10},
-      {"physics", "density", &p.density, 0, 1e6, {}, 1.0, "kg/m^3", 0, true},
+      {.section = "physics", .key = "integrator", .target = &p.integrator},
+      {.section = "physics",
+       .key = "dt_fraction",
+       .target = &p.dt_fraction,
+       .min = 0,
+       .max = 1.0,
+       .min_exclusive = true},
+      {.section = "physics",
+       .key = "voxel_size",
+       .target = &p.voxel_size,
+       .min = 0,
+       .max = 10,
+       .unit = "m",
+       .min_exclusive = true},
+      {.section = "physics",
+       .key = "gravity",
+       .target = &p.gravity,
+       .min = 0,
+       .max = 1000,
+       .unit = "m/s^2"},
+      {.section = "physics", .key = "floor", .target = &p.floor},
+      {.section = "physics", .key = "self_collision", .target = &p.self_collision},
+      {.section = "physics",
+       .key = "static_friction",
+       .target = &p.static_friction,
+       .min = 0,
+       .max = 100},
+      {.section = "physics",
+       .key = "kinetic_friction",
+       .target = &p.kinetic_friction,
+       .min = 0,
+       .max = 100},
+      {.section = "physics",
+       .key = "internal_damping",
+       .target = &p.internal_damping,
+       .min = 0,
+       .max = 10},
+      {.section = "physics",
+       .key = "global_damping",
+       .target = &p.global_damping,
+       .min = 0,
+       .max = 10},
+      {.section = "physics",
+       .key = "collision_damping",
+       .target = &p.collision_damping,
+       .min = 0,
+       .max = 10},
+      {.section = "physics",
+       .key = "youngs_modulus_min",
+       .target = &p.youngs_modulus_min,
+       .min = 0,
+       .max = 1e12,
+       .unit = "Pa",
+       .min_exclusive = true},
+      {.section = "physics",
+       .key = "youngs_modulus_max",
+       .target = &p.youngs_modulus_max,
+       .min = 0,
+       .max = 1e12,
+       .unit = "Pa",
+       .min_exclusive = true},
+      {.section = "physics",
+       .key = "material_count",
+       .target = &p.material_count,
+       .min = 1,
+       .max = 10},
+      {.section = "physics",
+       .key = "density",
+       .target = &p.density,
+       .min = 0,
+       .max = 1e6,
+       .unit = "kg/m^3",
+       .min_exclusive = true},
 
-      {"terrain",
-       "kind",
-       &tr.kind,
-       0,
-       0,
-       {"flat", "rows", "heightfield"},
-       1.0,
-       "",
-       0,
-       false,
-       std::nullopt,
-       terrain_not_flat},
-      only_when({"terrain", "heightfield", &tr.heightfield, 0, 0, {"bumps", "steps", "slope"}},
+      {.section = "terrain", .key = "kind", .target = &tr.kind, .printed_if = terrain_not_flat},
+      only_when({.section = "terrain", .key = "heightfield", .target = &tr.heightfield},
                 terrain_heightfield, "terrain.kind = \"heightfield\""),
-      only_when({"terrain", "amplitude", &tr.amplitude, 0, 1, {}, 1.0, "m"}, terrain_bumps,
+      only_when({.section = "terrain",
+                 .key = "amplitude",
+                 .target = &tr.amplitude,
+                 .min = 0,
+                 .max = 1,
+                 .unit = "m"},
+                terrain_bumps,
                 "terrain.kind = \"heightfield\" and terrain.heightfield = \"bumps\""),
-      only_when(
-          {"terrain", "correlation_length", &tr.correlation_length, 0, 100, {}, 1.0, "m", 0, true},
-          terrain_bumps, "terrain.kind = \"heightfield\" and terrain.heightfield = \"bumps\""),
-      only_when({"terrain", "step_height", &tr.step_height, 0, 1, {}, 1.0, "m"}, terrain_steps,
-                "terrain.kind = \"heightfield\" and terrain.heightfield = \"steps\""),
-      only_when({"terrain", "step_spacing", &tr.step_spacing, 0, 100, {}, 1.0, "m", 0, true},
+      only_when({.section = "terrain",
+                 .key = "correlation_length",
+                 .target = &tr.correlation_length,
+                 .min = 0,
+                 .max = 100,
+                 .unit = "m",
+                 .min_exclusive = true},
+                terrain_bumps,
+                "terrain.kind = \"heightfield\" and terrain.heightfield = \"bumps\""),
+      only_when({.section = "terrain",
+                 .key = "step_height",
+                 .target = &tr.step_height,
+                 .min = 0,
+                 .max = 1,
+                 .unit = "m"},
                 terrain_steps,
                 "terrain.kind = \"heightfield\" and terrain.heightfield = \"steps\""),
-      only_when({"terrain", "slope_angle", &tr.slope_angle, -60, 60, {}, 1.0, "deg"}, terrain_slope,
-                "terrain.kind = \"heightfield\" and terrain.heightfield = \"slope\""),
-      only_when({"terrain", "slope_direction", &tr.slope_direction, -360, 360, {}, 1.0, "deg"},
+      only_when({.section = "terrain",
+                 .key = "step_spacing",
+                 .target = &tr.step_spacing,
+                 .min = 0,
+                 .max = 100,
+                 .unit = "m",
+                 .min_exclusive = true},
+                terrain_steps,
+                "terrain.kind = \"heightfield\" and terrain.heightfield = \"steps\""),
+      only_when({.section = "terrain",
+                 .key = "slope_angle",
+                 .target = &tr.slope_angle,
+                 .min = -60,
+                 .max = 60,
+                 .unit = "deg"},
                 terrain_slope,
                 "terrain.kind = \"heightfield\" and terrain.heightfield = \"slope\""),
-      only_when({"terrain", "seed", &tr.seed, 0, 9.0e15}, terrain_not_flat,
-                "terrain.kind is not \"flat\""),
-      only_when({"terrain",
-                 "resample",
-                 &tr.resample,
-                 0,
-                 0,
-                 {"per_run", "per_generation", "per_evaluation"}},
+      only_when({.section = "terrain",
+                 .key = "slope_direction",
+                 .target = &tr.slope_direction,
+                 .min = -360,
+                 .max = 360,
+                 .unit = "deg"},
+                terrain_slope,
+                "terrain.kind = \"heightfield\" and terrain.heightfield = \"slope\""),
+      only_when({.section = "terrain", .key = "seed", .target = &tr.seed, .min = 0, .max = 9.0e15},
                 terrain_not_flat, "terrain.kind is not \"flat\""),
+      only_when({.section = "terrain", .key = "resample", .target = &tr.resample}, terrain_not_flat,
+                "terrain.kind is not \"flat\""),
 
-      {"pneumatics", "supply_pressure", &pn.supply_pressure, 0, 100, {}, kPascalPerBar, "bar"},
-      {"pneumatics", "ambient_pressure", &pn.ambient_pressure, 0, 100, {}, kPascalPerBar, "bar"},
-      {"pneumatics", "conductivity", &pn.conductivity, 0, 1000, {}, 1.0, "m^3/(bar s)"},
-      {"pneumatics", "valve_cutoff", &pn.valve_cutoff, 0, 1e4, {}, 1.0, "Hz", 0, true},
-      {"pneumatics", "valve_filter_stages", &pn.valve_filter_stages, 0, 16},
-      {"pneumatics", "valve_filter_q", &pn.valve_filter_q, 0, 100, {}, 1.0, "", 0, true},
-      {"pneumatics",
-       "initial_sensor_pressure",
-       &pn.initial_sensor_pressure,
-       0,
-       100,
-       {},
-       kPascalPerBar,
-       "bar"},
-      {"pneumatics",
-       "supply_pressure_scaling",
-       &pn.supply_pressure_scaling,
-       0,
-       0,
-       {"none", "inverse_volume"},
-       1.0,
-       "",
-       0,
-       false,
-       std::nullopt,
-       supply_scaled},
-      only_when({"pneumatics",
-                 "scaling_reference_volume",
-                 &pn.scaling_reference_volume,
-                 0,
-                 1,
-                 {},
-                 1.0,
-                 "m^3",
-                 0,
-                 true},
+      {.section = "pneumatics",
+       .key = "supply_pressure",
+       .target = &pn.supply_pressure,
+       .min = 0,
+       .max = 100,
+       .scale = kPascalPerBar,
+       .unit = "bar"},
+      {.section = "pneumatics",
+       .key = "ambient_pressure",
+       .target = &pn.ambient_pressure,
+       .min = 0,
+       .max = 100,
+       .scale = kPascalPerBar,
+       .unit = "bar"},
+      {.section = "pneumatics",
+       .key = "conductivity",
+       .target = &pn.conductivity,
+       .min = 0,
+       .max = 1000,
+       .unit = "m^3/(bar s)"},
+      {.section = "pneumatics",
+       .key = "valve_cutoff",
+       .target = &pn.valve_cutoff,
+       .min = 0,
+       .max = 1e4,
+       .unit = "Hz",
+       .min_exclusive = true},
+      {.section = "pneumatics",
+       .key = "valve_filter_stages",
+       .target = &pn.valve_filter_stages,
+       .min = 0,
+       .max = 16},
+      {.section = "pneumatics",
+       .key = "valve_filter_q",
+       .target = &pn.valve_filter_q,
+       .min = 0,
+       .max = 100,
+       .min_exclusive = true},
+      {.section = "pneumatics",
+       .key = "initial_sensor_pressure",
+       .target = &pn.initial_sensor_pressure,
+       .min = 0,
+       .max = 100,
+       .scale = kPascalPerBar,
+       .unit = "bar"},
+      {.section = "pneumatics",
+       .key = "supply_pressure_scaling",
+       .target = &pn.supply_pressure_scaling,
+       .printed_if = supply_scaled},
+      only_when({.section = "pneumatics",
+                 .key = "scaling_reference_volume",
+                 .target = &pn.scaling_reference_volume,
+                 .min = 0,
+                 .max = 1,
+                 .unit = "m^3",
+                 .min_exclusive = true},
                 supply_scaled, "pneumatics.supply_pressure_scaling = \"inverse_volume\""),
-      only_when({"pneumatics",
-                 "max_supply_pressure",
-                 &pn.max_supply_pressure,
-                 0,
-                 100,
-                 {},
-                 kPascalPerBar,
-                 "bar",
-                 0,
-                 true},
+      only_when({.section = "pneumatics",
+                 .key = "max_supply_pressure",
+                 .target = &pn.max_supply_pressure,
+                 .min = 0,
+                 .max = 100,
+                 .scale = kPascalPerBar,
+                 .unit = "bar",
+                 .min_exclusive = true},
                 supply_scaled, "pneumatics.supply_pressure_scaling = \"inverse_volume\""),
 
-      {"controller", "hidden", &ct.hidden, 1, 64},
-      {"controller",
-       "crossover_method",
-       &ct.crossover_method,
-       0,
-       0,
-       {"1pointpl", "random", "1point"}},
-      {"controller", "weight_init_sd", &ct.weight_init_sd, 0, 100},
-      {"controller", "gene_limit", &ct.gene_limit, 0, 1000, {}, 1.0, "", 0, true},
-      {"controller", "freq_min", &ct.freq_min, 0, 1000, {}, 1.0, "Hz", 0, true},
-      {"controller", "freq_max", &ct.freq_max, 0, 1000, {}, 1.0, "Hz", 0, true},
-      {"controller", "freq_step_size_init", &ct.freq_step_size_init, 0, 1000, {}, 1.0, "Hz"},
-      {"controller",
-       "oscillator_inputs",
-       &ct.oscillator_inputs,
-       -kInf,
-       kInf,
-       {},
-       1.0,
-       "",
-       0,
-       false,
-       std::nullopt,
-       oscillator_inputs_removed},
-      {"controller",
-       "init",
-       &ct.init,
-       0,
-       0,
-       {"random", "oscillator"},
-       1.0,
-       "",
-       0,
-       false,
-       std::nullopt,
-       controller_init_not_random},
-      only_when({"controller", "init_perturbation_sd", &ct.init_perturbation_sd, 0, 5},
+      {.section = "controller", .key = "hidden", .target = &ct.hidden, .min = 1, .max = 64},
+      {.section = "controller", .key = "crossover_method", .target = &ct.crossover_method},
+      {.section = "controller",
+       .key = "weight_init_sd",
+       .target = &ct.weight_init_sd,
+       .min = 0,
+       .max = 100},
+      {.section = "controller",
+       .key = "gene_limit",
+       .target = &ct.gene_limit,
+       .min = 0,
+       .max = 1000,
+       .min_exclusive = true},
+      {.section = "controller",
+       .key = "freq_min",
+       .target = &ct.freq_min,
+       .min = 0,
+       .max = 1000,
+       .unit = "Hz",
+       .min_exclusive = true},
+      {.section = "controller",
+       .key = "freq_max",
+       .target = &ct.freq_max,
+       .min = 0,
+       .max = 1000,
+       .unit = "Hz",
+       .min_exclusive = true},
+      {.section = "controller",
+       .key = "freq_step_size_init",
+       .target = &ct.freq_step_size_init,
+       .min = 0,
+       .max = 1000,
+       .unit = "Hz"},
+      {.section = "controller",
+       .key = "oscillator_inputs",
+       .target = &ct.oscillator_inputs,
+       .printed_if = oscillator_inputs_removed},
+      {.section = "controller",
+       .key = "init",
+       .target = &ct.init,
+       .printed_if = controller_init_not_random},
+      only_when({.section = "controller",
+                 .key = "init_perturbation_sd",
+                 .target = &ct.init_perturbation_sd,
+                 .min = 0,
+                 .max = 5},
                 controller_init_not_random, "controller.init = \"oscillator\""),
 
-      {"body", "lattice", &b.lattice, 2, 64, {}, 1.0, "cells", 3},
-      {"body", "distance_input", &b.distance_input, 0, 0, {"center", "pneuvox"}},
-      {"body", "presence_threshold", &b.presence_threshold, -kInf, kInf},
-      {"body", "pneumatic_threshold", &b.pneumatic_threshold, -kInf, kInf},
-      {"body", "max_chambers", &b.max_chambers, 1, 10},
+      {.section = "body",
+       .key = "lattice",
+       .target = &b.lattice,
+       .min = 2,
+       .max = 64,
+       .unit = "cells",
+       .list_length = 3},
+      {.section = "body", .key = "distance_input", .target = &b.distance_input},
+      {.section = "body", .key = "presence_threshold", .target = &b.presence_threshold},
+      {.section = "body", .key = "pneumatic_threshold", .target = &b.pneumatic_threshold},
+      {.section = "body", .key = "max_chambers", .target = &b.max_chambers, .min = 1, .max = 10},
 
-      {"neat", "pop_size", &n.pop_size, 2, 1e6},
-      {"neat",
-       "compatibility_threshold",
-       &n.compatibility_threshold,
-       0,
-       kInf,
-       {},
-       1.0,
-       "",
-       0,
-       true},
-      {"neat", "compatibility_disjoint_coefficient", &n.compatibility_disjoint_coefficient, 0,
-       kInf},
-      {"neat", "compatibility_weight_coefficient", &n.compatibility_weight_coefficient, 0, kInf},
-      {"neat", "conn_add_prob", &n.conn_add_prob, 0, 1},
-      {"neat", "conn_delete_prob", &n.conn_delete_prob, 0, 1},
-      {"neat", "node_add_prob", &n.node_add_prob, 0, 1},
-      {"neat", "node_delete_prob", &n.node_delete_prob, 0, 1},
-      {"neat",
-       "activation_default",
-       &n.activation_default,
-       0,
-       0,
-       {"random", "sigmoid", "sin", "abs", "square", "exp", "clamped", "gauss", "tanh"}},
-      {"neat", "activation_mutate_rate", &n.activation_mutate_rate, 0, 1},
-      {"neat", "activation_options", &n.activation_options, 0, 0, activations},
-      {"neat", "bias_init_mean", &n.bias_init_mean},
-      {"neat", "bias_init_stdev", &n.bias_init_stdev, 0, kInf},
-      {"neat", "bias_max_value", &n.bias_max_value},
-      {"neat", "bias_min_value", &n.bias_min_value},
-      {"neat", "bias_mutate_power", &n.bias_mutate_power, 0, kInf},
-      {"neat", "bias_mutate_rate", &n.bias_mutate_rate, 0, 1},
-      {"neat", "bias_replace_rate", &n.bias_replace_rate, 0, 1},
-      {"neat", "weight_init_mean", &n.weight_init_mean},
-      {"neat", "weight_init_stdev", &n.weight_init_stdev, 0, kInf},
-      {"neat", "weight_max_value", &n.weight_max_value},
-      {"neat", "weight_min_value", &n.weight_min_value},
-      {"neat", "weight_mutate_power", &n.weight_mutate_power, 0, kInf},
-      {"neat", "weight_mutate_rate", &n.weight_mutate_rate, 0, 1},
-      {"neat", "weight_replace_rate", &n.weight_replace_rate, 0, 1},
-      {"neat", "response_init_mean", &n.response_init_mean},
-      {"neat", "response_init_stdev", &n.response_init_stdev, 0, kInf},
-      {"neat", "response_max_value", &n.response_max_value},
-      {"neat", "response_min_value", &n.response_min_value},
-      {"neat", "response_mutate_power", &n.response_mutate_power, 0, kInf},
-      {"neat", "response_mutate_rate", &n.response_mutate_rate, 0, 1},
-      {"neat", "response_replace_rate", &n.response_replace_rate, 0, 1},
-      {"neat", "enabled_mutate_rate", &n.enabled_mutate_rate, 0, 1},
-      {"neat", "max_stagnation", &n.max_stagnation, 1, 1e9},
-      {"neat", "species_elitism", &n.species_elitism, 0, 1e9},
-      {"neat", "elitism", &n.elitism, 0, 1e9},
-      {"neat", "survival_threshold", &n.survival_threshold, 0, 1, {}, 1.0, "", 0, true},
-      {"neat", "tournament_size", &n.tournament_size, 1, 1e9},
-      {"neat", "min_species_size", &n.min_species_size, 1, 1e9},
+      {.section = "neat", .key = "pop_size", .target = &n.pop_size, .min = 2, .max = 1e6},
+      {.section = "neat",
+       .key = "compatibility_threshold",
+       .target = &n.compatibility_threshold,
+       .min = 0,
+       .min_exclusive = true},
+      {.section = "neat",
+       .key = "compatibility_disjoint_coefficient",
+       .target = &n.compatibility_disjoint_coefficient,
+       .min = 0},
+      {.section = "neat",
+       .key = "compatibility_weight_coefficient",
+       .target = &n.compatibility_weight_coefficient,
+       .min = 0},
+      {.section = "neat", .key = "conn_add_prob", .target = &n.conn_add_prob, .min = 0, .max = 1},
+      {.section = "neat",
+       .key = "conn_delete_prob",
+       .target = &n.conn_delete_prob,
+       .min = 0,
+       .max = 1},
+      {.section = "neat", .key = "node_add_prob", .target = &n.node_add_prob, .min = 0, .max = 1},
+      {.section = "neat",
+       .key = "node_delete_prob",
+       .target = &n.node_delete_prob,
+       .min = 0,
+       .max = 1},
+      {.section = "neat",
+       .key = "activation_default",
+       .target = &n.activation_default,
+       .allowed = {"random", "sigmoid", "sin", "abs", "square", "exp", "clamped", "gauss", "tanh"}},
+      {.section = "neat",
+       .key = "activation_mutate_rate",
+       .target = &n.activation_mutate_rate,
+       .min = 0,
+       .max = 1},
+      {.section = "neat",
+       .key = "activation_options",
+       .target = &n.activation_options,
+       .allowed = activations},
+      {.section = "neat", .key = "bias_init_mean", .target = &n.bias_init_mean},
+      {.section = "neat", .key = "bias_init_stdev", .target = &n.bias_init_stdev, .min = 0},
+      {.section = "neat", .key = "bias_max_value", .target = &n.bias_max_value},
+      {.section = "neat", .key = "bias_min_value", .target = &n.bias_min_value},
+      {.section = "neat", .key = "bias_mutate_power", .target = &n.bias_mutate_power, .min = 0},
+      {.section = "neat",
+       .key = "bias_mutate_rate",
+       .target = &n.bias_mutate_rate,
+       .min = 0,
+       .max = 1},
+      {.section = "neat",
+       .key = "bias_replace_rate",
+       .target = &n.bias_replace_rate,
+       .min = 0,
+       .max = 1},
+      {.section = "neat", .key = "weight_init_mean", .target = &n.weight_init_mean},
+      {.section = "neat", .key = "weight_init_stdev", .target = &n.weight_init_stdev, .min = 0},
+      {.section = "neat", .key = "weight_max_value", .target = &n.weight_max_value},
+      {.section = "neat", .key = "weight_min_value", .target = &n.weight_min_value},
+      {.section = "neat", .key = "weight_mutate_power", .target = &n.weight_mutate_power, .min = 0},
+      {.section = "neat",
+       .key = "weight_mutate_rate",
+       .target = &n.weight_mutate_rate,
+       .min = 0,
+       .max = 1},
+      {.section = "neat",
+       .key = "weight_replace_rate",
+       .target = &n.weight_replace_rate,
+       .min = 0,
+       .max = 1},
+      {.section = "neat", .key = "response_init_mean", .target = &n.response_init_mean},
+      {.section = "neat", .key = "response_init_stdev", .target = &n.response_init_stdev, .min = 0},
+      {.section = "neat", .key = "response_max_value", .target = &n.response_max_value},
+      {.section = "neat", .key = "response_min_value", .target = &n.response_min_value},
+      {.section = "neat",
+       .key = "response_mutate_power",
+       .target = &n.response_mutate_power,
+       .min = 0},
+      {.section = "neat",
+       .key = "response_mutate_rate",
+       .target = &n.response_mutate_rate,
+       .min = 0,
+       .max = 1},
+      {.section = "neat",
+       .key = "response_replace_rate",
+       .target = &n.response_replace_rate,
+       .min = 0,
+       .max = 1},
+      {.section = "neat",
+       .key = "enabled_mutate_rate",
+       .target = &n.enabled_mutate_rate,
+       .min = 0,
+       .max = 1},
+      {.section = "neat",
+       .key = "max_stagnation",
+       .target = &n.max_stagnation,
+       .min = 1,
+       .max = 1e9},
+      {.section = "neat",
+       .key = "species_elitism",
+       .target = &n.species_elitism,
+       .min = 0,
+       .max = 1e9},
+      {.section = "neat", .key = "elitism", .target = &n.elitism, .min = 0, .max = 1e9},
+      {.section = "neat",
+       .key = "survival_threshold",
+       .target = &n.survival_threshold,
+       .min = 0,
+       .max = 1,
+       .min_exclusive = true},
+      {.section = "neat",
+       .key = "tournament_size",
+       .target = &n.tournament_size,
+       .min = 1,
+       .max = 1e9},
+      {.section = "neat",
+       .key = "min_species_size",
+       .target = &n.min_species_size,
+       .min = 1,
+       .max = 1e9},
 
-      {"learning",
-       "method",
-       &l.method,
-       0,
-       0,
-       {"none", "es"},
-       1.0,
-       "",
-       0,
-       false,
-       std::nullopt,
-       learning_on},
-      only_when({"learning", "evaluations", &l.evaluations, 2, 1e9}, learning_on,
-                "learning.method is not \"none\""),
-      only_when({"learning", "population", &l.population, 1, 1e9}, learning_on,
-                "learning.method is not \"none\""),
-      only_when({"learning", "inheritance", &l.inheritance, 0, 0, {"lamarckian", "baldwinian"}},
+      {.section = "learning", .key = "method", .target = &l.method, .printed_if = learning_on},
+      only_when({.section = "learning",
+                 .key = "evaluations",
+                 .target = &l.evaluations,
+                 .min = 2,
+                 .max = 1e9},
                 learning_on, "learning.method is not \"none\""),
-      only_when({"learning", "step_size_factor", &l.step_size_factor, 0, 1e6, {}, 1.0, "", 0, true},
+      only_when({.section = "learning",
+                 .key = "population",
+                 .target = &l.population,
+                 .min = 1,
+                 .max = 1e9},
                 learning_on, "learning.method is not \"none\""),
-      only_when({"learning", "body_mutate_power_factor", &l.body_mutate_power_factor, 0, 1e6},
+      only_when({.section = "learning", .key = "inheritance", .target = &l.inheritance},
+                learning_on, "learning.method is not \"none\""),
+      only_when({.section = "learning",
+                 .key = "step_size_factor",
+                 .target = &l.step_size_factor,
+                 .min = 0,
+                 .max = 1e6,
+                 .min_exclusive = true},
+                learning_on, "learning.method is not \"none\""),
+      only_when({.section = "learning",
+                 .key = "body_mutate_power_factor",
+                 .target = &l.body_mutate_power_factor,
+                 .min = 0,
+                 .max = 1e6},
                 learning_on, "learning.method is not \"none\""),
   };
 }
@@ -433,9 +644,10 @@ std::string allowed_text(const KeyDef& def) {
         if constexpr (std::is_same_v<T, double>) return range_text(def, false);
         if constexpr (std::is_same_v<T, std::int64_t>) return range_text(def, true);
         if constexpr (std::is_same_v<T, bool>) return "true or false";
-        if constexpr (std::is_same_v<T, std::string> || std::is_same_v<T, TaskKind>) {
+        if constexpr (std::is_same_v<T, std::string> || std::is_same_v<T, TaskKind> ||
+                      ConfigChoice<T>) {
           std::vector<std::string> q;
-          for (const auto& a : def.allowed) q.push_back(quote(a));
+          for (const auto& a : allowed_strings(def)) q.push_back(quote(a));
           return "one of " + join(q);
         }
         if constexpr (std::is_same_v<T, std::vector<double>>) {
@@ -530,9 +742,9 @@ std::string string_of(const toml::node& node, const KeyDef& def, const Location&
     fail(at, name + " must be " + allowed_text(def) + ", got " + type_name(node));
   }
   std::string v = node.as_string()->get();
-  if (!def.allowed.empty() &&
-      std::find(def.allowed.begin(), def.allowed.end(), v) == def.allowed.end()) {
-    fail(at, name + " = " + quote(v) + " is not allowed" + suggestion(v, def.allowed) +
+  const std::vector<std::string> allowed = allowed_strings(def);
+  if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), v) == allowed.end()) {
+    fail(at, name + " = " + quote(v) + " is not allowed" + suggestion(v, allowed) +
                  "; allowed: " + allowed_text(def));
   }
   return v;
@@ -582,6 +794,8 @@ void assign(const KeyDef& def, const toml::node& node, const Location& at) {
           *target = string_of(node, def, at, name);
         } else if constexpr (std::is_same_v<T, TaskKind>) {
           *target = *task_kind_from_string(string_of(node, def, at, name));  // allowed: checked
+        } else if constexpr (ConfigChoice<T>) {
+          *target = *choice_from_string<T>(string_of(node, def, at, name));  // allowed: checked
         } else {
           if (!node.is_array()) {
             fail(at, name + " must be " + allowed_text(def) + ", got " + type_name(node));
@@ -656,14 +870,12 @@ void check_consistency(const Config& c, const std::string& source) {
   // Ground that cannot work: a tread shorter than a voxel puts a riser under every voxel centre
   // (physics/terrain.cpp refuses it, so every evaluation would fail), and value noise of cells
   // below a voxel is sampled less than once per cell (far below, it reads as flat ground).
-  if (c.terrain.kind == "heightfield" && c.terrain.heightfield == "steps" &&
-      !(c.terrain.step_spacing >= c.physics.voxel_size)) {
+  if (terrain_steps(c) && !(c.terrain.step_spacing >= c.physics.voxel_size)) {
     fail(at, "terrain.step_spacing = " + format_double(c.terrain.step_spacing) +
                  " m must be at least one voxel (physics.voxel_size = " +
                  format_double(c.physics.voxel_size) + " m)");
   }
-  if (c.terrain.kind == "heightfield" && c.terrain.heightfield == "bumps" &&
-      !(c.terrain.correlation_length >= c.physics.voxel_size)) {
+  if (terrain_bumps(c) && !(c.terrain.correlation_length >= c.physics.voxel_size)) {
     fail(at, "terrain.correlation_length = " + format_double(c.terrain.correlation_length) +
                  " m must be at least one voxel (physics.voxel_size = " +
                  format_double(c.physics.voxel_size) +
@@ -672,8 +884,7 @@ void check_consistency(const Config& c, const std::string& source) {
   if (c.controller.freq_min > c.controller.freq_max) {
     fail(at, "controller.freq_min must be <= controller.freq_max");
   }
-  if (c.pneumatics.supply_pressure_scaling != "none" &&
-      c.pneumatics.max_supply_pressure < c.pneumatics.supply_pressure) {
+  if (supply_scaled(c) && c.pneumatics.max_supply_pressure < c.pneumatics.supply_pressure) {
     fail(at, "pneumatics.max_supply_pressure = " +
                  format_double(c.pneumatics.max_supply_pressure / kPascalPerBar) +
                  " bar must be >= pneumatics.supply_pressure = " +
@@ -681,26 +892,26 @@ void check_consistency(const Config& c, const std::string& source) {
                  " bar (the reference chamber keeps supply_pressure)");
   }
   // Below ambient the scaled gauge would be negative and grow without bound for small chambers.
-  if (c.pneumatics.supply_pressure_scaling != "none" &&
-      !(c.pneumatics.supply_pressure > c.pneumatics.ambient_pressure)) {
-    fail(at, "pneumatics.supply_pressure_scaling = " + quote(c.pneumatics.supply_pressure_scaling) +
+  if (supply_scaled(c) && !(c.pneumatics.supply_pressure > c.pneumatics.ambient_pressure)) {
+    fail(at, "pneumatics.supply_pressure_scaling = " +
+                 quote(to_string(c.pneumatics.supply_pressure_scaling)) +
                  " needs pneumatics.supply_pressure > pneumatics.ambient_pressure (it scales the "
                  "gauge pressure above ambient)");
   }
   // Without pressure sensors the hand-made oscillator has nothing to switch on, and an open-loop
   // controller without oscillator inputs has no input that changes.
-  if (c.controller.init == "oscillator" && c.task.control != "closed") {
+  if (c.controller.init == ControllerInit::oscillator && c.task.control != ControlLoop::closed) {
     fail(at,
          "controller.init = \"oscillator\" needs task.control = \"closed\" (it switches on "
          "the pressure sensors), got task.control = " +
-             quote(c.task.control));
+             quote(to_string(c.task.control)));
   }
-  if (!c.controller.oscillator_inputs && c.task.control != "closed") {
+  if (!c.controller.oscillator_inputs && c.task.control != ControlLoop::closed) {
     fail(at,
          "controller.oscillator_inputs = false needs task.control = \"closed\" (an open-loop "
          "controller without oscillator inputs gets no input that changes), got "
          "task.control = " +
-             quote(c.task.control));
+             quote(to_string(c.task.control)));
   }
   if (learning_on(c) && c.learning.evaluations < 1 + c.learning.population) {
     fail(at,
@@ -715,8 +926,9 @@ void check_consistency(const Config& c, const std::string& source) {
   }
   // A candidate is evaluated under its own work-unit id: on a ground drawn per evaluation it
   // would compete on another ground than its body's, and the learned robot would not replay.
-  if (learning_on(c) && c.terrain.kind != "flat" && c.terrain.resample == "per_evaluation") {
-    fail(at, "learning.method = " + quote(c.learning.method) +
+  if (learning_on(c) && terrain_not_flat(c) &&
+      c.terrain.resample == TerrainResample::per_evaluation) {
+    fail(at, "learning.method = " + quote(to_string(c.learning.method)) +
                  " needs terrain.resample = \"per_run\" or \"per_generation\" (candidates of one "
                  "body must be scored on the same ground), got \"per_evaluation\"");
   }
@@ -846,6 +1058,7 @@ std::string value_text(const KeyDef& def) {
         if constexpr (std::is_same_v<T, bool>) return *target ? "true" : "false";
         if constexpr (std::is_same_v<T, std::string>) return quote(*target);
         if constexpr (std::is_same_v<T, TaskKind>) return quote(to_string(*target));
+        if constexpr (ConfigChoice<T>) return quote(to_string(*target));
         if constexpr (std::is_same_v<T, std::vector<double>>) {
           std::vector<std::string> items;
           for (double v : *target) items.push_back(format_double(v / def.scale));
@@ -1045,16 +1258,17 @@ std::string experiment_name(const Config& config) {
   // Controller learning is another experiment (docs/model.md §8.11): "gait-closed-learn".
   const std::string learn = learning_on(config) ? "-learn" : "";
   const TerrainConfig& t = config.terrain;
-  if (t.kind == "flat") return experiment_name(config.task) + learn;
+  if (t.kind == GroundKind::flat) return experiment_name(config.task) + learn;
   const std::string kind =
       config.task.kind == TaskKind::directed ? "dir" : to_string(config.task.kind);
-  return kind + (t.kind == "rows" ? "-rows-" : "-rough-") + config.task.control + learn;
+  return kind + (t.kind == GroundKind::rows ? "-rows-" : "-rough-") +
+         to_string(config.task.control) + learn;
 }
 
 std::string experiment_name(const TaskConfig& task) {
   // "dir" is the thesis' short name of the directed experiments (run names mdv2_*, §8.9).
   const std::string kind = task.kind == TaskKind::directed ? "dir" : to_string(task.kind);
-  return kind + "-" + task.control;
+  return kind + "-" + to_string(task.control);
 }
 
 }  // namespace softevo

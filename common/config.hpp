@@ -15,8 +15,73 @@
 #include <vector>
 
 #include "common/body_plan.hpp"
+#include "common/choice.hpp"
 
 namespace softevo {
+
+// The choices of the config (common/choice.hpp), in the order of their config names.
+enum class FailurePolicy : std::uint8_t { killed, abort };          // run.on_failure
+enum class ControlLoop : std::uint8_t { open, closed };             // task.control (§4.1)
+enum class Integrator : std::uint8_t { pneuvox, symplectic };       // physics.integrator (§2.9)
+enum class GroundKind : std::uint8_t { flat, rows, heightfield };   // terrain.kind (§2.8a)
+enum class HeightfieldKind : std::uint8_t { bumps, steps, slope };  // terrain.heightfield
+enum class TerrainResample : std::uint8_t { per_run, per_generation, per_evaluation };
+enum class SupplyScaling : std::uint8_t { none, inverse_volume };                      // (§3.8)
+enum class CrossoverMethod : std::uint8_t { one_point_per_layer, random, one_point };  // (§8.6)
+enum class ControllerInit : std::uint8_t { random, oscillator };   // (§8.2, §4.8)
+enum class DistanceInput : std::uint8_t { center, pneuvox };       // (§6.2)
+enum class LearningMethod : std::uint8_t { none, es };             // (§8.11)
+enum class Inheritance : std::uint8_t { lamarckian, baldwinian };  // (§8.11)
+
+template <>
+struct ChoiceNames<FailurePolicy> {
+  static constexpr std::array<const char*, 2> names = {"killed", "abort"};
+};
+template <>
+struct ChoiceNames<ControlLoop> {
+  static constexpr std::array<const char*, 2> names = {"open", "closed"};
+};
+template <>
+struct ChoiceNames<Integrator> {
+  static constexpr std::array<const char*, 2> names = {"pneuvox", "symplectic"};
+};
+template <>
+struct ChoiceNames<GroundKind> {
+  static constexpr std::array<const char*, 3> names = {"flat", "rows", "heightfield"};
+};
+template <>
+struct ChoiceNames<HeightfieldKind> {
+  static constexpr std::array<const char*, 3> names = {"bumps", "steps", "slope"};
+};
+template <>
+struct ChoiceNames<TerrainResample> {
+  static constexpr std::array<const char*, 3> names = {"per_run", "per_generation",
+                                                       "per_evaluation"};
+};
+template <>
+struct ChoiceNames<SupplyScaling> {
+  static constexpr std::array<const char*, 2> names = {"none", "inverse_volume"};
+};
+template <>
+struct ChoiceNames<CrossoverMethod> {
+  static constexpr std::array<const char*, 3> names = {"1pointpl", "random", "1point"};
+};
+template <>
+struct ChoiceNames<ControllerInit> {
+  static constexpr std::array<const char*, 2> names = {"random", "oscillator"};
+};
+template <>
+struct ChoiceNames<DistanceInput> {
+  static constexpr std::array<const char*, 2> names = {"center", "pneuvox"};
+};
+template <>
+struct ChoiceNames<LearningMethod> {
+  static constexpr std::array<const char*, 2> names = {"none", "es"};
+};
+template <>
+struct ChoiceNames<Inheritance> {
+  static constexpr std::array<const char*, 2> names = {"lamarckian", "baldwinian"};
+};
 
 struct RunConfig {
   std::int64_t seed = 1;           // run seed; every evaluation seed derives from it
@@ -26,7 +91,7 @@ struct RunConfig {
   double eval_timeout_seconds = 600.0;
   // What a worker-side failure (exception, non-finite state, timeout) scores: "killed" scores it
   // like a killed robot (fitness 0) and the run goes on; "abort" ends the run with an error.
-  std::string on_failure = "killed";
+  FailurePolicy on_failure = FailurePolicy::killed;
   // The run stops (exit code 1, the cause printed and recorded as the archive's stop_reason)
   // after this many generations in a row in which no evaluation succeeded: each one diverged,
   // failed, timed out or had an invalid body (a config that cannot work, not evolution). The
@@ -48,9 +113,9 @@ std::optional<TaskKind> task_kind_from_string(const std::string& name);
 
 struct TaskConfig {
   TaskKind kind = TaskKind::gait;
-  std::string control = "open";  // "open" or "closed" loop (pressure sensors as inputs, §4.1)
-  double eval_seconds = 10.0;    // nominal evaluation length [s]; frames = round(60 * seconds)
-  double control_rate = 60.0;    // controller rate [Hz] (§4.6)
+  ControlLoop control = ControlLoop::open;  // closed: pressure sensors as inputs (§4.1)
+  double eval_seconds = 10.0;  // nominal evaluation length [s]; frames = round(60 * seconds)
+  double control_rate = 60.0;  // controller rate [Hz] (§4.6)
   // Target directions of the directed task [deg], in the order the thesis summed them (§7.4).
   std::vector<double> directions = {0.0, -40.0, -20.0, 20.0, 40.0};
   double path_penalty_weight = 0.1;  // omega of §7.2
@@ -60,17 +125,17 @@ struct TaskConfig {
 };
 
 struct PhysicsConfig {
-  std::string integrator = "pneuvox";  // "pneuvox" (§2.12-2.13) or "symplectic" (§2.9 upstream)
-  double dt_fraction = 1.0;            // time step = recommended step (§2.14) x dt_fraction
-  double voxel_size = 0.01;            // voxel edge [m]
-  double gravity = 9.80665;            // [m/s^2], acting along -z
-  bool floor = true;                   // floor contact at z = 0 (voxel centres, §2.8)
-  bool self_collision = true;          // voxel-voxel collisions (§2.10)
-  double static_friction = 0.9;        // mu_s [-]
-  double kinetic_friction = 0.9;       // mu_k [-]
-  double internal_damping = 0.1;       // zeta_int [-] (bond damping ratio)
-  double global_damping = 0.001;       // zeta_glob [-]
-  double collision_damping = 0.1;      // zeta_col [-]
+  Integrator integrator = Integrator::pneuvox;  // pneuvox (§2.12-2.13) or symplectic (§2.9)
+  double dt_fraction = 1.0;        // time step = recommended step (§2.14) x dt_fraction
+  double voxel_size = 0.01;        // voxel edge [m]
+  double gravity = 9.80665;        // [m/s^2], acting along -z
+  bool floor = true;               // floor contact at z = 0 (voxel centres, §2.8)
+  bool self_collision = true;      // voxel-voxel collisions (§2.10)
+  double static_friction = 0.9;    // mu_s [-]
+  double kinetic_friction = 0.9;   // mu_k [-]
+  double internal_damping = 0.1;   // zeta_int [-] (bond damping ratio)
+  double global_damping = 0.001;   // zeta_glob [-]
+  double collision_damping = 0.1;  // zeta_col [-]
   // Structural material k (1..material_count) has E_k = linspace(min, max, count)[k-1] (§1).
   double youngs_modulus_min = 1.0e4;  // [Pa]
   double youngs_modulus_max = 1.0e5;  // [Pa]
@@ -82,18 +147,18 @@ struct PhysicsConfig {
 // canonical text (and the config hash) only when kind is not "flat", so the configs of every
 // existing archive keep their hash.
 struct TerrainConfig {
-  std::string kind = "flat";  // "flat", "rows" (the reference's fixed voxels), "heightfield"
-  std::string heightfield = "bumps";  // kind = "heightfield": "bumps", "steps" or "slope"
-  double amplitude = 0.01;            // bumps: largest height above / below the plane [m]
-  double correlation_length = 0.05;   // bumps: grid spacing of the value noise [m]
-  double step_height = 0.005;         // steps: rise of each step [m]
-  double step_spacing = 0.05;         // steps: tread length along +x [m]
-  double slope_angle = 10.0;          // slope: inclination [deg], > 0 uphill
-  double slope_direction = 0.0;       // slope: uphill direction from +x towards +y [deg]
-  std::int64_t seed = 1;              // terrain seed, mixed with run.seed
+  GroundKind kind = GroundKind::flat;  // flat, rows (the thesis system's fixed voxels), heightfield
+  HeightfieldKind heightfield = HeightfieldKind::bumps;  // kind = heightfield: bumps, steps, slope
+  double amplitude = 0.01;           // bumps: largest height above / below the plane [m]
+  double correlation_length = 0.05;  // bumps: grid spacing of the value noise [m]
+  double step_height = 0.005;        // steps: rise of each step [m]
+  double step_spacing = 0.05;        // steps: tread length along +x [m]
+  double slope_angle = 10.0;         // slope: inclination [deg], > 0 uphill
+  double slope_direction = 0.0;      // slope: uphill direction from +x towards +y [deg]
+  std::int64_t seed = 1;             // terrain seed, mixed with run.seed
   // How often the ground is drawn anew: once per run, per generation (every genome of a
   // generation on the same ground), or per evaluation (genome and direction too).
-  std::string resample = "per_run";
+  TerrainResample resample = TerrainResample::per_run;
 };
 
 // Median rest volume of the 57 chambers of the 40 thesis champions [m^3] (about 133 cm^3;
@@ -113,7 +178,7 @@ struct PneumaticsConfig {
   // Thesis 5.3.4: "none" gives every inlet supply_pressure; "inverse_volume" raises the supply's
   // gauge pressure (above ambient_pressure) of each chamber in inverse proportion to its rest
   // volume, so small actuators are compensated (docs/model.md §3.8).
-  std::string supply_pressure_scaling = "none";
+  SupplyScaling supply_pressure_scaling = SupplyScaling::none;
   // Rest volume [m^3] whose chamber keeps supply_pressure under "inverse_volume" (§3.8).
   double scaling_reference_volume = kThesisMedianChamberVolume;
   // Upper bound of a scaled chamber supply, absolute [Pa] (config: bar; §3.8).
@@ -121,26 +186,26 @@ struct PneumaticsConfig {
 };
 
 struct ControllerConfig {
-  std::int64_t hidden = 4;                    // Elman hidden (= context) units (§4.1)
-  std::string crossover_method = "1pointpl";  // "1pointpl", "random" or "1point" (§8.6)
-  double weight_init_sd = 3.0;                // init SD of genes and initial step size (§8.2)
-  double gene_limit = 5.0;                    // genes and step sizes clipped to +-gene_limit
-  double freq_min = 1.0;                      // oscillator frequency range [Hz]
-  double freq_max = 5.0;                      // [Hz]
-  double freq_step_size_init = 0.2;           // initial step size of the frequency gene [Hz]
+  std::int64_t hidden = 4;  // Elman hidden (= context) units (§4.1)
+  CrossoverMethod crossover_method = CrossoverMethod::one_point_per_layer;  // (§8.6)
+  double weight_init_sd = 3.0;       // init SD of genes and initial step size (§8.2)
+  double gene_limit = 5.0;           // genes and step sizes clipped to +-gene_limit
+  double freq_min = 1.0;             // oscillator frequency range [Hz]
+  double freq_max = 5.0;             // [Hz]
+  double freq_step_size_init = 0.2;  // initial step size of the frequency gene [Hz]
   // Thesis 5.3.4 and 5.1.1: false removes the sin/cos oscillator inputs (closed loop only, §4.1).
   bool oscillator_inputs = true;
   // Initial controller genes (§8.2): "random", or "oscillator", a hand-made pressure-driven
   // oscillator per chamber (closed loop only, §4.8).
-  std::string init = "random";
+  ControllerInit init = ControllerInit::random;
   // "oscillator": SD of the Gaussian perturbation of every hand-made gene, and the genes' initial
   // mutation step size (§4.8).
   double init_perturbation_sd = 0.1;
 };
 
 struct BodyConfig {
-  std::vector<std::int64_t> lattice = {10, 10, 10};  // CPPN query lattice X, Y, Z
-  std::string distance_input = "center";             // "center" or "pneuvox" (§6.2)
+  std::vector<std::int64_t> lattice = {10, 10, 10};      // CPPN query lattice X, Y, Z
+  DistanceInput distance_input = DistanceInput::center;  // (§6.2)
   double presence_threshold = 0.1;
   double pneumatic_threshold = 0.1;
   std::int64_t max_chambers = 10;  // chambers beyond this stay unactuated voids (§6.5 step 9)
@@ -195,14 +260,14 @@ struct NeatConfig {
 // sees it. method = "none" (the thesis, the default) leaves every [learning] key out of the
 // canonical text, so configs without learning keep their config hash and their bits.
 struct LearningConfig {
-  std::string method = "none";  // "none" or "es"
+  LearningMethod method = LearningMethod::none;
   // Evaluations per new body, the inherited controller's own evaluation included: the strategy
   // runs (evaluations - 1) / population iterations of `population` candidates each.
   std::int64_t evaluations = 101;
   std::int64_t population = 10;  // lambda: candidates per iteration
   // "lamarckian": the learned controller (values and step sizes) replaces the genome's before
   // reproduction; "baldwinian": only the learned fitness counts, the genome reproduces as born.
-  std::string inheritance = "lamarckian";
+  Inheritance inheritance = Inheritance::lamarckian;
   // The strategy's step sizes are the genome's (evolution's: weight_init_sd = 3 at first, one
   // large mutation per generation) times this factor: a local search needs small steps.
   double step_size_factor = 0.1;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/body_plan.hpp"
+#include "common/config.hpp"  // DistanceInput
 #include "common/safe_write.hpp"
 
 namespace softevo {
@@ -79,7 +80,7 @@ struct RobotGenomeRecord {
   std::vector<CppnConnectionRecord> connections;  // in summation order
   ControllerVectors controller_step_sizes;
   std::vector<int> body_lattice = {10, 10, 10};
-  std::string distance_input = "pneuvox";  // "pneuvox" or "center"
+  DistanceInput distance_input = DistanceInput::pneuvox;
 };
 
 // Optional "evaluation" section: the settings of the run the robot was exported from, so that

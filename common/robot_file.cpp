@@ -332,10 +332,11 @@ RobotGenomeRecord read_genome(const Reader& r, const Json& j, const ControllerSp
       g.body_lattice = {l[0], l[1], l[2]};
     }
     if (auto f = it->find("distance_input"); f != it->end()) {
-      g.distance_input = r.string(*f, bk + ".distance_input");
-      if (g.distance_input != "pneuvox" && g.distance_input != "center")
-        r.fail(bk + ".distance_input",
-               "expected \"pneuvox\" or \"center\", got \"" + g.distance_input + "\"");
+      const std::string name = r.string(*f, bk + ".distance_input");
+      const auto distance_input = choice_from_string<DistanceInput>(name);
+      if (!distance_input)
+        r.fail(bk + ".distance_input", "expected \"pneuvox\" or \"center\", got \"" + name + "\"");
+      g.distance_input = *distance_input;
     }
   }
   return g;
@@ -574,7 +575,7 @@ std::string robot_to_json(const RobotFile& robot) {
     if (!g.controller_step_sizes.freq.empty())
       genome["controller_step_sizes"] =
           vectors_to_json(g.controller_step_sizes, c.input_count(), c.hidden, c.outputs, true);
-    genome["body"] = {{"lattice", g.body_lattice}, {"distance_input", g.distance_input}};
+    genome["body"] = {{"lattice", g.body_lattice}, {"distance_input", to_string(g.distance_input)}};
     root["genome"] = genome;
   }
   if (robot.evaluation) {

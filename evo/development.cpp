@@ -192,10 +192,7 @@ DevelopedBody develop_body(const CppnGenome& genome, const BodyConfig& body) {
                   static_cast<int>(body.lattice[2])};
   const std::size_t cells = static_cast<std::size_t>(dims[0]) * dims[1] * dims[2];
   if (cells > 10'000'000) throw std::invalid_argument("body.lattice: more than 1e7 cells");
-  const bool pneuvox_distance = body.distance_input == "pneuvox";
-  if (!pneuvox_distance && body.distance_input != "center")
-    throw std::invalid_argument("body.distance_input: '" + body.distance_input +
-                                "' (expected \"pneuvox\" or \"center\")");
+  const bool pneuvox_distance = body.distance_input == DistanceInput::pneuvox;
   if (body.max_chambers < 0 || body.max_chambers > 10)
     throw std::invalid_argument("body.max_chambers: " + std::to_string(body.max_chambers) +
                                 " out of range [0, 10] (chamber ids are 11..20)");

@@ -42,19 +42,11 @@ std::array<const std::vector<double>*, kControllerVectorCount> vectors_of(
 
 ControllerShape controller_shape(const Config& config, int task_inputs) {
   ControllerShape s;
-  s.inputs = controller_input_count(task_inputs, config.task.control == "closed",
+  s.inputs = controller_input_count(task_inputs, config.task.control == ControlLoop::closed,
                                     config.controller.oscillator_inputs);
   s.hidden = static_cast<int>(config.controller.hidden);
   s.outputs = static_cast<int>(2 * config.body.max_chambers);  // inlet + outlet per chamber (§4.5)
   return s;
-}
-
-EvoParams::CrossoverMethod crossover_method_from_string(const std::string& name) {
-  if (name == "1pointpl") return EvoParams::CrossoverMethod::one_point_per_layer;
-  if (name == "random") return EvoParams::CrossoverMethod::random;
-  if (name == "1point") return EvoParams::CrossoverMethod::one_point;
-  throw std::invalid_argument("controller.crossover_method: unknown method '" + name +
-                              "' (expected 1pointpl, random or 1point)");
 }
 
 EvoParams evo_params(const Config& config, int task_inputs) {
@@ -89,7 +81,7 @@ EvoParams evo_params(const Config& config, int task_inputs) {
   p.with_controller = true;
   p.shape = controller_shape(config, task_inputs);
   p.controller = config.controller;
-  p.crossover_method = crossover_method_from_string(config.controller.crossover_method);
+  p.crossover_method = config.controller.crossover_method;
   p.mutate_only_probability = 0.0;  // §8.5 step 5
   return p;
 }
@@ -203,7 +195,7 @@ void oscillator_controller(const EvoParams& p, Rng& rng, Genome& genome) {
 }
 
 void random_controller(const EvoParams& p, Rng& rng, Genome& genome) {
-  if (p.controller.init == "oscillator") {
+  if (p.controller.init == ControllerInit::oscillator) {
     oscillator_controller(p, rng, genome);
     return;
   }
@@ -395,7 +387,7 @@ ControllerSpec to_controller_spec(const Genome& genome, const Config& config, in
   check_controller_shape(genome, shape);
   ControllerSpec spec;
   spec.kind = "elman";
-  spec.closed_loop = config.task.control == "closed";
+  spec.closed_loop = config.task.control == ControlLoop::closed;
   spec.directed = task_inputs == 1;
   spec.oscillator_inputs = config.controller.oscillator_inputs;
   spec.hidden = shape.hidden;

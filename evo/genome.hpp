@@ -67,8 +67,8 @@ struct EvoParams {
   bool with_controller = true;
   ControllerShape shape;
   ControllerConfig controller;
-  // 1pointpl / random / 1point (§8.6); stored resolved for speed.
-  enum class CrossoverMethod : std::uint8_t { one_point_per_layer, random, one_point };
+  // 1pointpl / random / 1point (§8.6), the config's choice.
+  using CrossoverMethod = softevo::CrossoverMethod;
   CrossoverMethod crossover_method = CrossoverMethod::one_point_per_layer;
   // MIPReproduction.mutateonlyprobability (0.0 in the thesis, §8.5 step 5): probability that a
   // child is a mutated copy of parent A instead of crossover(A, B) + mutation.
@@ -86,9 +86,8 @@ struct EvoParams {
 // knows no task).
 ControllerShape controller_shape(const Config& config, int task_inputs);
 // Resolves a Config into operator parameters; throws std::invalid_argument naming the key for
-// an unknown activation option or crossover method.
+// an unknown activation option.
 EvoParams evo_params(const Config& config, int task_inputs);
-EvoParams::CrossoverMethod crossover_method_from_string(const std::string& name);
 
 // --- Initialisation (§8.2) -----------------------------------------------------------------
 // A neat-python 0.92 gene value draw: clamp(N(mean, stdev), min, max) (gaussian init_type).

@@ -205,7 +205,7 @@ std::string mebibytes(std::uint64_t bytes) {
 std::uint64_t estimate_run_memory(const Config& config) {
   const auto members = static_cast<std::uint64_t>(std::max<std::int64_t>(config.neat.pop_size, 0));
   std::uint64_t per_member = kBytesPerMember;
-  if (config.learning.method != "none")
+  if (config.learning.method != LearningMethod::none)
     per_member += kBytesPerLearningCandidate *
                   static_cast<std::uint64_t>(std::max<std::int64_t>(config.learning.population, 0));
   return kRunBaseBytes + members * per_member;
@@ -235,12 +235,12 @@ std::string check_run_memory(const std::vector<const Config*>& configs,
                          ? "the run (neat.pop_size = " + std::to_string(first.neat.pop_size)
                          : std::to_string(configs.size()) + " runs of this job (neat.pop_size = " +
                                std::to_string(first.neat.pop_size) + " in the first";
-  if (first.learning.method != "none")
+  if (first.learning.method != LearningMethod::none)
     what += ", learning.population = " + std::to_string(first.learning.population);
   what += ")";
   const std::string keys =
       "lower neat.pop_size (--population)" +
-      std::string(first.learning.method != "none" ? " or learning.population" : "") +
+      std::string(first.learning.method != LearningMethod::none ? " or learning.population" : "") +
       (configs.size() > 1 ? ", or run fewer seeds per job" : "");
   if (total > available->bytes)
     throw StartupError(what + " needs about " + mebibytes(total) + " of memory on rank 0, but " +
@@ -499,7 +499,7 @@ GenerationScheduler& RunLoop::begin_generation() {
     // A learned result is not a function of the genome alone when it is learned again (a
     // Lamarckian elite would learn on from its learned controller): with learning, results are
     // always reused (docs/model.md §8.11).
-    const bool reuse = run_.options.reuse_results || config.learning.method != "none";
+    const bool reuse = run_.options.reuse_results || config.learning.method != LearningMethod::none;
     plan_ = plan_reuse(ids, encoded_, reuse ? &run_.memory : nullptr);
     std::vector<std::int64_t> evaluated_ids;
     costs_.clear();
@@ -530,7 +530,7 @@ EvalRequest RunLoop::request(const WorkUnit& unit) const {
 
 GenerationScheduler* RunLoop::continue_generation() {
   GenerationScheduler* next = nullptr;
-  if (run_.config.learning.method == "none") return next;
+  if (run_.config.learning.method == LearningMethod::none) return next;
   guarded([&] {
     GenerationScheduler& scheduler = *scheduler_;
     const std::int64_t g = scheduler.generation();
@@ -566,7 +566,7 @@ GenerationScheduler* RunLoop::continue_generation() {
 }
 
 void RunLoop::check_failures(const GenerationScheduler& scheduler) const {
-  if (run_.config.run.on_failure != "abort") return;
+  if (run_.config.run.on_failure != FailurePolicy::abort) return;
   const auto failures = scheduler.failures();
   if (failures.empty()) return;
   const EvalResult& f = *failures.front();
@@ -668,7 +668,7 @@ void RunLoop::end_generation() {
 
     try {
       // Lamarckian inheritance: the learned controllers are what reproduces (§8.11).
-      if (learning_ && config.learning.inheritance == "lamarckian")
+      if (learning_ && config.learning.inheritance == Inheritance::lamarckian)
         for (std::size_t r = 0; r < rec.size(); ++r)
           if (rec.learned_genome[r] != rec.genome[r])
             population.adopt_controller(rec.id[r], evo::decode_genome(rec.learned_genome[r]));

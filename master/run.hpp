@@ -217,7 +217,7 @@ class RunLoop {
   ReusePlan plan_;
   std::vector<double> costs_;  // predicted cost per evaluated member (empty: member order)
   std::optional<GenerationScheduler> scheduler_;
-  // Controller learning of the generation in flight (learning.method != "none").
+  // Controller learning of the generation in flight (learning.method != none).
   std::optional<GenerationLearning> learning_;
   std::size_t units_before_ = 0;  // units simulated in the generation's finished rounds
   Clock::time_point t_generation_;

@@ -124,14 +124,7 @@ std::array<std::vector<double>, 12> members_of(const std::vector<Record>& record
 
 Model build_model(const BodyPlan& plan, const PhysicsConfig& cfg, const BuildOptions& options) {
   Model m;
-  if (cfg.integrator == "pneuvox") {
-    m.integrator = Integrator::pneuvox;
-  } else if (cfg.integrator == "symplectic") {
-    m.integrator = Integrator::symplectic;
-  } else {
-    fail("physics.integrator = \"" + cfg.integrator +
-         "\" is not one of \"pneuvox\", \"symplectic\"");
-  }
+  m.integrator = cfg.integrator;
   if (!(cfg.dt_fraction > 0.0) || !std::isfinite(cfg.dt_fraction))
     fail("physics.dt_fraction must be > 0");
   m.simd = resolve_simd(options.simd);

@@ -27,10 +27,9 @@
 
 namespace softevo::physics {
 
-enum class Integrator : std::uint8_t {
-  pneuvox = 0,     // exact two-part fork step, §2.12-2.13
-  symplectic = 1,  // upstream single-pass symplectic Euler, §2.9
-};
+// The integrator is the config's choice (common/config.hpp): pneuvox, the exact two-part fork
+// step of §2.12-2.13, or symplectic, the upstream single-pass symplectic Euler of §2.9.
+using softevo::Integrator;
 
 // SIMD width of the step passes (physics/step_kernels.hpp). Every width gives bit-identical
 // results (same IEEE operations per lane, on x86-64 and AArch64 alike); only the speed differs.

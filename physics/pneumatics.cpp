@@ -29,7 +29,7 @@ BiquadCoeffs lowpass_biquad(double normalised_cutoff, double q) {
 }
 
 double chamber_supply_pressure(const PneumaticsConfig& cfg, double rest_volume) {
-  if (cfg.supply_pressure_scaling == "none") return cfg.supply_pressure;
+  if (cfg.supply_pressure_scaling == SupplyScaling::none) return cfg.supply_pressure;
   // §3.8: the gauge part scales, because the wall force (§3.4) and the gas a stroke moves are
   // proportional to it; scaling the absolute pressure would multiply the gauge of a half-size
   // chamber by 7 instead of 2 at the default 1.2 bar.
@@ -44,10 +44,7 @@ PneumaticsModel build_pneumatics(const BodyPlan& plan, const Model& model,
     throw std::invalid_argument("build_pneumatics: body plan lattice does not match the model");
   if (!(cfg.supply_pressure > 0.0) || !(cfg.ambient_pressure > 0.0))
     throw std::invalid_argument("build_pneumatics: reservoir pressures must be > 0 Pa");
-  if (cfg.supply_pressure_scaling != "none" && cfg.supply_pressure_scaling != "inverse_volume")
-    throw std::invalid_argument("build_pneumatics: unknown supply_pressure_scaling '" +
-                                cfg.supply_pressure_scaling + "' (none or inverse_volume)");
-  if (cfg.supply_pressure_scaling == "inverse_volume" &&
+  if (cfg.supply_pressure_scaling == SupplyScaling::inverse_volume &&
       (!(cfg.scaling_reference_volume > 0.0) || !(cfg.max_supply_pressure >= cfg.supply_pressure) ||
        !(cfg.supply_pressure > cfg.ambient_pressure)))
     throw std::invalid_argument(

@@ -22,6 +22,8 @@
 #include <string>
 #include <vector>
 
+#include "common/config.hpp"  // GroundKind, HeightfieldKind
+
 namespace softevo::physics {
 
 enum class TerrainKind : std::uint8_t {
@@ -32,6 +34,26 @@ enum class TerrainKind : std::uint8_t {
   slope = 4,  // height field: an inclined plane in front of the robot
 };
 const char* to_string(TerrainKind kind);  // "flat", "rows", "bumps", "steps", "slope"
+// The ground of the config's terrain.kind and terrain.heightfield (docs/model.md §2.8a).
+constexpr TerrainKind terrain_kind(GroundKind ground, HeightfieldKind heightfield) {
+  switch (ground) {
+    case GroundKind::flat:
+      return TerrainKind::flat;
+    case GroundKind::rows:
+      return TerrainKind::rows;
+    case GroundKind::heightfield:
+      break;
+  }
+  switch (heightfield) {
+    case HeightfieldKind::bumps:
+      return TerrainKind::bumps;
+    case HeightfieldKind::steps:
+      return TerrainKind::steps;
+    case HeightfieldKind::slope:
+      break;
+  }
+  return TerrainKind::slope;
+}
 
 // What defines one evaluation's ground: the resolved config values and the seed derived for the
 // evaluation (worker/terrain_seed). Recorded in traces so that a viewer can rebuild the ground.

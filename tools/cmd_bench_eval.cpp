@@ -273,7 +273,8 @@ int run_bench_eval(const BenchEvalArgs& a) {
   const std::vector<ChampionRow> unevaluated = rows;
   for (int run = 1; run <= a.runs; ++run) {
     std::vector<ChampionRow> again = unevaluated;
-    validation::evaluate_champions(again, a.overrides, a.integrator, a.jobs,
+    validation::evaluate_champions(again, a.overrides,
+                                   parse_choice<Integrator>(a.integrator, "--integrator"), a.jobs,
                                    [&](const ChampionRow& r) {
                                      std::fprintf(stderr, "  run %d  %-16s %.2f s CPU\n", run,
                                                   r.robot.name.c_str(), r.cpu_seconds);
@@ -350,7 +351,7 @@ void register_bench_eval(CLI::App& app, int& exit_code) {
   cmd->add_option("DIR", a->dir, "directory of robot files")->capture_default_str();
   cmd->add_option("--jobs", a->jobs, "evaluation threads (1 = one core)")->check(CLI::Range(1, 64));
   cmd->add_option("--integrator", a->integrator, "physics integrator")
-      ->check(CLI::IsMember({"pneuvox", "symplectic"}));
+      ->check(CLI::IsMember(choice_names<Integrator>()));
   cmd->add_option("--only", a->only, "only files whose path contains this text");
   cmd->add_option("--runs", a->runs,
                   "evaluations per robot; the fastest is kept (all must give the same fitness)")

@@ -31,7 +31,7 @@ struct BenchRow {
   double cpu_seconds = 0.0, wall_seconds = 0.0;
 };
 
-BenchRow bench_one(const Scene& scene, const std::string& integrator, physics::Simd simd, int steps,
+BenchRow bench_one(const Scene& scene, Integrator integrator, physics::Simd simd, int steps,
                    int runs) {
   PhysicsConfig cfg;  // thesis defaults: floor, gravity, self-collision, damping 0.1/0.001/0.1
   cfg.integrator = integrator;
@@ -39,8 +39,8 @@ BenchRow bench_one(const Scene& scene, const std::string& integrator, physics::S
   options.simd = simd;
   const physics::Model model =
       physics::build_model(physics::solid_block(scene.x, scene.y, scene.z, 1.0e5), cfg, options);
-  BenchRow row{scene.name,        integrator,       physics::to_string(model.simd),
-               model.voxel_count, model.link_count, steps};
+  BenchRow row{scene.name,        to_string(integrator), physics::to_string(model.simd),
+               model.voxel_count, model.link_count,      steps};
   row.cpu_seconds = 1e300;
   for (int r = 0; r < runs; ++r) {
     physics::State state = physics::initial_state(model);
@@ -107,7 +107,7 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
     int failed = 0;
     for (const Scene& scene : scenes) {
       if (!only->empty() && std::string(scene.name).find(*only) == std::string::npos) continue;
-      for (const char* integrator : {"pneuvox", "symplectic"})
+      for (Integrator integrator : {Integrator::pneuvox, Integrator::symplectic})
         for (physics::Simd simd : widths) {
           const BenchRow r = bench_one(scene, integrator, simd, *steps, *runs);
           const double us = r.cpu_seconds * 1e6 / (static_cast<double>(r.steps) * r.voxels);

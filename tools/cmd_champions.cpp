@@ -46,11 +46,13 @@ int run_champions(const ChampionsArgs& a) {
   if (rows.empty()) throw std::runtime_error(a.dir + ": no robot files selected");
   std::fprintf(stderr, "evaluating %zu robots on %d thread(s), integrator %s\n", rows.size(),
                a.jobs, a.integrator.c_str());
-  validation::evaluate_champions(rows, a.overrides, a.integrator, a.jobs, [](const ChampionRow& r) {
-    std::fprintf(stderr, "  %-16s ours %12.6f  ref %10.4f  %s  (%.1f s CPU)\n",
-                 r.robot.name.c_str(), r.result.fitness, r.ref_fitness, to_string(r.result.status),
-                 r.cpu_seconds);
-  });
+  validation::evaluate_champions(
+      rows, a.overrides, parse_choice<Integrator>(a.integrator, "--integrator"), a.jobs,
+      [](const ChampionRow& r) {
+        std::fprintf(stderr, "  %-16s ours %12.6f  ref %10.4f  %s  (%.1f s CPU)\n",
+                     r.robot.name.c_str(), r.result.fitness, r.ref_fitness,
+                     to_string(r.result.status), r.cpu_seconds);
+      });
 
   std::vector<double> ours_all, ref_all, open_diff;
   int below_half = 0, not_walking = 0, walkers = 0;
@@ -139,7 +141,7 @@ void register_champions(CLI::App& app, int& exit_code) {
   cmd->add_option("DIR", a->dir, "directory of robot files")->capture_default_str();
   cmd->add_option("--jobs", a->jobs, "evaluation threads")->check(CLI::Range(1, 64));
   cmd->add_option("--integrator", a->integrator, "physics integrator")
-      ->check(CLI::IsMember({"pneuvox", "symplectic"}));
+      ->check(CLI::IsMember(choice_names<Integrator>()));
   cmd->add_option("--only", a->only, "only files whose path contains this text");
   cmd->add_option("--set", a->overrides, "override a config key: section.key=value");
   cmd->add_flag("--json", a->json, "print one JSON object");

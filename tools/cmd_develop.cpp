@@ -81,9 +81,9 @@ std::vector<ChamberInfo> chamber_info(const BodyPlan& p) {
 }
 
 void print_text(const std::string& path, const evo::DevelopedBody& body, const BodyPlan& expected,
-                const std::vector<CellDiff>& diffs, const std::string& distance_input) {
+                const std::vector<CellDiff>& diffs, DistanceInput distance_input) {
   const BodyPlan& p = body.plan;
-  std::printf("develop %s (distance_input %s)\n", path.c_str(), distance_input.c_str());
+  std::printf("develop %s (distance_input %s)\n", path.c_str(), to_string(distance_input));
   std::printf("valid %s, actuatable %s\n", body.valid ? "yes" : "no",
               body.actuatable ? "yes" : "no");
   if (body.valid) {

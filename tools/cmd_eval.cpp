@@ -82,7 +82,8 @@ int run_eval(const EvalArgs& a) {
   if (!a.direction.empty()) settings.overrides.push_back("task.directions=[" + a.direction + "]");
   if (!a.timeout.empty()) settings.overrides.push_back("run.eval_timeout_seconds=" + a.timeout);
   settings.task = a.task;
-  settings.integrator = a.integrator;
+  if (!a.integrator.empty())
+    settings.integrator = parse_choice<Integrator>(a.integrator, "--integrator");
   const Config config = worker::robot_eval_config(robot, settings);
   const std::string config_source = worker::describe_config_source(robot, settings);
   const Overwrite overwrite = a.force ? Overwrite::replace : Overwrite::refuse;
@@ -146,7 +147,7 @@ int run_eval(const EvalArgs& a) {
     nlohmann::ordered_json j;
     j["robot"] = robot.name.empty() ? a.robot : robot.name;
     j["task"] = to_string(config.task.kind);
-    j["integrator"] = config.physics.integrator;
+    j["integrator"] = to_string(config.physics.integrator);
     j["ablate"] = ablation;
     j["fitness"] = json_number(result.fitness);
     j["status"] = to_string(result.status);
@@ -189,7 +190,7 @@ int run_eval(const EvalArgs& a) {
     std::printf("task         %s (%s loop%s), integrator %s, ablate %s\n",
                 to_string(config.task.kind), robot.controller.closed_loop ? "closed" : "open",
                 robot.controller.directed ? ", directed controller" : "",
-                config.physics.integrator.c_str(), ablation.c_str());
+                to_string(config.physics.integrator), ablation.c_str());
     std::printf("config       %s\n", printable(config_source).c_str());
     std::printf("fitness      %.17g\n", result.fitness);
     if (archived)
@@ -230,7 +231,7 @@ void register_eval(CLI::App& app, int& exit_code) {
                   "fit)")
       ->check(CLI::IsMember(task_names));
   cmd->add_option("--integrator", a->integrator, "physics integrator")
-      ->check(CLI::IsMember({"pneuvox", "symplectic"}));
+      ->check(CLI::IsMember(choice_names<Integrator>()));
   add_seconds_option(*cmd, a->seconds, "simulated seconds");
   cmd->add_option("--ablate", a->ablate, "feed zeros to the oscillator or the pressure sensors")
       ->check(CLI::IsMember({"oscillator", "sensors"}));

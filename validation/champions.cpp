@@ -61,18 +61,18 @@ ChampionRow load_champion(const std::string& path) {
 }
 
 Config champion_config(const ChampionRow& row, const std::vector<std::string>& overrides,
-                       const std::string& integrator) {
+                       Integrator integrator) {
   Config config = parse_config("", "<built-in defaults>", overrides);
-  config.task.control = row.robot.controller.closed_loop ? "closed" : "open";
+  config.task.control = row.robot.controller.closed_loop ? ControlLoop::closed : ControlLoop::open;
   config.task.kind = tasks::default_task_for(row.robot.controller.task_inputs());
-  if (!integrator.empty()) config.physics.integrator = integrator;
+  config.physics.integrator = integrator;
   // No wall-clock limit: a report must not depend on how busy the machine is.
   config.run.eval_timeout_seconds = 0.0;
   return config;
 }
 
 void evaluate_champions(std::vector<ChampionRow>& rows, const std::vector<std::string>& overrides,
-                        const std::string& integrator, int jobs,
+                        Integrator integrator, int jobs,
                         const std::function<void(const ChampionRow&)>& progress) {
   struct Unit {
     std::size_t row;

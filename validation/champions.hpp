@@ -35,12 +35,12 @@ ChampionRow load_champion(const std::string& path);
 // Config of a champion: built-in defaults (+ overrides), task.control from the controller,
 // task.kind the task its controller's inputs fit (tasks::default_task_for), integrator as given.
 Config champion_config(const ChampionRow& row, const std::vector<std::string>& overrides,
-                       const std::string& integrator);
+                       Integrator integrator);
 
 // Evaluates every row (every work unit of its task on its own, combined by the task) on `jobs`
 // threads; `progress` is called (serialised) when a robot is complete.
 void evaluate_champions(std::vector<ChampionRow>& rows, const std::vector<std::string>& overrides,
-                        const std::string& integrator, int jobs,
+                        Integrator integrator, int jobs,
                         const std::function<void(const ChampionRow&)>& progress);
 
 // Spearman rank correlation (average ranks for ties); NaN for fewer than 2 values.

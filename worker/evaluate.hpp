@@ -145,7 +145,7 @@ struct RobotEvalSettings {
   // controller's inputs fit (tasks::default_task_for). Applied as the last override, so that a
   // key of that task is accepted.
   std::string task;
-  std::string integrator;           // "" = the config's physics.integrator
+  std::optional<Integrator> integrator;  // none = the config's physics.integrator
   std::optional<double> seconds;    // replaces task.eval_seconds [s] (range-checked)
   std::optional<double> direction;  // replaces task.directions by [direction] [deg]
 };

@@ -47,16 +47,8 @@ physics::BuildOptions build_options_for(physics::Simd simd, physics::TerrainPara
 physics::TerrainParams terrain_params(const Config& config, const EvaluationIds& ids, int unit) {
   const TerrainConfig& tc = config.terrain;
   physics::TerrainParams p;
-  if (tc.kind == "flat") return p;
-  if (tc.kind == "rows") {
-    p.kind = physics::TerrainKind::rows;
-  } else if (tc.heightfield == "bumps") {
-    p.kind = physics::TerrainKind::bumps;
-  } else if (tc.heightfield == "steps") {
-    p.kind = physics::TerrainKind::steps;
-  } else {
-    p.kind = physics::TerrainKind::slope;
-  }
+  p.kind = physics::terrain_kind(tc.kind, tc.heightfield);
+  if (p.kind == physics::TerrainKind::flat) return p;
   p.amplitude = tc.amplitude;
   p.correlation_length = tc.correlation_length;
   p.step_height = tc.step_height;
@@ -64,8 +56,8 @@ physics::TerrainParams terrain_params(const Config& config, const EvaluationIds&
   p.slope_angle = tc.slope_angle;
   p.slope_direction = tc.slope_direction;
   // -1 = "not part of this ground's identity" (derive_seed's convention for a missing id).
-  const bool per_generation = tc.resample != "per_run";
-  const bool per_evaluation = tc.resample == "per_evaluation";
+  const bool per_generation = tc.resample != TerrainResample::per_run;
+  const bool per_evaluation = tc.resample == TerrainResample::per_evaluation;
   std::uint64_t base = static_cast<std::uint64_t>(tc.seed);
   base = splitmix64(base) ^ static_cast<std::uint64_t>(config.run.seed);
   p.seed = derive_seed(base, per_generation ? ids.generation : -1,

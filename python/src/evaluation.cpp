@@ -95,9 +95,11 @@ worker::RobotEvalSettings eval_settings(const std::optional<Config>& config,
     s.seconds = *seconds;
   }
   if (integrator) {
-    if (*integrator != "pneuvox" && *integrator != "symplectic")
-      throw py::value_error("integrator: '" + *integrator + "' is not one of pneuvox, symplectic");
-    s.integrator = *integrator;
+    try {
+      s.integrator = parse_choice<Integrator>(*integrator, "integrator");
+    } catch (const std::invalid_argument& e) {
+      throw py::value_error(e.what());
+    }
   }
   if (direction) {
     if (!std::isfinite(*direction)) throw py::value_error("direction: must be finite");

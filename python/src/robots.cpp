@@ -225,7 +225,7 @@ Make one with softevo.load_config(path, overrides) or softevo.default_config(tas
           "task", [](const Config& c) { return std::string(to_string(c.task.kind)); },
           "task.kind: gait, directed or rotate.")
       .def_property_readonly(
-          "control", [](const Config& c) { return c.task.control; },
+          "control", [](const Config& c) { return std::string(to_string(c.task.control)); },
           "task.control: open or closed.")
       .def_property_readonly(
           "eval_seconds", [](const Config& c) { return c.task.eval_seconds; },

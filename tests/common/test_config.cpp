@@ -35,7 +35,7 @@ TEST(Config, DefaultsAreTheThesisValues) {
   EXPECT_EQ(c.neat.pop_size, 50);
   EXPECT_DOUBLE_EQ(c.neat.compatibility_threshold, 3.5);
   EXPECT_DOUBLE_EQ(c.neat.conn_add_prob, 0.0713);
-  EXPECT_EQ(c.physics.integrator, "pneuvox");
+  EXPECT_EQ(c.physics.integrator, Integrator::pneuvox);
   EXPECT_DOUBLE_EQ(c.pneumatics.supply_pressure, 1.2e5);  // bar converted to Pa
   EXPECT_DOUBLE_EQ(c.pneumatics.initial_sensor_pressure, 0.0);
   EXPECT_EQ(c.task.directions.size(), 5u);
@@ -52,7 +52,7 @@ TEST(Config, OverridesApplyAfterTheFileAndAreValidated) {
                                 {"neat.pop_size=30", "physics.integrator=symplectic",
                                  "task.directions=[0, 90]", "physics.self_collision=false"});
   EXPECT_EQ(c.neat.pop_size, 30);
-  EXPECT_EQ(c.physics.integrator, "symplectic");
+  EXPECT_EQ(c.physics.integrator, Integrator::symplectic);
   EXPECT_EQ(c.task.directions, (std::vector<double>{0, 90}));
   EXPECT_FALSE(c.physics.self_collision);
   try {
@@ -174,7 +174,7 @@ TEST(Config, LearningKeysEnterTheTextOnlyWithAMethod) {
       "l.toml");
   EXPECT_EQ(learn.learning.evaluations, 51);
   EXPECT_EQ(learn.learning.population, 5);
-  EXPECT_EQ(learn.learning.inheritance, "baldwinian");
+  EXPECT_EQ(learn.learning.inheritance, Inheritance::baldwinian);
   EXPECT_EQ(learn.learning.step_size_factor, 0.2);
   const std::string text = canonical_text(learn);
   EXPECT_NE(text.find("[learning]\nmethod = \"es\"\nevaluations = 51\npopulation = 5\n"
@@ -372,7 +372,7 @@ TEST(Config, OverrideNumberBeyondRangeNamesTheKey) {
   // A bare word that starts with a digit is still a string.
   EXPECT_EQ(parse_config("", "c.toml", {"controller.crossover_method=1pointpl"})
                 .controller.crossover_method,
-            "1pointpl");
+            CrossoverMethod::one_point_per_layer);
 }
 
 TEST(Config, BrokenConfigsGiveTheirExactError) {

@@ -200,7 +200,7 @@ TEST(Population, RobotStateRoundTripsThroughTheConfig) {
   EXPECT_EQ(a.serialize(), b.serialize());
   // A configuration with another controller shape does not fit the state.
   Config closed = config;
-  closed.task.control = "closed";
+  closed.task.control = ControlLoop::closed;
   EXPECT_THROW(Population::deserialize(bytes, closed, 0), std::invalid_argument);
 }
 

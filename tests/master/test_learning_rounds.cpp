@@ -18,9 +18,9 @@ namespace {
 using io::Archive;
 using io::GenerationRecord;
 
-Config learning_config(const std::string& inheritance = "lamarckian") {
+Config learning_config(Inheritance inheritance = Inheritance::lamarckian) {
   Config c = small_config();
-  c.learning.method = "es";
+  c.learning.method = LearningMethod::es;
   c.learning.evaluations = 7;  // born + 3 iterations of 2
   c.learning.population = 2;
   c.learning.inheritance = inheritance;
@@ -138,9 +138,9 @@ TEST(LearningRun, ArchivesTheLearnedResultOfEveryBody) {
 
 TEST(LearningRun, ElitesKeepTheirLearnedResultAndNeverLearnAgain) {
   test::TmpDir dir;
-  for (const std::string inheritance : {"lamarckian", "baldwinian"}) {
+  for (const Inheritance inheritance : {Inheritance::lamarckian, Inheritance::baldwinian}) {
     const Config config = learning_config(inheritance);
-    const std::string out = dir.file(inheritance + ".h5");
+    const std::string out = dir.file(std::string(to_string(inheritance)) + ".h5");
     ASSERT_EQ(run_once(config, out, false), RunOutcome::complete);
     const Archive archive(out);
     std::size_t checked = 0;
@@ -156,12 +156,13 @@ TEST(LearningRun, ElitesKeepTheirLearnedResultAndNeverLearnAgain) {
         EXPECT_EQ(cur.fitness[i], prev.fitness[origin]);
         EXPECT_EQ(cur.fitness_before[i], prev.fitness_before[origin]);
         EXPECT_EQ(cur.learned_genome[i], prev.learned_genome[origin]);
-        EXPECT_EQ(cur.genome[i],
-                  inheritance == "lamarckian" ? prev.learned_genome[origin] : prev.genome[origin]);
+        EXPECT_EQ(cur.genome[i], inheritance == Inheritance::lamarckian
+                                     ? prev.learned_genome[origin]
+                                     : prev.genome[origin]);
         ++checked;
       }
     }
-    EXPECT_GT(checked, 0u) << inheritance;
+    EXPECT_GT(checked, 0u) << to_string(inheritance);
   }
   EXPECT_NE(fitness_digest_of(dir.file("lamarckian.h5")),
             fitness_digest_of(dir.file("baldwinian.h5")));
@@ -197,7 +198,7 @@ TEST(LearningRun, ConfigWithoutLearningKeepsItsTextAndHash) {
   Config config = small_config();
   const std::string text = canonical_text(config);
   EXPECT_EQ(text.find("[learning]"), std::string::npos);
-  config.learning.inheritance = "baldwinian";  // ignored while method = "none"
+  config.learning.inheritance = Inheritance::baldwinian;  // ignored while method = "none"
   EXPECT_EQ(canonical_text(config), text);
   EXPECT_NE(canonical_text(learning_config()).find("[learning]\nmethod = \"es\"\n"),
             std::string::npos);

@@ -543,9 +543,9 @@ TEST(RunMemory, EstimateRefusesBeyondAndWarnsNearTheAvailableMemory) {
   const std::uint64_t million = estimate_run_memory(c);
   EXPECT_GT(million, std::uint64_t{9} << 30);  // measured: about 9.3 kB per member
   EXPECT_GT(million, thousand * 100);
-  c.learning.method = "es";
+  c.learning.method = LearningMethod::es;
   EXPECT_GT(estimate_run_memory(c), million);
-  c.learning.method = "none";
+  c.learning.method = LearningMethod::none;
 
   const std::vector<const Config*> one = {&c};
   try {

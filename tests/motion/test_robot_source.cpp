@@ -149,10 +149,10 @@ TEST_F(RobotSource, ATracesTerrainAttributesRebuildTheEvaluationsGround) {
     Config c;
     c.task.eval_seconds = 0.2;
     c.run.eval_timeout_seconds = 0.0;
-    c.terrain.kind = heightfield ? "heightfield" : "rows";
+    c.terrain.kind = heightfield ? GroundKind::heightfield : GroundKind::rows;
     c.terrain.seed = 11;
     if (!heightfield) return c;
-    c.terrain.heightfield = heightfield;
+    c.terrain.heightfield = parse_choice<HeightfieldKind>(heightfield, "heightfield");
     const std::string h = heightfield;
     std::vector<std::string> keys;  // the kind's own keys, checked as a config file's
     if (h == "bumps") keys = {"terrain.amplitude=0.01", "terrain.correlation_length=0.04"};

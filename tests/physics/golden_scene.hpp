@@ -45,7 +45,7 @@ inline std::uint64_t run_scene(const std::string& integrator, Simd simd = Simd::
   plan.cells[plan.cell_index(2, 1, 1)] = kEmptyCell;
   plan.cells[plan.cell_index(3, 2, 1)] = kFirstChamberCell;
   PhysicsConfig cfg;
-  cfg.integrator = integrator;
+  cfg.integrator = parse_choice<Integrator>(integrator, "integrator");
   BuildOptions options;
   options.simd = simd;
   options.terrain = terrain;

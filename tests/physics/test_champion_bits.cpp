@@ -52,7 +52,7 @@ TEST(ChampionBits, ShortEvaluationsGiveThePinnedFitnessBits) {
     Config cfg;
     cfg.run.eval_timeout_seconds = 0.0;  // results must not depend on machine load
     cfg.task.eval_seconds = p.seconds;
-    cfg.task.control = robot.controller.closed_loop ? "closed" : "open";
+    cfg.task.control = robot.controller.closed_loop ? ControlLoop::closed : ControlLoop::open;
     cfg.task.kind = tasks::default_task_for(robot.controller.task_inputs());
     const auto task = tasks::make_task(cfg);
     const EvalResult r = worker::evaluate(cfg, *task, robot.body, robot.controller, p.unit);

@@ -77,7 +77,7 @@ double min_arm_distance(const Model& m, const State& st) {
 
 double fold(bool collisions, const std::string& integrator, int& pairs_seen) {
   PhysicsConfig cfg;
-  cfg.integrator = integrator;
+  cfg.integrator = parse_choice<Integrator>(integrator, "integrator");
   cfg.self_collision = collisions;
   const Model m = build_model(hairpin(), cfg);
   State st = initial_state(m);

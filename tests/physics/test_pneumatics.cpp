@@ -197,7 +197,7 @@ TEST(Pneumatics, InletInflatesMovingWallsToSupplyThenOutletReleasesIt) {
   // while the outlet opens, so gas may still enter for a while: only the settling is checked.)
   for (const char* integrator : {"pneuvox", "symplectic"}) {
     PhysicsConfig phys;
-    phys.integrator = integrator;
+    phys.integrator = parse_choice<Integrator>(integrator, "integrator");
     Scene sc(box_with_cavity({5, 4, 5}, {1, 1, 1}, {3, 2, 3}), phys);
     const int steps = static_cast<int>(0.5 / sc.model.dt);
     const float v0 = sc.ps.volume[0];
@@ -355,7 +355,7 @@ TEST(Pneumatics, FreeFloatingInflatingBodyKeepsZeroLinearMomentum) {
   // the applied impulses: compare with 1e-6 x the summed magnitude of all pressure impulses.
   for (const char* integrator : {"pneuvox", "symplectic"}) {
     PhysicsConfig phys = free_floating();
-    phys.integrator = integrator;
+    phys.integrator = parse_choice<Integrator>(integrator, "integrator");
     Scene sc(box_with_cavity({5, 4, 5}, {1, 1, 1}, {3, 2, 3}), phys);
     sc.valves(1.0f, 0.0f);
     const Vec3 com0 = centre_of_mass(sc.model, sc.state);
@@ -388,7 +388,7 @@ namespace {
 
 PneumaticsConfig inverse_volume(double reference_volume, double max_supply_bar = 2.0) {
   PneumaticsConfig c;
-  c.supply_pressure_scaling = "inverse_volume";
+  c.supply_pressure_scaling = SupplyScaling::inverse_volume;
   c.scaling_reference_volume = reference_volume;
   c.max_supply_pressure = max_supply_bar * kPascalPerBar;
   return c;

@@ -24,7 +24,7 @@ class Validation : public ::testing::TestWithParam<std::string> {
  protected:
   PhysicsConfig base_config() const {
     PhysicsConfig cfg;
-    cfg.integrator = GetParam();
+    cfg.integrator = parse_choice<Integrator>(GetParam(), "integrator");
     return cfg;
   }
 

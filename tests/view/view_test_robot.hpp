@@ -22,7 +22,7 @@ inline view::ViewInput block_input(TaskKind kind, double seconds) {
   in.robot.controller = make_controller(
       true, directed, [](int i) { return std::cos(0.7 + 2.1 * i); }, 2.5);
   in.config.task.kind = kind;
-  in.config.task.control = "closed";
+  in.config.task.control = ControlLoop::closed;
   in.config.task.eval_seconds = seconds;
   in.config.run.eval_timeout_seconds = 0.0;
   if (directed) in.config.task.directions = {0.0};

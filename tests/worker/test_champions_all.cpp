@@ -41,7 +41,7 @@ TEST(ChampionsAll, EveryReferenceWalkerWalksHere) {
     for (std::size_t i; (i = next.fetch_add(1)) < robots.size();) {
       Config cfg;
       cfg.run.eval_timeout_seconds = 0.0;  // results must not depend on machine load
-      cfg.task.control = robots[i].controller.closed_loop ? "closed" : "open";
+      cfg.task.control = robots[i].controller.closed_loop ? ControlLoop::closed : ControlLoop::open;
       cfg.task.kind = tasks::default_task_for(robots[i].controller.task_inputs());
       const auto task = tasks::make_task(cfg);
       results[i] = worker::evaluate_all_units(cfg, *task, robots[i].body, robots[i].controller);

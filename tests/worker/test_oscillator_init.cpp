@@ -29,11 +29,11 @@ constexpr double kHighBar = 1.075;  // the upper one [bar]
 
 Config oscillator_config() {
   Config c;
-  c.task.control = "closed";
+  c.task.control = ControlLoop::closed;
   c.task.eval_seconds = kSeconds;
   c.run.eval_timeout_seconds = 0.0;
   c.controller.oscillator_inputs = false;
-  c.controller.init = "oscillator";
+  c.controller.init = ControllerInit::oscillator;
   return c;
 }
 
@@ -149,7 +149,7 @@ TEST(OscillatorInit, GenesAreTheConstructionPlusASmallPerturbation) {
   EXPECT_EQ(ga.step_sizes.freq[0], config.controller.freq_step_size_init);
 
   Config open = config;
-  open.task.control = "open";
+  open.task.control = ControlLoop::open;
   open.controller.oscillator_inputs = true;
   Rng c(7);
   evo::Genome gc;

@@ -35,10 +35,10 @@ Config rough_config(const RobotFile& robot, const std::string& integrator) {
   Config c;
   c.run.eval_timeout_seconds = 0.0;
   c.task.eval_seconds = kSeconds;
-  c.task.control = robot.controller.closed_loop ? "closed" : "open";
-  c.physics.integrator = integrator;
-  c.terrain.kind = "heightfield";
-  c.terrain.heightfield = "bumps";
+  c.task.control = robot.controller.closed_loop ? ControlLoop::closed : ControlLoop::open;
+  c.physics.integrator = parse_choice<Integrator>(integrator, "integrator");
+  c.terrain.kind = GroundKind::heightfield;
+  c.terrain.heightfield = HeightfieldKind::bumps;
   c.terrain.amplitude = 0.01;  // 1 cm [m]
   c.terrain.correlation_length = 0.05;
   c.terrain.seed = 4;

@@ -152,7 +152,7 @@ TEST(Simulation, TerrainSeedFollowsTheResampleChoice) {
   Config config = parse_config("[terrain]\nkind = \"heightfield\"\n", "t");
   EXPECT_EQ(worker::terrain_params(Config{}, {3, 7}, 0).kind, physics::TerrainKind::flat);
   const auto seed = [&](const char* resample, std::int64_t generation, std::int64_t id, int unit) {
-    config.terrain.resample = resample;
+    config.terrain.resample = parse_choice<TerrainResample>(resample, "resample");
     const physics::TerrainParams p = worker::terrain_params(config, {generation, id}, unit);
     EXPECT_EQ(p.kind, physics::TerrainKind::bumps);
     EXPECT_EQ(p.amplitude, config.terrain.amplitude);
