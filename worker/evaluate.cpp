@@ -213,7 +213,8 @@ Config robot_eval_config(const RobotFile& robot, const RobotEvalSettings& settin
       config = parse_config("", "<built-in defaults>", overrides);
       break;
   }
-  if (built_in) config.task.control = controller.closed_loop ? ControlLoop::closed : ControlLoop::open;
+  if (built_in)
+    config.task.control = controller.closed_loop ? ControlLoop::closed : ControlLoop::open;
   if (settings.integrator) config.physics.integrator = *settings.integrator;
   return config;
 }

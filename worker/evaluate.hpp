@@ -146,8 +146,8 @@ struct RobotEvalSettings {
   // key of that task is accepted.
   std::string task;
   std::optional<Integrator> integrator;  // none = the config's physics.integrator
-  std::optional<double> seconds;    // replaces task.eval_seconds [s] (range-checked)
-  std::optional<double> direction;  // replaces task.directions by [direction] [deg]
+  std::optional<double> seconds;         // replaces task.eval_seconds [s] (range-checked)
+  std::optional<double> direction;       // replaces task.directions by [direction] [deg]
 };
 // Where the config of a robot evaluation comes from (the order of RobotEvalSettings).
 enum class RobotConfigSource : std::uint8_t { config_file, config_text, robot_file, built_in };
