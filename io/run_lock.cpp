@@ -137,6 +137,12 @@ void RunLock::abandon() noexcept {
   ::close(std::exchange(fd_, -1));
 }
 
+void RunLock::finish() noexcept {
+  if (fd_ < 0) return;
+  ::unlink(path_.c_str());  // still locked: see the header for a run that opened it meanwhile
+  ::close(std::exchange(fd_, -1));
+}
+
 RunLock::RunLock(RunLock&& other) noexcept
     : path_(std::move(other.path_)),
       fd_(std::exchange(other.fd_, -1)),

@@ -4,9 +4,11 @@
 // every generation replaces the archive by a rename, so its inode changes). The lock file
 // holds "pid <pid> on <host>" of the holder, for the message of the run that is refused.
 // The kernel drops an flock when its holder dies in any way (SIGKILL included), so a lock
-// cannot go stale; the file itself stays (removing it would let a third run lock a new file
-// while a second still holds the unlinked old one). docs/archive.md states what this means on
-// NFS.
+// cannot go stale; the file of a killed run stays. A run that ends cleanly removes its lock file
+// (finish()) while it still holds the lock: a run that opened the old file meanwhile gets that
+// lock only after the unlink, sees the file is gone (st_nlink 0) and locks the file now at the
+// path instead, so two runs never hold locks on different files of one archive.
+// docs/archive.md states what this means on NFS.
 #pragma once
 
 #include <optional>
@@ -55,6 +57,12 @@ class RunLock {
   // created it (a file that was there before stays), then releases the lock. A process that
   // opened the file meanwhile finds it locked and is refused, as it would have been.
   void abandon() noexcept;
+
+  // For a run that ended cleanly (complete, or stopped after a checkpoint): removes the lock
+  // file, created by this lock or not, then releases the lock, so no `.lock` stays beside a
+  // finished archive. Only the holder calls it, so it never removes the file of another run's
+  // lock.
+  void finish() noexcept;
 
  private:
   std::string path_;

@@ -869,6 +869,10 @@ std::vector<RunOutcome> execute_runs(const std::vector<PreparedRun*>& runs, Unit
     }
     for (std::size_t r = 0; r < runs.size(); ++r)
       if (loops[r]) loops[r]->close(outcomes[r]);
+    // Every archive is closed and consistent: no lock file stays beside it (issue 30). A run
+    // that failed keeps its lock file until the process ends (the lock itself goes then).
+    for (PreparedRun* run : runs)
+      if (run->lock) run->lock->finish();
   } catch (...) {
     // One run's failure ends the job: the other archives keep their last generation and are
     // marked interrupted, so each --resume continues it.

@@ -374,6 +374,29 @@ TEST(RunLock, SecondRunOnTheSameArchiveIsRefused) {
   EXPECT_EQ(execute_run(first, executor, progress), RunOutcome::complete);
 }
 
+// Issue 30: no `.lock` stays beside a finished archive. A run that ends cleanly (complete, or a
+// --resume of a complete archive) removes its lock file; while a run holds the lock, a refused
+// second start leaves it in place (a run that opened the old file before the removal locks
+// the file then at the path: io/run_lock.hpp).
+TEST(RunLock, ACleanEndRemovesTheLockFile) {
+  test::TmpDir dir;
+  const Config config = small_config();
+  const std::string out = dir.file("run.h5");
+  const std::string lock = io::lock_path_for(out);
+  RunOptions options;
+  options.out_path = out;
+  PreparedRun first = prepare_run(config, options, 1);
+  EXPECT_THROW(prepare_run(config, options, 1), StartupError);
+  EXPECT_TRUE(std::filesystem::exists(lock)) << "removed while its run holds it";
+  LocalExecutor executor(fake_evaluation);
+  ProgressReporter progress = ProgressReporter::silent();
+  EXPECT_EQ(execute_run(first, executor, progress), RunOutcome::complete);
+  EXPECT_FALSE(std::filesystem::exists(lock)) << "left beside the finished archive";
+  EXPECT_EQ(io::lock_holder(out), std::nullopt);
+  run_once(config, out, true);  // --resume of the complete archive: nothing to do
+  EXPECT_FALSE(std::filesystem::exists(lock));
+}
+
 TEST(RunLock, LockOfAKilledProcessDoesNotBlock) {
   test::TmpDir dir;
   const std::string out = dir.file("run.h5");

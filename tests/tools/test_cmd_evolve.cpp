@@ -225,7 +225,7 @@ TEST_F(CmdEvolve, PackedStartChecksDescriptorsAndLeavesNothingOnFailure) {
                     "--generations", "1"})
                 .code,
             0);
-  fs::remove((fs::path(dir) / (stem + "-03.h5.lock")));
+  EXPECT_FALSE(fs::exists(fs::path(dir) / (stem + "-03.h5.lock"))) << "left by a clean end";
   const test::CommandResult raised = evolve_limited("ulimit -Sn 40", "1-3");
   EXPECT_EQ(raised.code, 2) << raised.output;
   EXPECT_NE(raised.output.find("--resume"), std::string::npos) << raised.output;
