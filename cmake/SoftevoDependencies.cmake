@@ -4,6 +4,7 @@
 # configure error; SOFTEVO_ENABLE_<X> records what was found and decides what gets built.
 #   TESTS  GoogleTest             the test suite
 #   PNG    libpng                 `softevo render` to .png (without it: .mp4 only, via ffmpeg)
+#   GIF    giflib                 `softevo render` to an animated .gif
 #   MPI    MPI (C++ bindings off) softevo-mpi and the MPI tests
 #   HDF5   HDF5 C                 io (run archive, trace), the master, softevo-mpi, the softevo CLI
 #   PYTHON Python 3 + pybind11    the `softevo` Python package (python/; also needs HDF5)
@@ -18,6 +19,7 @@ option(SOFTEVO_FETCH_MISSING
        "download missing header-only libraries (Eigen, CLI11, nlohmann-json) at configure time" ON)
 option(SOFTEVO_REQUIRE_TESTS "fail at configure time unless GoogleTest is found" OFF)
 option(SOFTEVO_REQUIRE_PNG "fail at configure time unless libpng is found" OFF)
+option(SOFTEVO_REQUIRE_GIF "fail at configure time unless giflib is found" OFF)
 option(SOFTEVO_REQUIRE_MPI "fail at configure time unless MPI is found" OFF)
 option(SOFTEVO_REQUIRE_HDF5 "fail at configure time unless HDF5 (C) is found" OFF)
 option(SOFTEVO_REQUIRE_PYTHON
@@ -47,6 +49,9 @@ softevo_optional(NAME TESTS FOUND GTest_FOUND HOW "install libgtest-dev (Debian)
 
 find_package(PNG QUIET)
 softevo_optional(NAME PNG FOUND PNG_FOUND HOW "install libpng-dev (Debian) or set PNG_ROOT")
+
+find_package(GIF 5 QUIET)
+softevo_optional(NAME GIF FOUND GIF_FOUND HOW "install libgif-dev (Debian) or set GIF_DIR")
 
 find_package(MPI QUIET COMPONENTS CXX)
 softevo_optional(NAME MPI FOUND MPI_FOUND
@@ -208,11 +213,14 @@ function(softevo_print_summary)
   endif()
   if(SOFTEVO_BUILD_CLI)
     string(APPEND built " softevo")
+    set(formats "")
     if(SOFTEVO_ENABLE_PNG)
-      string(APPEND built "(render .png)")
-    else()
-      string(APPEND built "(render .mp4 only)")
+      string(APPEND formats " .png")
     endif()
+    if(SOFTEVO_ENABLE_GIF)
+      string(APPEND formats " .gif")
+    endif()
+    string(APPEND built "(render${formats} .mp4)")
   endif()
   if(SOFTEVO_ENABLE_VIEW)
     string(APPEND built " view")
@@ -226,6 +234,7 @@ function(softevo_print_summary)
   message(STATUS "softevo configuration:")
   message(STATUS "  GoogleTest    ${SOFTEVO_ENABLE_TESTS}")
   message(STATUS "  libpng        ${SOFTEVO_ENABLE_PNG}")
+  message(STATUS "  giflib        ${SOFTEVO_ENABLE_GIF}")
   message(STATUS "  MPI           ${SOFTEVO_ENABLE_MPI}")
   message(STATUS "  HDF5 C        ${SOFTEVO_ENABLE_HDF5}")
   message(STATUS "  viewer        ${SOFTEVO_ENABLE_VIEW} (Boost.Beast, zlib)")

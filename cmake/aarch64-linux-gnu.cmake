@@ -29,3 +29,4 @@ set(nlohmann_json_DIR ${CMAKE_CURRENT_LIST_DIR}/cross/nlohmann_json CACHE PATH "
 set(CMAKE_DISABLE_FIND_PACKAGE_MPI ON CACHE BOOL "no AArch64 MPI in the cross build")
 set(CMAKE_DISABLE_FIND_PACKAGE_HDF5 ON CACHE BOOL "no AArch64 HDF5 in the cross build")
 set(CMAKE_DISABLE_FIND_PACKAGE_PNG ON CACHE BOOL "no AArch64 libpng in the cross build")
+set(CMAKE_DISABLE_FIND_PACKAGE_GIF ON CACHE BOOL "no AArch64 giflib in the cross build")

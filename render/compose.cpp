@@ -234,8 +234,10 @@ std::vector<double> video_frame_times(double fps, double end) {
 }
 
 int render_frames(const Clip& clip, View view, const VideoOptions& options,
-                  const SceneOptions& scene, const std::function<bool(const Image&)>& sink) {
+                  const SceneOptions& scene, const std::function<bool(const Image&)>& sink,
+                  int stride) {
   if (clip.poses.size() < 2) throw std::runtime_error("a video needs motion (a single pose)");
+  if (stride < 1) throw std::invalid_argument("render_frames: stride must be at least 1");
   if (!(options.fps > 0.0) || !std::isfinite(options.fps))
     throw std::runtime_error("the frame rate must be a finite number > 0");
   const int width = (options.width > 0 ? options.width : 960) & ~1;  // yuv420p needs even sizes
@@ -250,7 +252,8 @@ int render_frames(const Clip& clip, View view, const VideoOptions& options,
   const Eigen::Vector3d start_centroid = centroid(first);
   const std::vector<double> times = video_frame_times(options.fps, clip.poses.back().time);
   std::size_t nearest = 0;
-  for (std::size_t f = 0; f < times.size(); ++f) {
+  int given = 0;
+  for (std::size_t f = 0; f < times.size(); f += static_cast<std::size_t>(stride)) {
     // Walking on from the last frame's pose: a search from the start for every frame made a
     // long video quadratic in its length.
     nearest = pose_at(clip.poses, times[f], nearest);
@@ -260,9 +263,10 @@ int render_frames(const Clip& clip, View view, const VideoOptions& options,
     cam.center = start_centre + follow;
     SceneOptions o = scene;
     o.label = clip.name + "  " + time_label(pose.time);
-    if (!sink(render_poses(clip.body, {pose}, cam, o))) return static_cast<int>(f);
+    if (!sink(render_poses(clip.body, {pose}, cam, o))) return given;
+    ++given;
   }
-  return static_cast<int>(times.size());
+  return given;
 }
 
 VideoWritten write_video(const Clip& clip, View view, const VideoOptions& options,

@@ -78,8 +78,11 @@ VideoWritten write_video(const Clip& clip, View view, const VideoOptions& option
                          const SceneOptions& scene, const std::string& ffmpeg,
                          const std::string& output, Overwrite overwrite = Overwrite::refuse);
 // The frames of that video, in order, to `sink` (false stops); returns the frames given.
-// `softevo render` writes them as a PNG sequence when there is no ffmpeg.
+// `softevo render` writes them as a PNG sequence when there is no ffmpeg. With `stride` > 1 only
+// frames 0, stride, 2 stride, ... are drawn (the others are skipped, not drawn): a sample of
+// the video, e.g. for a GIF's palette.
 int render_frames(const Clip& clip, View view, const VideoOptions& options,
-                  const SceneOptions& scene, const std::function<bool(const Image&)>& sink);
+                  const SceneOptions& scene, const std::function<bool(const Image&)>& sink,
+                  int stride = 1);
 
 }  // namespace softevo::render

@@ -28,6 +28,7 @@ PACKAGES=(
   libgtest-dev                       # tests
   libcli11-dev libtomlplusplus-dev nlohmann-json3-dev  # command lines, config, JSON
   libpng-dev                         # headless rendering to PNG
+  libgif-dev                         # ... and to animated GIF
   libstb-dev fonts-dejavu-core       # render labels: stb_truetype and the DejaVu Sans font
   python3 python3-numpy python3-scipy python3-matplotlib  # analysis/ figures
   python3-h5py                       # the analysis test writes synthetic archives with it
@@ -58,7 +59,7 @@ install_dependencies() {
   fi
 }
 
-REQUIRE_ALL=(-DSOFTEVO_REQUIRE_TESTS=ON -DSOFTEVO_REQUIRE_PNG=ON -DSOFTEVO_REQUIRE_MPI=ON
+REQUIRE_ALL=(-DSOFTEVO_REQUIRE_TESTS=ON -DSOFTEVO_REQUIRE_PNG=ON -DSOFTEVO_REQUIRE_GIF=ON -DSOFTEVO_REQUIRE_MPI=ON
   -DSOFTEVO_REQUIRE_HDF5=ON -DSOFTEVO_REQUIRE_VIEW=ON)
 
 # The page of `softevo view` (view/web): three.js (and, for the browser test, puppeteer-core)
@@ -246,6 +247,7 @@ case "${1:-}" in
       -DCMAKE_CXX_FLAGS_DEBUG=-O0 -DCMAKE_C_FLAGS_DEBUG=-O0 \
       -DSOFTEVO_WERROR=ON -DCMAKE_PREFIX_PATH="$modules" \
       -DCMAKE_DISABLE_FIND_PACKAGE_GTest=ON -DCMAKE_DISABLE_FIND_PACKAGE_PNG=ON \
+      -DCMAKE_DISABLE_FIND_PACKAGE_GIF=ON \
       -DCMAKE_DISABLE_FIND_PACKAGE_Python=ON \
       -DCMAKE_DISABLE_FIND_PACKAGE_nlohmann_json=ON -DCMAKE_DISABLE_FIND_PACKAGE_tomlplusplus=ON \
       -DSOFTEVO_REQUIRE_MPI=ON -DSOFTEVO_REQUIRE_HDF5=ON | sed -n '/softevo configuration:/,/builds /p'

@@ -2,9 +2,9 @@
 //
 // Inputs: a robot file (rest pose, or re-simulated when motion is asked for), a trace written by
 // `softevo eval --trace`, or a run archive (genome developed and re-simulated exactly as the
-// run evaluated it). Outputs: PNG (single frame, time-lapse strip or overlay) or MP4 through
-// ffmpeg, both written atomically; an existing output is replaced only with --force
-// (docs/output-files.md). Every number option is checked for range (NaN included) before
+// run evaluated it). Outputs: PNG (single frame, time-lapse strip or overlay), an animated GIF
+// (giflib) or MP4 through ffmpeg, all written atomically; an existing output is replaced only with
+// --force (docs/output-files.md). Every number option is checked for range (NaN included) before
 // anything is simulated; --seconds and --direction go through the config's checks.
 #include <cstdio>
 #include <filesystem>
@@ -21,6 +21,7 @@
 #include "common/safe_write.hpp"
 #include "motion/robot_source.hpp"
 #include "render/compose.hpp"
+#include "render/gif.hpp"
 #include "render/render.hpp"
 #include "tools/commands.hpp"
 
@@ -119,11 +120,13 @@ int write_frame_sequence(const RenderArgs& args, const render::Clip& clip, View 
 int run_render(const RenderArgs& args) {
   const View view = render::parse_view(args.view);
   const std::string ext = lower(fs::path(args.output).extension().string());
-  const bool video = ext == ".mp4" || ext == ".mkv" || ext == ".webm" || ext == ".avi";
+  const bool gif = ext == ".gif";
+  const bool video = gif || ext == ".mp4" || ext == ".mkv" || ext == ".webm" || ext == ".avi";
   if (!video && ext != ".png") {
     throw std::invalid_argument("render: output " + args.output +
-                                " must end in .png (image) or .mp4 (video)");
+                                " must end in .png (image), .gif (animation) or .mp4 (video)");
   }
+  if (gif) render::require_gif_support(args.output);
   if (!video) render::require_png_support(args.output);
   const Overwrite overwrite = args.force ? Overwrite::replace : Overwrite::refuse;
   check_output_target(args.output, overwrite);  // before the simulation, not after
@@ -224,6 +227,16 @@ int run_render(const RenderArgs& args) {
   const render::Clip clip{
       motion.body, motion.poses,
       motion.status.empty() ? motion.name : motion.name + " (" + motion.status + ")"};
+  if (gif) {
+    const render::VideoWritten g = render::write_gif(
+        clip, view, {args.fps, args.width, args.height}, scene, args.output, overwrite);
+    if (args.json)
+      print_written_json(args, "gif", g.width, g.height, g.frames, motion.summary);
+    else
+      std::printf("wrote %s (%d frames, %d/100 s apart, %dx%d)\n", args.output.c_str(), g.frames,
+                  render::gif_frame_delay(args.fps), g.width, g.height);
+    return kExitOk;
+  }
   if (video) {
     const auto ffmpeg = render::find_on_path("ffmpeg");
     if (!ffmpeg) return write_frame_sequence(args, clip, view, scene, overwrite);
@@ -254,11 +267,12 @@ int run_render(const RenderArgs& args) {
 void register_render(CLI::App& app, int& exit_code) {
   auto* cmd = app.add_subcommand(
       "render",
-      "draw a robot headless (PNG image or time-lapse, MP4 video through ffmpeg) from a robot "
+      "draw a robot headless (PNG image or time-lapse, animated GIF, MP4 video through ffmpeg) "
+      "from a robot "
       "file, an `eval --trace` file or a run archive");
   auto args = std::make_shared<RenderArgs>();
   cmd->add_option("INPUT", args->input, "ROBOT.json, TRACE.h5 or RUN.h5")->required();
-  cmd->add_option("-o,--output,--out", args->output, "OUT.png or OUT.mp4")->required();
+  cmd->add_option("-o,--output,--out", args->output, "OUT.png, OUT.gif or OUT.mp4")->required();
   cmd->add_option("--view", args->view, "side | top | iso (default side)")
       ->check(CLI::IsMember({"side", "top", "iso"}));
   cmd->add_option("--timelapse", args->timelapse,
@@ -283,13 +297,15 @@ void register_render(CLI::App& app, int& exit_code) {
       ->check(finite_in(-180.0, 180.0));
   // Images are held in memory: 8192 x 8192 at supersample 4 is 2.4 GB of pixels.
   // Below 32 pixels nothing is recognisable.
-  cmd->add_option("--width", args->width, "image width [pixel] (32-8192; strip: per panel)")
+  cmd->add_option("--width", args->width,
+                  "image width [pixel] (32-8192; strip: per panel; default 960, GIF 640)")
       ->check(CLI::Range(32, 8192));
-  cmd->add_option("--height", args->height, "image height [pixel] (32-8192)")
+  cmd->add_option("--height", args->height, "image height [pixel] (32-8192; default 540, GIF 360)")
       ->check(CLI::Range(32, 8192));
   cmd->add_option("--supersample", args->supersample, "anti-aliasing samples per axis (1-4)")
       ->check(CLI::Range(1, 4));
-  cmd->add_option("--fps", args->fps, "video frame rate (default 30)")
+  cmd->add_option("--fps", args->fps,
+                  "video or GIF frame rate (default 30; a GIF stores 1/fps in whole 1/100 s)")
       ->check(finite_in(0.01, 1000.0));
   add_seconds_option(*cmd, args->seconds, "simulated seconds when re-simulating");
   cmd->add_option("--generation", args->generation, "archive: generation (default the last)")

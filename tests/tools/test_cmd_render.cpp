@@ -3,6 +3,7 @@
 // show the robot (stiffness colours), not a blank floor.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <nlohmann/json.hpp>
 
 #include <cstdlib>
 #include <filesystem>
@@ -176,7 +177,7 @@ TEST_F(CmdRender, TraceTimelapseStripHasOnePanelPerSnapshot) {
 
 TEST_F(CmdRender, BadInputsFailWithUsageExitCode) {
   const std::string robot = write_robot();
-  EXPECT_EQ(run(softevo_binary() + " render " + robot + " -o " + (dir_ / "x.gif").string()), 2);
+  EXPECT_EQ(run(softevo_binary() + " render " + robot + " -o " + (dir_ / "x.bmp").string()), 2);
   EXPECT_EQ(run(softevo_binary() + " render " + (dir_ / "missing.json").string() + " -o " +
                 (dir_ / "x.png").string()),
             2);
@@ -207,6 +208,31 @@ TEST_F(CmdRender, VideoWithoutFfmpegIsWrittenAsAPngFrameSequence) {
       run("PATH=" + empty_bin.string() + " " + softevo_binary() + " render " + robot + " -o " +
           (dir_ / "x.mp4").string() + " --seconds 0.2 --fps 10 --width 64 --height 48"),
       2);
+}
+
+// Issue 30: `render -o OUT.gif` writes an animated GIF (giflib), no ffmpeg needed.
+TEST_F(CmdRender, GifIsWrittenWithoutFfmpeg) {
+#ifndef SOFTEVO_HAVE_GIF
+  GTEST_SKIP() << "softevo was built without giflib (libgif-dev)";
+#endif
+  const std::string robot = write_robot();
+  const fs::path empty_bin = dir_ / "empty-bin";
+  fs::create_directories(empty_bin);
+  const std::string out = (dir_ / "walk.gif").string();
+  const auto r =
+      test::run_command("PATH=" + empty_bin.string() + " " + softevo_binary() + " render " + robot +
+                        " -o " + out + " --seconds 0.2 --fps 10 --width 64 --height 48 --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["kind"], "gif");
+  EXPECT_EQ(j["width"], 64);
+  EXPECT_GE(j["frames"].get<int>(), 2);
+  std::ifstream in(out, std::ios::binary);
+  std::string magic(6, '\0');
+  in.read(magic.data(), 6);
+  EXPECT_EQ(magic, "GIF89a");
+  // Like every output: an existing file only with --force.
+  EXPECT_EQ(run(softevo_binary() + " render " + robot + " -o " + out + " --seconds 0.2"), 2);
 }
 
 TEST_F(CmdRender, VideoFramesArePipedToFfmpeg) {
