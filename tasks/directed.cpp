@@ -61,18 +61,34 @@ class DirectedScoreKeeper : public UnitScore {
   }
 
   UnitFitness finish(const physics::Model& model, const physics::State& state) override {
-    record_waypoint(model, state);
-    const DirectedScore s = directed_score(waypoints_cm_, direction_deg_, path_penalty_weight_);
+    waypoints_cm_.push_back(waypoint_cm(model, state));
+    return score(waypoints_cm_);
+  }
+
+  UnitFitness so_far(const physics::Model& model, const physics::State& state) const override {
+    std::vector<Vec3d> waypoints = waypoints_cm_;  // the final waypoint, on a copy
+    waypoints.push_back(waypoint_cm(model, state));
+    return score(waypoints);
+  }
+
+  // A steered unit (the viewer's dial, a Python agent) senses and is scored towards the new
+  // target; its waypoints so far stay.
+  void steer(double direction_deg) override { direction_deg_ = direction_deg; }
+
+ private:
+  static Vec3d waypoint_cm(const physics::Model& model, const physics::State& state) {
+    const Vec3d c = physics::centroid_displacement(model, state);
+    return {c.x() * kCmPerM, c.y() * kCmPerM, 0.0};  // cm, z set to 0
+  }
+  void record_waypoint(const physics::Model& model, const physics::State& state) {
+    waypoints_cm_.push_back(waypoint_cm(model, state));
+  }
+  UnitFitness score(std::span<const Vec3d> waypoints) const {
+    const DirectedScore s = directed_score(waypoints, direction_deg_, path_penalty_weight_);
     UnitFitness f;
     f.fitness = s.fitness;
     f.values = {direction_deg_, s.distance, s.path_length, s.angle_error, s.perpendicular_penalty};
     return f;
-  }
-
- private:
-  void record_waypoint(const physics::Model& model, const physics::State& state) {
-    const Vec3d c = physics::centroid_displacement(model, state);
-    waypoints_cm_.emplace_back(c.x() * kCmPerM, c.y() * kCmPerM, 0.0);  // cm, z set to 0
   }
 
   double direction_deg_;
@@ -85,7 +101,10 @@ class DirectedTask : public Task {
  public:
   explicit DirectedTask(const Config& config) : config_(config) {}
   TaskKind kind() const override { return TaskKind::directed; }
-  int controller_inputs() const override { return 1; }
+  std::vector<std::string> controller_input_names() const override {
+    return {"direction_sensor"};  // §7.3
+  }
+  bool steerable() const override { return true; }
   int units() const override { return static_cast<int>(config_.task.directions.size()); }
   // |D| / L x (D / (delta + 1) - P): a distance (§7.2)
   std::string fitness_unit() const override { return "cm"; }

@@ -11,6 +11,9 @@ constexpr double kCmPerM = 100.0;
 class GaitScore : public UnitScore {
  public:
   UnitFitness finish(const physics::Model& model, const physics::State& state) override {
+    return so_far(model, state);
+  }
+  UnitFitness so_far(const physics::Model& model, const physics::State& state) const override {
     const Eigen::Vector3d c = physics::centroid_displacement(model, state);
     UnitFitness f;
     f.fitness = gait_fitness(c);
@@ -22,7 +25,7 @@ class GaitScore : public UnitScore {
 class GaitTask : public Task {
  public:
   TaskKind kind() const override { return TaskKind::gait; }
-  int controller_inputs() const override { return 0; }
+  std::vector<std::string> controller_input_names() const override { return {}; }
   int units() const override { return 1; }
   // mean x displacement (§7.1)
   std::string fitness_unit() const override { return "cm"; }

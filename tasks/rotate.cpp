@@ -72,17 +72,28 @@ class RotateScoreKeeper : public UnitScore {
 
   UnitFitness finish(const physics::Model& model, const physics::State& state) override {
     tracker_.observe(free_voxels(model, state.pos));
+    return score(tracker_, model, state);
+  }
+
+  UnitFitness so_far(const physics::Model& model, const physics::State& state) const override {
+    HeadingTracker tracker = tracker_;  // the final observation, on a copy
+    tracker.observe(free_voxels(model, state.pos));
+    return score(tracker, model, state);
+  }
+
+ private:
+  UnitFitness score(const HeadingTracker& tracker, const physics::Model& model,
+                    const physics::State& state) const {
     const Eigen::Vector3d c = physics::centroid_displacement(model, state);
     const double travel = std::sqrt(c.x() * c.x() + c.y() * c.y());
     const RotateScore s =
-        rotate_score(tracker_.heading_change(), travel, body_length_, travel_penalty_weight_);
+        rotate_score(tracker.heading_change(), travel, body_length_, travel_penalty_weight_);
     UnitFitness f;
     f.fitness = s.fitness;
     f.values = {s.heading_change, s.travel, s.travel_penalty};
     return f;
   }
 
- private:
   HeadingTracker tracker_;
   double body_length_;
   double travel_penalty_weight_;
@@ -92,7 +103,7 @@ class RotateTask : public Task {
  public:
   explicit RotateTask(const Config& config) : config_(config) {}
   TaskKind kind() const override { return TaskKind::rotate; }
-  int controller_inputs() const override { return 0; }
+  std::vector<std::string> controller_input_names() const override { return {}; }
   int units() const override { return 1; }
   // |heading change| - travel penalty (§7.6)
   std::string fitness_unit() const override { return "rad"; }

@@ -1,11 +1,17 @@
 // Shared parts of the Task seam. See task.hpp.
 #include "tasks/task.hpp"
 
+#include <stdexcept>
+
 namespace softevo::tasks {
 
 void UnitScore::controller_inputs(const physics::Model&, const physics::State&, std::span<float>) {}
 
 void UnitScore::observe(int, const physics::Model&, const physics::State&) {}
+
+void UnitScore::steer(double) {
+  throw std::logic_error("this task has no target direction to steer");
+}
 
 CombinedFitness Task::combine(std::span<const EvalResult> units) const {
   CombinedFitness c;

@@ -4,7 +4,9 @@
 //   - the simulation loop (worker/evaluate.cpp) asks for the controller inputs of every frame,
 //     hands it the robot once per frame and at the end, and gets the unit's score;
 //   - the scheduler and replay ask for the work units per genome and how they combine;
-//   - the archive and `eval --json` ask for the names of the fitness components.
+//   - the archive and `eval --json` ask for the names of the fitness components;
+//   - live views (the viewer, the Python env) ask a running unit for its score so far and hand
+//     it the steering input.
 // The task's config keys live in [task] (common/config.cpp, marked with their task).
 //
 // MPI-free and HDF5-free; the interface itself is physics-free (the robot is passed as the
@@ -46,6 +48,12 @@ class UnitScore {
   virtual void observe(int frame, const physics::Model& model, const physics::State& state);
   // Fitness and component values (in Task::component_names() order) of the finished unit.
   virtual UnitFitness finish(const physics::Model& model, const physics::State& state) = 0;
+  // What finish would give if the unit ended on `state` now, changing nothing: the fitness and
+  // components a live view shows while the robot moves (the viewer, the Python env's reward).
+  virtual UnitFitness so_far(const physics::Model& model, const physics::State& state) const = 0;
+  // Steering (Task::steerable()): from now on the target is `direction_deg` [deg], for the
+  // controller's inputs and for the score. Throws std::logic_error for a task without a target.
+  virtual void steer(double direction_deg);
 };
 
 // Fitness of a genome from its units.
@@ -59,9 +67,12 @@ class Task {
  public:
   virtual ~Task() = default;
   virtual TaskKind kind() const = 0;
-  // Controller inputs the task feeds after the oscillator's [sin, cos] and before the pressure
-  // sensors (§4.1).
-  virtual int controller_inputs() const = 0;
+  // Names of the controller inputs the task feeds after the oscillator's [sin, cos] and before
+  // the pressure sensors (§4.1), e.g. "direction_sensor".
+  virtual std::vector<std::string> controller_input_names() const = 0;
+  int controller_inputs() const { return static_cast<int>(controller_input_names().size()); }
+  // Whether a unit's target direction can be changed while it runs (UnitScore::steer).
+  virtual bool steerable() const { return false; }
   // Work units per genome; each is simulated on its own (one MPI work unit each).
   virtual int units() const = 0;
   virtual std::vector<ComponentName> component_names() const = 0;

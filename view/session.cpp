@@ -16,8 +16,7 @@
 #include "motion/trace_recorder.hpp"
 #include "physics/observables.hpp"
 #include "physics/pneumatics.hpp"
-#include "tasks/directed.hpp"
-#include "tasks/gait.hpp"
+#include "tasks/task.hpp"
 #include "worker/controller.hpp"
 #include "worker/evaluate.hpp"
 #include "worker/simulation.hpp"
@@ -186,10 +185,6 @@ struct Session::Live {
   worker::EvaluateOptions recorder_hooks;
   std::vector<float> task_inputs, sensor_bar, commands;
   std::vector<double> pressures_pa;
-  // Directed task: the waypoints the task records (§7.2), for the components so far.
-  std::vector<Eigen::Vector3d> waypoints_cm;
-  int waypoint_every = 1;
-  double unit_direction_deg = 0.0;
 };
 
 Session::Session(const ViewInput& input, std::vector<SteerCommand> steering)
@@ -220,9 +215,7 @@ Session::Session(const ViewInput& input, std::vector<SteerCommand> steering)
   l.sensor_bar.assign(static_cast<std::size_t>(l.sim->chambers()), 0.0f);
   l.commands.assign(static_cast<std::size_t>(l.sim->valve_count()), 1.0f);
   l.pressures_pa.assign(static_cast<std::size_t>(l.sim->chambers()), 0.0);
-  l.waypoint_every = std::max(1, static_cast<int>(std::lround(l.config.task.control_rate)));
-  if (directed()) l.unit_direction_deg = l.config.task.directions.at(0);
-  target_deg_ = l.unit_direction_deg;
+  if (l.task->steerable()) target_deg_ = l.config.task.directions.at(0);
   planned_ = l.sim->frames() + 1;
   l.recorder.attach(l.recorder_hooks);
   worker::TraceHeader h;
@@ -238,7 +231,7 @@ Session::Session(const ViewInput& input, std::vector<SteerCommand> steering)
 Session::~Session() = default;
 
 bool Session::directed() const {
-  return input_.config.task.kind == TaskKind::directed;
+  return tasks::make_task(input_.config)->steerable();
 }
 
 double Session::control_rate() const {
@@ -289,10 +282,6 @@ bool Session::advance() {
   worker::Simulation& sim = *l.sim;
   if (!timeline_.empty()) {
     // 3-5. Kill checks, the task's observation, the physics of the frame whose record is last.
-    if (sim.frame() % l.waypoint_every == 0) {
-      const Eigen::Vector3d c = physics::centroid_displacement(sim.model(), sim.state());
-      l.waypoints_cm.emplace_back(c.x() * 100.0, c.y() * 100.0, 0.0);
-    }
     sim.step(l.commands);
   }
   if (!sim.running()) {
@@ -302,18 +291,13 @@ bool Session::advance() {
     if (sim.status() == EvalStatus::ok) append_live_record(sim.frames());
     return false;
   }
-  // 1-2. What the controller senses (steered: the sensor towards the steered target).
+  // 1-2. What the controller senses; a steering command hands the task its new target.
   while (next_command_ < steering_.size() && steering_[next_command_].frame <= sim.frame()) {
     target_deg_ = steering_[next_command_].direction_deg;
-    steered_ = true;
+    sim.steer(target_deg_);
     ++next_command_;
   }
   sim.task_inputs(l.task_inputs);
-  if (steered_) {
-    const Eigen::Vector3d c = physics::centroid_displacement(sim.model(), sim.state());
-    const double heading = physics::mean_rotation_vector(sim.model(), sim.state()).z();
-    l.task_inputs.at(0) = tasks::direction_sensor(c, heading, target_deg_, sim.model().voxel_size);
-  }
   for (int q = 0; q < sim.chambers(); ++q) l.sensor_bar[q] = sim.sensor_pressure_bar(q);
   l.brain->act(l.task_inputs, l.sensor_bar, l.commands);
   append_live_record(sim.frame());
@@ -350,27 +334,20 @@ void Session::append_live_record(int frame) {
   r.centroid_y = static_cast<float>(c.y());
   r.heading_rad = static_cast<float>(physics::mean_rotation_vector(sim.model(), sim.state()).z());
   r.target_deg = static_cast<float>(target_deg_);
-  // Fitness components so far: the task's formula on the state of this record.
+  // Fitness components so far: the task's score of this record's state (the final result once
+  // the unit has ended).
   const std::size_t n = l.task->component_names().size();
-  r.components.assign(n, 0.0f);
+  UnitFitness so_far;
   if (result_ && !result_->components.empty()) {
-    for (std::size_t i = 0; i < n && i < result_->components[0].values.size(); ++i)
-      r.components[i] = static_cast<float>(result_->components[0].values[i]);
-    r.fitness = static_cast<float>(result_->fitness);
-  } else if (l.config.task.kind == TaskKind::gait) {
-    r.fitness = static_cast<float>(tasks::gait_fitness(c));
-    if (n > 0) r.components[0] = r.fitness;
-  } else if (directed()) {
-    std::vector<Eigen::Vector3d> w = l.waypoints_cm;
-    w.emplace_back(c.x() * 100.0, c.y() * 100.0, 0.0);
-    const tasks::DirectedScore s =
-        tasks::directed_score(w, l.unit_direction_deg, l.config.task.path_penalty_weight);
-    const double values[] = {l.unit_direction_deg, s.distance, s.path_length, s.angle_error,
-                             s.perpendicular_penalty};
-    for (std::size_t i = 0; i < n && i < std::size(values); ++i)
-      r.components[i] = static_cast<float>(values[i]);
-    r.fitness = static_cast<float>(s.fitness);
+    so_far = result_->components[0];
+    so_far.fitness = result_->fitness;
+  } else {
+    so_far = sim.score_so_far();
   }
+  r.components.assign(n, 0.0f);
+  for (std::size_t i = 0; i < n && i < so_far.values.size(); ++i)
+    r.components[i] = static_cast<float>(so_far.values[i]);
+  r.fitness = static_cast<float>(so_far.fitness);
   timeline_.push_back(std::move(r));
 }
 
@@ -399,8 +376,9 @@ void Session::append_trace_record(int index) {
 
 void Session::save(const std::string& trace_path, Overwrite overwrite) const {
   if (!live_ || !result_) throw std::logic_error("a session is saved when its simulation ended");
+  // The unit's configured direction (a steered run's targets are in its steering log).
   const std::optional<double> direction =
-      directed() ? std::optional<double>(live_->unit_direction_deg) : std::nullopt;
+      directed() ? std::optional<double>(live_->config.task.directions.at(0)) : std::nullopt;
   check_output_target(steering_log_path(trace_path), overwrite);
   live_->recorder.write(trace_path, input_.robot, *result_, control_rate(), direction, overwrite);
   write_file_atomically(steering_log_path(trace_path), steering_log_json(steering_, input_.name),

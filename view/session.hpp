@@ -140,7 +140,6 @@ class Session {
   std::vector<SteerCommand> steering_;
   std::size_t next_command_ = 0;
   double target_deg_ = 0.0;
-  bool steered_ = false;
   std::unique_ptr<Live> live_;
   std::vector<FrameRecord> timeline_;
   int planned_ = 0;

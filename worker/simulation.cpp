@@ -108,6 +108,23 @@ void Simulation::task_inputs(std::span<float> inputs) {
   if (score_ && !inputs.empty()) score_->controller_inputs(model_, state_, inputs);
 }
 
+UnitFitness Simulation::score_so_far() const {
+  UnitFitness f;
+  if (score_ && status_ == EvalStatus::ok) f = score_->so_far(model_, state_);
+  f.status = status_;
+  f.values.resize(task_.component_names().size(), 0.0);  // a stopped unit scores 0 (§7.1)
+  return f;
+}
+
+void Simulation::steer(double direction_deg) {
+  if (!task_.steerable())
+    throw std::logic_error(std::string("the ") + to_string(task_.kind()) +
+                           " task has no target direction to steer");
+  if (!(direction_deg >= -180.0 && direction_deg <= 180.0))
+    throw std::invalid_argument("steering direction must be within [-180, 180] degrees");
+  if (score_) score_->steer(direction_deg);
+}
+
 float Simulation::sensor_pressure_bar(int chamber) const {
   return frame_ == 0 ? initial_sensor_bar_ : pneumatics_.pressure[chamber];  // §3.7
 }

@@ -78,6 +78,14 @@ class Simulation {
   // The task's controller inputs of this frame (task().controller_inputs() values, e.g. the
   // direction sensor of §7.3).
   void task_inputs(std::span<float> inputs);
+  // The task's fitness and components if the unit ended now (UnitScore::so_far); zeros once
+  // the unit has stopped with a status other than ok (as finish() would give).
+  UnitFitness score_so_far() const;
+  // A new target direction [deg, within [-180, 180]] for a steerable task (the viewer's dial,
+  // a Python agent): the controller senses it and the unit is scored towards it from now on.
+  // Throws std::logic_error for a task that is not steerable, std::invalid_argument for a
+  // direction out of range.
+  void steer(double direction_deg);
   // The pressure sensor reading of chamber q this frame [bar] (§3.7): the configured
   // pneumatics.initial_sensor_pressure at frame 0, the chamber pressure afterwards.
   float sensor_pressure_bar(int chamber) const;

@@ -85,7 +85,7 @@ __all__ = [
     "evolve", "load_config", "load_robot", "open_run", "parse_config", "status_name",
 ]
 
-TASKS = ("gait", "directed", "rotate")
+TASKS = _softevo.TASKS  # the registered tasks, in registration order (tasks/registry.cpp)
 
 
 def _existing_file(path: str | os.PathLike, what: str,

@@ -19,15 +19,14 @@ controller inputs (the direction sensor of the directed task), the centroid disp
 [m] (x, y, z), the heading [rad] and the simulated time [s].
 
 Reward: from the task, shaped so that the episode's return is the task's fitness. Each step
-gives the change of the task's progress (gait: centroid x displacement [cm]; directed: the
-displacement along the target direction [cm]; rotate: the heading [rad]); the last step gives
-the fitness minus the progress rewarded so far. A killed robot scores 0 (terminated); an
+gives the change of the task's score so far (the fitness the task would give if the episode
+ended now: the observation's fitness_so_far, computed by the task itself); the last step gives
+the fitness minus what was rewarded so far. A killed robot scores 0 (terminated); an
 episode that runs every frame ends truncated.
 """
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 
@@ -100,11 +99,6 @@ class SoftRobotEnv(_Base):
                                         direction=direction, unit=unit)
         self.task = self._sim.task
         self.chambers = self._sim.chambers
-        resolved = self._sim.config
-        self._direction = 0.0
-        if self.task == "directed":
-            directions = _directions(resolved.text)
-            self._direction = directions[unit] if direction is None else direction
         obs = self._sim.observation()
         self._task_inputs = len(obs["task_inputs"])
         size = self.chambers + self._task_inputs + 5
@@ -120,14 +114,9 @@ class SoftRobotEnv(_Base):
             obs["centroid"], [obs["heading"], obs["time"]],
         ]).astype(np.float32)
 
-    def _progress_of(self, obs: dict) -> float:
-        c = obs["centroid"]
-        if self.task == "gait":
-            return 100.0 * float(c[0])
-        if self.task == "directed":
-            d = math.radians(self._direction)
-            return 100.0 * (float(c[0]) * math.cos(d) + float(c[1]) * math.sin(d))
-        return float(obs["heading"])
+    @staticmethod
+    def _progress_of(obs: dict) -> float:
+        return float(obs["fitness_so_far"])
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Start again from the initial state; returns (observation, info). `seed` reseeds the
@@ -174,10 +163,3 @@ class SoftRobotEnv(_Base):
 
     def close(self) -> None:
         """Nothing to release (kept for the Gymnasium interface)."""
-
-
-def _directions(config_text: str) -> list[float]:
-    """task.directions of a canonical config text."""
-    import tomllib
-
-    return [float(d) for d in tomllib.loads(config_text)["task"]["directions"]]

@@ -250,8 +250,18 @@ class PySimulation {
     obs["task_inputs"] = array_of(task_inputs_);
     obs["centroid"] = array_of(std::vector<double>{c.x(), c.y(), c.z()});
     obs["heading"] = physics::mean_rotation_vector(model, state).z();
-    if (config_.task.kind == TaskKind::directed && !task_inputs_.empty())
-      obs["direction_sensor"] = task_inputs_[0];
+    // Each task input under the task's own name (the directed task's direction_sensor).
+    const std::vector<std::string> input_names = task_->controller_input_names();
+    for (std::size_t i = 0; i < input_names.size() && i < task_inputs_.size(); ++i)
+      obs[py::str(input_names[i])] = task_inputs_[i];
+    // The task's score if the unit ended now: fitness and named components.
+    const UnitFitness so_far = sim_->score_so_far();
+    obs["fitness_so_far"] = so_far.fitness;
+    py::dict components;
+    const std::vector<tasks::ComponentName> names = task_->component_names();
+    for (std::size_t i = 0; i < names.size() && i < so_far.values.size(); ++i)
+      components[py::str(names[i].name)] = so_far.values[i];
+    obs["components"] = components;
     if (observe_voxels_) {
       obs["positions"] = positions();
       obs["orientations"] = orientations();
@@ -338,6 +348,13 @@ class PySimulation {
   }
 
   const worker::Simulation& sim() const { return *sim_; }
+  void steer(double direction_deg) {
+    try {
+      sim_->steer(direction_deg);
+    } catch (const std::logic_error& e) {  // std::invalid_argument included
+      throw py::value_error(std::string("steer: ") + e.what());
+    }
+  }
   const Config& config() const { return config_; }
 
  private:
@@ -489,6 +506,10 @@ The same code path as `softevo eval --json`, so the fitness bits are equal for e
 The GIL is released while the robot is simulated, so threads evaluate robots in parallel.
 Bad input raises ValueError (ConfigError for a bad config key).)");
 
+  py::tuple task_names(task_kinds().size());
+  for (std::size_t i = 0; i < task_kinds().size(); ++i) task_names[i] = to_string(task_kinds()[i]);
+  m.attr("TASKS") = task_names;
+
   py::class_<PySimulation>(m, "Simulation",
                            R"(One work unit of a task, stepped one 60 Hz control frame at a time.
 
@@ -503,8 +524,10 @@ frame, absolute [Pa]; frame 0 reads pneumatics.initial_sensor_pressure): every p
 sensor_pressures keeps its earlier meaning, the same reading in the controller's own scale
 [bar] as float32 (what Controller.act reads). task_inputs (the task's controller inputs),
 centroid (centroid displacement since the start [m]), heading (mean rotation about z [rad]),
-direction_sensor (directed task), and with observe_voxels positions (n, 3) [m] and orientations
-(n, 4) (w, x, y, z). Feeding step() the commands of softevo.Controller(robot).act(obs) gives the
+each task input under its name (direction_sensor of the directed task), fitness_so_far and
+components (name -> value): the task's score if the unit ended now, and with observe_voxels
+positions (n, 3) [m] and orientations (n, 4) (w, x, y, z). steer(direction) gives a steerable
+task (directed) a new target direction [deg] for the sensor and the score. Feeding step() the commands of softevo.Controller(robot).act(obs) gives the
 bits of softevo.evaluate() for that unit; result() scores it.)")
       .def(py::init<const RobotFile&, const std::optional<Config>&,
                     const std::optional<std::string>&, const std::optional<double>&,
@@ -523,6 +546,9 @@ bits of softevo.evaluate() for that unit; result() scores it.)")
           "state_hash", [](const PySimulation& s) { return physics::state_hash(s.sim().state()); },
           "Hash of the physics state (equal states, equal hashes).")
       .def("observation", &PySimulation::observation, "The current observation (as step gives).")
+      .def("steer", &PySimulation::steer, "direction"_a,
+           "A new target direction [deg, -180..180] from the next frame on, for the task's "
+           "sensor and its score (steerable tasks only: directed); ValueError otherwise.")
       .def("positions", &PySimulation::positions, "Voxel centres (n, 3) [m].")
       .def("render", &PySimulation::render, "width"_a = 480, "height"_a = 360, "view"_a = "side",
            "The current state as an RGB image (height, width, 3) uint8, drawn by the headless "

@@ -56,6 +56,38 @@ def test_observation_contents():
     assert obs["sensor_pressures"][0] > 0.9  # now the chamber pressure [bar]
 
 
+@pytest.mark.parametrize("task", softevo.TASKS)
+def test_the_task_reports_its_score_so_far(task):
+    """Issue 28: the task itself scores the state so far (fitness_so_far, components by name);
+    at the end it is the result, and only a steerable task can be steered."""
+    assert softevo.TASKS == ("gait", "directed", "rotate")
+    robot = block_robot(closed=True, directed=task == "directed")
+    sim = softevo.Simulation(robot, seconds=0.5, task=task)
+    controller = softevo.Controller(robot)
+    obs = sim.reset()
+    names = [name for name in obs["components"]]
+    assert len(names) >= 1 and obs["fitness_so_far"] == 0.0
+    seen = 0
+    while not sim.done:
+        obs, info = sim.step(controller.act(obs))
+        seen += any(v != 0.0 for v in obs["components"].values())
+    assert seen > sim.frames // 2
+    result = sim.result()
+    assert obs["fitness_so_far"] == result.fitness
+    final = result.components[0]
+    assert {name: final[name] for name in names} == obs["components"]
+    if task == "directed":
+        sim.reset()
+        sim.steer(90.0)
+        obs, _ = sim.step(np.ones((2, 2), dtype=np.float32))
+        assert obs["components"]["direction_deg"] == 90.0
+        with pytest.raises(ValueError, match="180"):
+            sim.steer(200.0)
+    else:
+        with pytest.raises(ValueError, match="no target direction"):
+            sim.steer(90.0)
+
+
 def test_state_hash_repeats_after_reset():
     sim = softevo.Simulation(block_robot(), seconds=0.25)
     start = sim.state_hash()

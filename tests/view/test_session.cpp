@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <fstream>
 #include <memory>
@@ -65,6 +66,34 @@ TEST(ViewSession, UnsteeredGivesTheBitsOfEvaluate) {
     // The last record's components are the final ones; before, the task's formula so far.
     EXPECT_EQ(s.record(s.records() - 1).fitness, static_cast<float>(direct.fitness));
     EXPECT_FALSE(s.advance());
+  }
+}
+
+// Issue 28: the viewer asks the task for its score so far, so every task shows its
+// components while the robot moves (the rotate task showed nothing), and the score so far at the
+// last frame is the result's.
+TEST(ViewSession, EveryTaskShowsItsComponentsSoFar) {
+  for (TaskKind kind : task_kinds()) {
+    const view::ViewInput in = test::block_input(kind, 0.5);
+    view::Session s(in);
+    run_to_end(s);
+    ASSERT_TRUE(s.result().has_value());
+    ASSERT_EQ(s.result()->status, EvalStatus::ok) << to_string(kind);
+    const auto names = s.component_names();
+    ASSERT_FALSE(names.empty()) << to_string(kind);
+    int moving = 0;
+    for (int r = 1; r + 1 < s.records(); ++r) {
+      const auto& c = s.record(r).components;
+      ASSERT_EQ(c.size(), names.size()) << to_string(kind);
+      bool any = false;
+      for (float v : c) any = any || (v != 0.0f && std::isfinite(v));
+      moving += any ? 1 : 0;
+    }
+    EXPECT_GT(moving, s.records() / 2) << to_string(kind) << ": components stay 0 while it moves";
+    const auto& last = s.record(s.records() - 1);
+    for (std::size_t i = 0; i < names.size(); ++i)
+      EXPECT_EQ(last.components[i], static_cast<float>(s.result()->components[0].values[i]))
+          << to_string(kind) << " " << names[i];
   }
 }
 
