@@ -17,6 +17,7 @@
 #include "io/h5.hpp"
 #include "io/open_probe.hpp"
 #include "tests/io/tmp_dir.hpp"
+#include "tests/sanitizers.hpp"
 
 namespace softevo::io::h5 {
 namespace {
@@ -136,7 +137,7 @@ TEST(H5Probe, AFileThatMakesLibhdf5AllocateGigabytesIsRefused) {
   } catch (const Error& e) {
     const std::string message = e.what();
     EXPECT_NE(message.find("damaged HDF5 file"), std::string::npos) << message;
-#ifdef __SANITIZE_ADDRESS__
+#if SOFTEVO_TEST_ASAN
     // AddressSanitizer's allocator ends the child when an allocation fails (unless
     // allocator_may_return_null=1) instead of returning null to libhdf5: still refused.
     EXPECT_TRUE(message.find("MB of memory") != std::string::npos ||

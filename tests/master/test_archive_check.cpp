@@ -28,6 +28,7 @@
 #include "tests/build_tree.hpp"
 #include "tests/io/tmp_dir.hpp"
 #include "tests/master/fake_run.hpp"
+#include "tests/sanitizers.hpp"
 
 namespace softevo::master {
 namespace {
@@ -199,7 +200,7 @@ Measured softevo_measured(const std::vector<std::string>& args, const std::strin
     const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     ::dup2(fd, 1);
     ::dup2(fd, 2);
-#ifndef __SANITIZE_ADDRESS__
+#if !SOFTEVO_TEST_ASAN
     // Before the bounds, one damaged length made info allocate 8.4 GB: fail instead of
     // exhausting the machine (the sanitizer's shadow memory needs an unlimited address space).
     const rlimit as{rlim_t{2} << 30, rlim_t{2} << 30};
