@@ -4,10 +4,14 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cstring>
 #include <filesystem>
 #include <set>
 
 #include <nlohmann/json.hpp>
+
+#include "view/bytes.hpp"
+#include "view/export_html.hpp"
 
 namespace softevo::view {
 
@@ -102,6 +106,14 @@ std::string ClientSession::hello() const {
                            ? json(input_.config.task.directions[0])
                            : json(nullptr);
   j["task"] = to_string(input_.config.task.kind);
+  // The ground when it is not the flat floor: heights sampled here from physics/terrain (the
+  // page draws them, it never computes a height itself), float32 little-endian in base64.
+  if (const TerrainGrid g = terrain_grid(*session_); g.nx > 0) {
+    std::string bytes(g.z.size() * sizeof(float), '\0');
+    std::memcpy(bytes.data(), g.z.data(), bytes.size());
+    j["terrain"] = {{"kind", g.kind}, {"x0", g.x0}, {"y0", g.y0},        {"step", g.step},
+                    {"nx", g.nx},     {"ny", g.ny}, {"z", base64(bytes)}};
+  }
   if (input_.archived) {
     const auto& a = *input_.archived;
     json arch{

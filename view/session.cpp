@@ -246,6 +246,35 @@ std::vector<std::string> Session::component_names() const {
   return names;
 }
 
+const physics::Terrain& Session::terrain() const {
+  return live_ ? live_->sim->model().terrain : input_.trace_motion.terrain;
+}
+
+TerrainGrid terrain_grid(const Session& session) {
+  const physics::Terrain& terrain = session.terrain();
+  TerrainGrid g;
+  if (terrain.kind == physics::TerrainKind::flat || session.records() == 0) return g;
+  // Centred on the start (the centre of the first record's items).
+  const std::vector<float>& p = session.record(0).positions;
+  double cx = 0.0, cy = 0.0;
+  const std::size_t items = p.size() / 3;
+  for (std::size_t i = 0; i < items; ++i) cx += p[3 * i], cy += p[3 * i + 1];
+  if (items > 0) cx /= static_cast<double>(items), cy /= static_cast<double>(items);
+  const double s = session.input().body.voxel_size;
+  g.kind = physics::to_string(terrain.kind);
+  g.step = std::max(s, 2.0 * kTerrainGridHalfWidth / (kTerrainGridMaxSide - 1));
+  const int half = static_cast<int>(std::floor(kTerrainGridHalfWidth / g.step));
+  g.nx = g.ny = 2 * half + 1;
+  g.x0 = cx - half * g.step;
+  g.y0 = cy - half * g.step;
+  g.z.reserve(static_cast<std::size_t>(g.nx) * static_cast<std::size_t>(g.ny));
+  for (int j = 0; j < g.ny; ++j)
+    for (int i = 0; i < g.nx; ++i)
+      g.z.push_back(static_cast<float>(
+          physics::terrain_height(terrain, g.x0 + i * g.step, g.y0 + j * g.step) - 0.5 * s));
+  return g;
+}
+
 bool Session::finished() const {
   if (!live_) return true;
   return result_.has_value();

@@ -21,6 +21,7 @@
 #include "common/robot.hpp"
 #include "common/safe_write.hpp"
 #include "motion/robot_source.hpp"
+#include "physics/terrain.hpp"
 #include "render/render.hpp"
 #include "tasks/task.hpp"
 
@@ -119,6 +120,9 @@ class Session {
   std::string status_message() const;
   double control_rate() const;  // [Hz] records per simulated second
   std::vector<std::string> component_names() const;
+  // The ground the robot moves on (docs/model.md §2.8a): the simulation's own (live) or the one
+  // the trace recorded.
+  const physics::Terrain& terrain() const;
 
   // Steering at the live head: from the next simulated frame on. Throws std::logic_error when
   // the robot is not directed, the session is not live or has ended.
@@ -145,6 +149,21 @@ class Session {
   int planned_ = 0;
   std::optional<EvalResult> result_;
 };
+
+// The ground of a session sampled for drawing: surface heights [m] (physics::terrain_height, half
+// a voxel below the height a voxel centre rests at, as `softevo render` draws it) on a square
+// grid around the start, x fastest. Empty (nx = 0) for the flat floor.
+struct TerrainGrid {
+  std::string kind;       // physics::to_string of the terrain kind
+  double x0 = 0, y0 = 0;  // first sample [m]
+  double step = 0;        // grid spacing [m]
+  int nx = 0, ny = 0;     // samples along x, y
+  std::vector<float> z;   // [ny][nx] surface height [m]
+};
+// Half width [m] of the sampled square and the most samples along one side.
+inline constexpr double kTerrainGridHalfWidth = 1.0;
+inline constexpr int kTerrainGridMaxSide = 401;
+TerrainGrid terrain_grid(const Session& session);
 
 // Path of the steering log beside a trace: X.h5 -> X.steering.json.
 std::string steering_log_path(const std::string& trace_path);

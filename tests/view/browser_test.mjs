@@ -5,7 +5,9 @@
 //      towards the target and back;
 //   3. an --export-html file from file:// with the network off: it plays;
 //   3b. exports of robots with hostile names (closing </SCRIPT> and the like): no script runs;
-//   4. malformed WebSocket messages: each is answered with an error, the server keeps serving.
+//   4. malformed WebSocket messages: each is answered with an error, the server keeps serving;
+//   5. the ground (issue 30): exported on a bumpy config the page draws the terrain mesh, and
+//      its floor pixels are shaded, unlike the flat floor of 3.
 // Prints the measurements (simulation speed vs real time, render frame rate, socket bytes/s,
 // exported size). Exit 77 (skipped) when the reference champions or chromium are absent.
 //
@@ -81,6 +83,29 @@ async function robotPixels(page) {
       if (r + gg + b < 200) dark++;
     }
     return { blue, red, dark, coloured, total: d.length / 4 };
+  });
+}
+
+// The floor in the lower part of the picture: of its grey pixels (the robot is coloured, the
+// chambers dark), the fraction that differs from the flat floor's one colour (0xd6d6d1) by more
+// than a little: its grid lines on the flat floor, nearly all of it on a shaded terrain.
+async function floorPixels(page) {
+  return page.evaluate(() => {
+    const src = document.querySelector('#scene canvas');
+    const c = document.createElement('canvas');
+    c.width = src.width; c.height = src.height;
+    const g = c.getContext('2d');
+    g.drawImage(src, 0, 0);
+    const y0 = Math.floor(0.6 * c.height);
+    const d = g.getImageData(0, y0, c.width, c.height - y0).data;
+    let grey = 0, off = 0;
+    for (let i = 0; i < d.length; i += 4) {
+      const r = d[i], gg = d[i + 1], b = d[i + 2];
+      if (Math.max(r, gg, b) - Math.min(r, gg, b) > 20 || r + gg + b < 360) continue;
+      grey++;
+      if (Math.abs(r - 214) + Math.abs(gg - 214) + Math.abs(b - 209) > 24) off++;
+    }
+    return { grey, off, fraction: off / Math.max(grey, 1), terrain: window.softevo.terrainVertices };
   });
 }
 
@@ -290,7 +315,35 @@ try {
   const ex = await robotPixels(offline);
   check(ex.coloured > 2000, `the exported page draws the robot (${ex.coloured} coloured pixels)`);
   check(fetched.length === 0, `no network request (${fetched.join(' ') || 'none'})`);
+  const flatFloor = await floorPixels(offline);
+  console.log(`floor (flat): ${JSON.stringify(flatFloor)}`);
+  check(flatFloor.terrain === 0 && flatFloor.fraction < 0.3, 'a flat config draws the flat floor (no terrain mesh)');
   if (shots) await offline.screenshot({ path: path.join(shots, 'export-offline.png') });
+  await offline.close();
+
+  // ------------------------------------------------------------ 5. terrain, exported
+  const roughHtml = path.join(tmp, 'rough.html');
+  execFileSync(binary, ['view', gaitBot, '--config', path.join(sourceDir, 'configs', 'gait-rough-open.toml'),
+    '--seconds', '2', '--export-html', roughHtml], { stdio: 'inherit' });
+  const rough = await browser.newPage();
+  rough.on('pageerror', (e) => console.log('rough page error:', e.message));
+  await rough.goto(`file://${roughHtml}`);
+  await waitFor(rough, () => window.softevo.frames > 0, undefined, 30000);
+  // Paused at 1 s (the scrubber counts exported frames) and seen from the side at an angle.
+  await rough.evaluate(() => {
+    if (document.getElementById('play').textContent === 'Pause') document.getElementById('play').click();
+    const scrub = document.getElementById('scrub');
+    scrub.value = '30';
+    scrub.dispatchEvent(new Event('input'));
+    document.querySelector('[data-view="iso"]').click();
+  });
+  await waitFor(rough, () => window.softevo.last.index === 60 && window.softevo.renderedIndex === 60, undefined, 30000);
+  const roughFloor = await floorPixels(rough);
+  console.log(`floor (bumps): ${JSON.stringify(roughFloor)}`);
+  check(roughFloor.terrain > 1000, `a bumpy config draws the terrain mesh (${roughFloor.terrain} vertices)`);
+  check(roughFloor.grey > 10000 && roughFloor.fraction > 0.6 && roughFloor.fraction > 2 * flatFloor.fraction,
+    `the terrain is shaded: ${(100 * roughFloor.fraction).toFixed(0)} % of the floor pixels differ from the flat floor's colour (flat: ${(100 * flatFloor.fraction).toFixed(0)} %)`);
+  if (shots) await rough.screenshot({ path: path.join(shots, 'export-terrain.png') });
 
   // ------------------------------------------------------------ 3b. hostile names, exported
   // A shared robot file's name must never run as script in the page exported from it.

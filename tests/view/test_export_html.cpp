@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -11,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "physics/terrain.hpp"
 #include "tests/io/tmp_dir.hpp"
 #include "tests/view/view_test_robot.hpp"
 #include "view/client_session.hpp"
@@ -118,4 +120,77 @@ TEST(ViewExportHtml, HostileRobotNamesStayInsideTheExportedPage) {
       ++closes;
     EXPECT_EQ(opens, closes) << name;
   }
+}
+
+namespace {
+
+// Standard base64 back to bytes (the page's atob).
+std::string unbase64(const std::string& text) {
+  static const std::string kAlphabet =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  std::uint32_t acc = 0;
+  int bits = 0;
+  for (char c : text) {
+    if (c == '=') break;
+    acc = (acc << 6) | static_cast<std::uint32_t>(kAlphabet.find(c));
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out += static_cast<char>((acc >> bits) & 0xFF);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+// Issue 30: the page draws the ground it is sent. A bumpy config's hello (live and in the
+// exported page) carries the surface heights of physics/terrain on a grid around the start; a
+// flat config's carries none (the page draws its flat floor as before).
+TEST(ViewExportHtml, TheHelloAndTheExportedPageCarryTheTerrain) {
+  const FakeWeb fake;
+  view::ViewInput in = test::block_input(TaskKind::gait, 0.1);
+  in.config.terrain.kind = GroundKind::heightfield;
+  in.config.terrain.heightfield = HeightfieldKind::bumps;
+  in.config.terrain.amplitude = 0.01;
+  in.config.terrain.correlation_length = 0.05;
+  view::ClientSession client(in, {});
+  const json hello = json::parse(client.hello());
+  ASSERT_TRUE(hello.contains("terrain"));
+  const json& t = hello["terrain"];
+  EXPECT_EQ(t["kind"], "bumps");
+  const int nx = t["nx"], ny = t["ny"];
+  const double x0 = t["x0"], y0 = t["y0"], step = t["step"];
+  EXPECT_EQ(step, in.body.voxel_size);
+  EXPECT_EQ(nx, 201);
+  EXPECT_EQ(ny, 201);
+  const std::string bytes = unbase64(t["z"]);
+  ASSERT_EQ(bytes.size(), 4u * static_cast<std::size_t>(nx * ny));
+  std::vector<float> z(static_cast<std::size_t>(nx * ny));
+  std::memcpy(z.data(), bytes.data(), bytes.size());
+  // Every sample is the simulation's own ground, half a voxel below a resting centre.
+  const physics::Terrain& ground = client.session().terrain();
+  EXPECT_EQ(ground.kind, physics::TerrainKind::bumps);
+  const double half = 0.5 * in.body.voxel_size;
+  float lo = z[0], hi = z[0];
+  for (int j = 0; j < ny; j += 7)
+    for (int i = 0; i < nx; i += 5) {
+      const float want =
+          static_cast<float>(physics::terrain_height(ground, x0 + i * step, y0 + j * step) - half);
+      ASSERT_EQ(z[static_cast<std::size_t>(j * nx + i)], want) << i << "," << j;
+    }
+  for (float h : z) lo = std::min(lo, h), hi = std::max(hi, h);
+  EXPECT_LT(lo, -half - 0.005);  // valleys and bumps of about the amplitude
+  EXPECT_GT(hi, -half + 0.005);
+  // The grid is centred on the start: the start itself is behind the bumps' fade-in (flat).
+  EXPECT_NEAR(x0 + (nx - 1) / 2 * step, ground.start_x, 0.2);
+  // The exported page carries the same hello.
+  const std::string page = view::export_html(client, fake.dir.path, 30.0);
+  EXPECT_EQ(json::parse(element_text(page, "softevo-hello"))["terrain"], t);
+
+  // Flat: no terrain at all.
+  view::ClientSession flat(test::block_input(TaskKind::gait, 0.1), {});
+  EXPECT_FALSE(json::parse(flat.hello()).contains("terrain"));
+  EXPECT_EQ(view::terrain_grid(flat.session()).nx, 0);
 }

@@ -69,47 +69,127 @@ function label(text, size) {
   return m;
 }
 
+// The ground (hello.terrain, sampled by softevo from physics/terrain; absent for the flat floor):
+// {x0, y0, step, nx, ny, z: base64 float32 surface heights [m], x fastest}.
+let terrainZ = null;
+function decodeTerrain(t) {
+  if (!t) return null;
+  const raw = Uint8Array.from(atob(t.z), (c) => c.charCodeAt(0));
+  return new Float32Array(raw.buffer, 0, t.nx * t.ny);
+}
+// Surface height under (x, y) [m]: the flat floor, or the sent grid interpolated between its
+// samples (the flat floor outside it).
+function groundZ(x, y) {
+  const t = hello && hello.terrain;
+  if (!t || !terrainZ) return floorZ;
+  const u = (x - t.x0) / t.step, v = (y - t.y0) / t.step;
+  if (!(u >= 0 && v >= 0 && u <= t.nx - 1 && v <= t.ny - 1)) return floorZ;
+  const i = Math.min(Math.floor(u), t.nx - 2), j = Math.min(Math.floor(v), t.ny - 2);
+  const a = u - i, b = v - j, z = (ii, jj) => terrainZ[jj * t.nx + ii];
+  return (1 - b) * ((1 - a) * z(i, j) + a * z(i + 1, j)) + b * ((1 - a) * z(i, j + 1) + a * z(i + 1, j + 1));
+}
+// Highest surface along a segment (lines drawn on the ground stay above it).
+function groundMax(x0, y0, x1, y1) {
+  let z = -Infinity;
+  for (let k = 0; k <= 20; k++) z = Math.max(z, groundZ(x0 + (x1 - x0) * k / 20, y0 + (y1 - y0) * k / 20));
+  return z;
+}
+
+// The terrain as a shaded height mesh: Lambert-lit (its normals from the heights), tinted darker
+// in the valleys and lighter on the tops, with the 10-voxel grid as a repeating texture.
+function terrainMesh(t, s) {
+  const n = t.nx * t.ny;
+  const position = new Float32Array(3 * n), colour = new Float32Array(3 * n), uv = new Float32Array(2 * n);
+  let lo = Infinity, hi = -Infinity;
+  for (const z of terrainZ) { lo = Math.min(lo, z); hi = Math.max(hi, z); }
+  const range = Math.max(hi - lo, 1e-6);
+  for (let j = 0; j < t.ny; j++) for (let i = 0; i < t.nx; i++) {
+    const k = j * t.nx + i, x = t.x0 + i * t.step, y = t.y0 + j * t.step, z = terrainZ[k];
+    position.set([x, y, z], 3 * k);
+    const g = 0.56 + 0.36 * (z - lo) / range;
+    colour.set([g, g, g * 0.97], 3 * k);
+    uv.set([x / (10 * s), y / (10 * s)], 2 * k);
+  }
+  const index = [];
+  for (let j = 0; j + 1 < t.ny; j++) for (let i = 0; i + 1 < t.nx; i++) {
+    const a = j * t.nx + i, b = a + 1, c = a + t.nx, d = c + 1;
+    index.push(a, b, d, a, d, c);
+  }
+  const geo = new THREE.BufferGeometry();
+  geo.setAttribute('position', new THREE.BufferAttribute(position, 3));
+  geo.setAttribute('color', new THREE.BufferAttribute(colour, 3));
+  geo.setAttribute('uv', new THREE.BufferAttribute(uv, 2));
+  geo.setIndex(index);
+  geo.computeVertexNormals();
+  const c = document.createElement('canvas');
+  c.width = c.height = 64;
+  const g = c.getContext('2d');
+  g.fillStyle = '#ffffff'; g.fillRect(0, 0, 64, 64);
+  g.fillStyle = '#c8c8c2'; g.fillRect(0, 0, 64, 2); g.fillRect(0, 0, 2, 64);
+  const tex = new THREE.CanvasTexture(c);
+  tex.wrapS = tex.wrapT = THREE.RepeatWrapping;
+  tex.anisotropy = 4;
+  const mesh = new THREE.Mesh(geo, new THREE.MeshLambertMaterial({ vertexColors: true, map: tex }));
+  mesh.name = 'terrain';
+  return { mesh, lo };
+}
+
 function buildFloor(center) {
   if (floorGroup) scene.remove(floorGroup);
   floorGroup = new THREE.Group();
   const s = hello.voxel_size;
   const extent = 2.0;  // [m] half width
+  // With a terrain the flat floor lies under its lowest point (around the sampled square).
+  let planeZ = floorZ;
+  if (hello.terrain && terrainZ) {
+    const { mesh, lo } = terrainMesh(hello.terrain, s);
+    floorGroup.add(mesh);
+    planeZ = Math.min(floorZ, lo) - 0.001;
+  }
   const plane = new THREE.Mesh(new THREE.PlaneGeometry(2 * extent, 2 * extent),
     new THREE.MeshBasicMaterial({ color: 0xd6d6d1 }));
-  plane.position.set(center.x, center.y, floorZ - 0.0002);
+  plane.position.set(center.x, center.y, planeZ - 0.0002);
   plane.name = 'floor';
   floorGroup.add(plane);
   for (const [step, colour] of [[10 * s, 0xbdbdb6], [100 * s, 0x8d8d86]]) {
     const divisions = Math.round(2 * extent / step);
     const grid = new THREE.GridHelper(2 * extent, divisions, colour, colour);
     grid.rotation.x = Math.PI / 2;
-    grid.position.set(center.x, center.y, floorZ + (step > 20 * s ? 0.0001 : 0));
+    grid.position.set(center.x, center.y, planeZ + (step > 20 * s ? 0.0001 : 0));
     floorGroup.add(grid);
   }
   // Scale bar: 10 cm (10 voxel lengths of 1 cm) in black, with its label.
   const bar = 0.1;
   const y0 = center.y - 0.12;
+  const barZ = groundMax(center.x - 0.05, y0 - 0.02, center.x + 0.05, y0 - 0.02) + 0.0003;
   const barGeo = new THREE.BufferGeometry().setFromPoints([
-    new THREE.Vector3(center.x - 0.05, y0, floorZ + 0.0003), new THREE.Vector3(center.x - 0.05 + bar, y0, floorZ + 0.0003)]);
+    new THREE.Vector3(center.x - 0.05, y0, barZ), new THREE.Vector3(center.x - 0.05 + bar, y0, barZ)]);
   floorGroup.add(new THREE.Line(barGeo, new THREE.LineBasicMaterial({ color: 0x000000 })));
   const text = label('10 cm (grid 10 / 100 voxels)', 0.012);
-  text.position.set(center.x - 0.05 + 0.024, y0 - 0.008, floorZ + 0.0003);
+  text.position.set(center.x - 0.05 + 0.024, y0 - 0.008, barZ);
   floorGroup.add(text);
   scene.add(floorGroup);
+  probe.terrainVertices = hello.terrain && terrainZ ? terrainZ.length : 0;
 }
 
 function setTarget(deg) {
   changed();
   if (!hello.directed) return;
+  // On a terrain the line follows the ground (a point per 1.5 cm), else 2 points on the floor.
+  const points = hello.terrain ? 101 : 2;
   if (!targetLine) {
-    const geo = new THREE.BufferGeometry().setFromPoints([new THREE.Vector3(), new THREE.Vector3(1, 0, 0)]);
+    const geo = new THREE.BufferGeometry();
+    geo.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * points), 3));
     targetLine = new THREE.Line(geo, new THREE.LineBasicMaterial({ color: 0xdd1414 }));
+    targetLine.frustumCulled = false;
     scene.add(targetLine);
   }
   const r = deg * Math.PI / 180, len = 1.5;
   const p = targetLine.geometry.attributes.position;
-  p.setXYZ(0, start.x, start.y, floorZ + 0.0006);
-  p.setXYZ(1, start.x + len * Math.cos(r), start.y + len * Math.sin(r), floorZ + 0.0006);
+  for (let k = 0; k < points; k++) {
+    const x = start.x + len * Math.cos(r) * k / (points - 1), y = start.y + len * Math.sin(r) * k / (points - 1);
+    p.setXYZ(k, x, y, groundZ(x, y) + 0.0006);
+  }
   p.needsUpdate = true;
   if (deg !== dialDeg) {
     $('target').textContent = deg.toFixed(0);
@@ -124,6 +204,8 @@ function setup(h) {
   probe.hello = h;
   duration = (h.planned_records - 1) / h.control_rate;
   floorZ = -0.5 * h.voxel_size;
+  terrainZ = decodeTerrain(h.terrain);
+  if (floorGroup) { scene.remove(floorGroup); floorGroup = null; }
   $('title').textContent = `${h.name} (${h.kind}, ${h.task}${probe.mode === 'live' && h.live ? ', live' : probe.mode === 'export' ? ', exported replay' : ''})`;
   const s = h.voxel_size * 1.04;  // deformed body: hide the cracks between rigid cubes
   if (voxelMesh) scene.remove(voxelMesh);
@@ -236,7 +318,7 @@ function showFrame(f) {
   if (f.index > pathLast) {
     const p = pathLine.geometry.attributes.position;
     if (pathCount < p.count) {
-      p.setXYZ(pathCount++, start.x + f.cx, start.y + f.cy, floorZ + 0.0005);
+      p.setXYZ(pathCount++, start.x + f.cx, start.y + f.cy, groundZ(start.x + f.cx, start.y + f.cy) + 0.0005);
       p.needsUpdate = true;
       pathLine.geometry.setDrawRange(0, pathCount);
       pathLine.geometry.computeBoundingSphere();
