@@ -102,6 +102,8 @@ std::string ClientSession::hello() const {
   j["planned_records"] = session_->planned_records();
   j["control_rate"] = session_->control_rate();
   j["component_names"] = session_->component_names();
+  j["component_units"] = session_->component_units();
+  j["fitness_unit"] = session_->fitness_unit();
   j["direction_deg"] = session_->directed() && !input_.config.task.directions.empty()
                            ? json(input_.config.task.directions[0])
                            : json(nullptr);

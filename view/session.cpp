@@ -246,6 +246,18 @@ std::vector<std::string> Session::component_names() const {
   return names;
 }
 
+std::vector<std::string> Session::component_units() const {
+  std::vector<std::string> units;
+  if (live_) {
+    for (const auto& c : live_->task->component_names()) units.push_back(c.unit);
+  }
+  return units;
+}
+
+std::string Session::fitness_unit() const {
+  return live_ ? live_->task->fitness_unit() : tasks::make_task(input_.config)->fitness_unit();
+}
+
 const physics::Terrain& Session::terrain() const {
   return live_ ? live_->sim->model().terrain : input_.trace_motion.terrain;
 }

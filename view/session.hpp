@@ -120,6 +120,9 @@ class Session {
   std::string status_message() const;
   double control_rate() const;  // [Hz] records per simulated second
   std::vector<std::string> component_names() const;
+  // Their units ("cm", "deg", ...; same order) and the unit of the fitness (the task's).
+  std::vector<std::string> component_units() const;
+  std::string fitness_unit() const;
   // The ground the robot moves on (docs/model.md §2.8a): the simulation's own (live) or the one
   // the trace recorded.
   const physics::Terrain& terrain() const;

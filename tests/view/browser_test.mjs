@@ -153,8 +153,17 @@ try {
   const gaitUrl = await serve([gaitBot, '--seconds', '60']);
   const page = await browser.newPage();
   page.on('pageerror', (e) => console.log('page error:', e.message));
+  const failed = [];
+  page.on('response', (r) => { if (r.status() >= 400) failed.push(`${r.status()} ${r.url()}`); });
   await page.goto(gaitUrl);
   await waitFor(page, () => window.softevo.frames > 30);
+  // Issue 30: every request is served (the favicon is inline), the side panel has no
+  // horizontal scrollbar, and the gait's fitness plot says its unit.
+  check(failed.length === 0, `every request of the page is served (${failed.join(' ') || 'none failed'})`);
+  const side = await page.evaluate(() => { const e = document.getElementById('side'); return [e.scrollWidth, e.clientWidth]; });
+  check(side[0] <= side[1], `the side panel does not scroll sideways (${side[0]} <= ${side[1]} px)`);
+  const units = await page.evaluate(() => [window.softevo.hello.fitness_unit, document.getElementById('fitness').textContent]);
+  check(units[0] === 'cm' && units[1].includes('fitness so far [cm]'), `the fitness is labelled in cm (${units[0]})`);
   const t0 = Date.now();
   const p0 = await probe(page);
   await sleep(4000);
@@ -286,6 +295,12 @@ try {
   await sendSteer({ type: 'steer', deg: 40 });
   await runTo(4.0);
   if (shots) await steer.screenshot({ path: path.join(shots, 'directed-steered.png') });
+  // The live page shows the dial, and its target direction row is the steered one.
+  const steered = await steer.evaluate(() => [getComputedStyle(document.getElementById('steering')).display,
+    [...document.querySelectorAll('#fitness tr')].map((r) => [...r.cells].map((c) => c.textContent))
+      .find((r) => r[0].startsWith('direction_deg'))]);
+  check(steered[0] !== 'none' && steered[1] && Number(steered[1][1]) === 40,
+    `live: the dial is shown and the target direction reads the steered 40 deg (${JSON.stringify(steered)})`);
   await sendSteer({ type: 'steer', deg: 0 });
   await runTo(8.9);
   const before = direction(0.0, 1.0), turned = direction(2.5, 4.0), back = direction(7.0, 8.9);
@@ -320,6 +335,16 @@ try {
   check(flatFloor.terrain === 0 && flatFloor.fraction < 0.3, 'a flat config draws the flat floor (no terrain mesh)');
   if (shots) await offline.screenshot({ path: path.join(shots, 'export-offline.png') });
   await offline.close();
+
+  // An exported directed robot shows its target, but no dial: nothing there steers.
+  const dirHtml = path.join(tmp, 'directed.html');
+  execFileSync(binary, ['view', dirBot, '--seconds', '0.5', '--export-html', dirHtml], { stdio: 'ignore' });
+  const dirPage = await browser.newPage();
+  await dirPage.goto(`file://${dirHtml}`);
+  await waitFor(dirPage, () => window.softevo.frames > 0, undefined, 30000);
+  const dial = await dirPage.evaluate(() => [window.softevo.hello.directed, getComputedStyle(document.getElementById('steering')).display]);
+  check(dial[0] === true && dial[1] === 'none', `an exported directed replay hides the steering dial (display ${dial[1]})`);
+  await dirPage.close();
 
   // ------------------------------------------------------------ 5. terrain, exported
   const roughHtml = path.join(tmp, 'rough.html');

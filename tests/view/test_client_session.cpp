@@ -49,6 +49,10 @@ TEST(ViewClientSession, StartsWithTheHelloAndTheFirstFrame) {
   EXPECT_EQ(hello["directed"], true);
   EXPECT_EQ(hello["planned_records"], 13);
   EXPECT_EQ(hello["component_names"].size(), 5u);
+  // Units for the page's labels (issue 30): the fitness in cm, not "task units"; the target
+  // direction in degrees (the page plots only the components in the fitness's unit).
+  EXPECT_EQ(hello["fitness_unit"], "cm");
+  EXPECT_EQ(hello["component_units"], json::array({"deg", "cm", "cm", "rad", "cm"}));
   EXPECT_EQ(frames_in(out), 1);
 }
 

@@ -43,6 +43,7 @@ let pathCount = 0, pathLast = -1;  // centroid path points drawn, last record am
 const matrix = new THREE.Matrix4(), quat = new THREE.Quaternion(), pos = new THREE.Vector3();
 const scaleVec = new THREE.Vector3(1, 1, 1), hidden = new THREE.Vector3(0, 0, 0);
 let charts = null;
+let fitnessSeries = [];  // indices of the components drawn in the fitness plot
 let lastFrame = null;  // the frame shown
 let duration = 10;
 
@@ -56,17 +57,23 @@ function resize() {
 window.addEventListener('resize', resize);
 
 // A text label on the floor (scale bar).
+// `size` is the height [m]; the width follows the text, so that none of it is cut off. The mesh's
+// left edge is at x = 0 of its position.
 function label(text, size) {
   const c = document.createElement('canvas');
-  c.width = 256; c.height = 64;
+  const font = '40px sans-serif';
+  const g0 = c.getContext('2d');
+  g0.font = font;
+  c.width = Math.ceil(g0.measureText(text).width) + 8; c.height = 64;
   const g = c.getContext('2d');
   g.fillStyle = '#333';
-  g.font = '40px sans-serif';
+  g.font = font;
   g.fillText(text, 4, 46);
   const tex = new THREE.CanvasTexture(c);
-  const m = new THREE.Mesh(new THREE.PlaneGeometry(size * 4, size),
-    new THREE.MeshBasicMaterial({ map: tex, transparent: true, depthWrite: false }));
-  return m;
+  const width = size * c.width / c.height;
+  const geo = new THREE.PlaneGeometry(width, size);
+  geo.translate(width / 2, 0, 0);
+  return new THREE.Mesh(geo, new THREE.MeshBasicMaterial({ map: tex, transparent: true, depthWrite: false }));
 }
 
 // The ground (hello.terrain, sampled by softevo from physics/terrain; absent for the flat floor):
@@ -166,7 +173,7 @@ function buildFloor(center) {
     new THREE.Vector3(center.x - 0.05, y0, barZ), new THREE.Vector3(center.x - 0.05 + bar, y0, barZ)]);
   floorGroup.add(new THREE.Line(barGeo, new THREE.LineBasicMaterial({ color: 0x000000 })));
   const text = label('10 cm (grid 10 / 100 voxels)', 0.012);
-  text.position.set(center.x - 0.05 + 0.024, y0 - 0.008, barZ);
+  text.position.set(center.x - 0.05, y0 - 0.008, barZ);
   floorGroup.add(text);
   scene.add(floorGroup);
   probe.terrainVertices = hello.terrain && terrainZ ? terrainZ.length : 0;
@@ -238,14 +245,20 @@ function setup(h) {
   pathLine = new THREE.Line(pathGeo, new THREE.LineBasicMaterial({ color: 0x1a1a1a }));
   scene.add(pathLine);
   const chambers = [...Array(h.chambers).keys()];
+  // The fitness plot shows the components in the fitness's own unit (a direction in degrees or
+  // an angle in radians would only flatten the others); the table lists them all with units.
+  fitnessSeries = h.component_names.map((_, i) => i)
+    .filter((i) => !h.component_units || h.component_units[i] === h.fitness_unit);
   charts = {
     pressure: new StripChart($('plot-pressure'), 'chamber pressure', chambers.map((q) => `c${q}`), 'kPa', n),
     valves: new StripChart($('plot-valves'), 'valve commands (in/out)',
       chambers.flatMap((q) => [`c${q}in`, `c${q}out`]), '0..1', n),
-    fitness: new StripChart($('plot-fitness'), 'fitness so far', ['fitness', ...h.component_names], 'task units', n),
+    fitness: new StripChart($('plot-fitness'), 'fitness so far', ['fitness', ...fitnessSeries.map((i) => h.component_names[i])],
+      h.fitness_unit || 'task units', n),
   };
   $('scrub').max = String(n - 1);
-  $('steering').style.display = h.directed && h.live ? '' : 'none';
+  // The dial steers a live simulation: an exported replay (or a trace) only shows its target.
+  $('steering').style.display = h.directed && h.live && probe.mode === 'live' ? '' : 'none';
   $('save').style.display = h.live && probe.mode === 'live' ? '' : 'none';
   targetLine && scene.remove(targetLine);
   targetLine = null;
@@ -328,7 +341,7 @@ function showFrame(f) {
   if (hello.directed) setTarget(f.target);
   charts.pressure.set(f.index, f.time, Array.from(f.pressures, (x) => (x - 1e5) / 1000));
   charts.valves.set(f.index, f.time, f.valves);
-  charts.fitness.set(f.index, f.time, [f.fitness, ...f.components]);
+  charts.fitness.set(f.index, f.time, [f.fitness, ...fitnessSeries.map((i) => f.components[i])]);
   $('clock').textContent = `${f.time.toFixed(2)} s / ${duration.toFixed(2)} s`;
   if (probe.mode === 'live') $('scrub').value = String(f.index);
   renderFitness(f);
@@ -338,8 +351,9 @@ function renderFitness(f) {
   if (!hello) return;
   const rows = [];
   const num = (x) => (x === undefined || x === null ? '' : Number(x).toPrecision(6));
-  rows.push(['fitness so far', f ? num(f.fitness) : '']);
-  hello.component_names.forEach((n, i) => rows.push([n, f ? num(f.components[i]) : '']));
+  const unit = (u) => (u ? ` [${u}]` : '');
+  rows.push([`fitness so far${unit(hello.fitness_unit)}`, f ? num(f.fitness) : '']);
+  hello.component_names.forEach((n, i) => rows.push([n + unit(hello.component_units && hello.component_units[i]), f ? num(f.components[i]) : '']));
   if (probe.ended && probe.ended.fitness !== undefined) rows.push(['final fitness (softevo)', num(probe.ended.fitness)]);
   if (hello.archived) {
     rows.push([`archived fitness (gen ${hello.archived.generation} id ${hello.archived.id})`, num(hello.archived.fitness)]);

@@ -51,12 +51,26 @@ export class StripChart {
     if (!(hi > lo)) { lo = (Number.isFinite(lo) ? lo : 0) - 1; hi = lo + 2; }
     const pad = 0.05 * (hi - lo);
     lo -= pad; hi += pad;
-    const left = 46, right = 6, top = 16, bottom = 16;
-    const px = (t) => left + (w - left - right) * (t / Math.max(duration, 1e-9));
-    const py = (v) => top + (h - top - bottom) * (1 - (v - lo) / (hi - lo));
     g.fillStyle = '#222';
     g.font = '11px sans-serif';
-    g.fillText(`${this.title} [${this.unit}]`, left, 11);
+    g.fillText(`${this.title} [${this.unit}]`, 2, 11);
+    // Legend (at most 10 entries) with the values at the cursor: above the plot area, in as
+    // many lines as it needs, so that it never hides a curve.
+    g.font = '10px sans-serif';
+    const lineHeight = 12;
+    let lx = 2, ly = 11 + lineHeight;
+    for (let s = 0; s < Math.min(this.names.length, 10); s++) {
+      const value = this.cursor >= 0 ? this.values[s][this.cursor] : NaN;
+      const label = `${this.names[s]} ${Number.isNaN(value) ? '' : fmt(value)}`;
+      const width = g.measureText(label).width;
+      if (lx > 2 && lx + width > w - 2) { lx = 2; ly += lineHeight; }
+      g.fillStyle = PALETTE[s % PALETTE.length];
+      g.fillText(label, lx, ly);
+      lx += width + 10;
+    }
+    const left = 46, right = 6, top = ly + 6, bottom = 16;
+    const px = (t) => left + (w - left - right) * (t / Math.max(duration, 1e-9));
+    const py = (v) => top + (h - top - bottom) * (1 - (v - lo) / (hi - lo));
     g.fillStyle = '#666';
     g.fillText(fmt(hi), 2, top + 8);
     g.fillText(fmt(lo), 2, h - bottom);
@@ -76,17 +90,6 @@ export class StripChart {
         pen = true;
       }
       g.stroke();
-    }
-    // Legend (at most 10 entries) with the values at the cursor.
-    g.font = '10px sans-serif';
-    let lx = left + 4;
-    for (let s = 0; s < Math.min(this.names.length, 10); s++) {
-      const value = this.cursor >= 0 ? this.values[s][this.cursor] : NaN;
-      const label = `${this.names[s]} ${Number.isNaN(value) ? '' : fmt(value)}`;
-      g.fillStyle = PALETTE[s % PALETTE.length];
-      g.fillText(label, lx, top + 11);
-      lx += g.measureText(label).width + 8;
-      if (lx > w - 40) break;
     }
     if (this.cursor >= 0 && !Number.isNaN(this.time[this.cursor])) {
       g.strokeStyle = '#000';
