@@ -43,6 +43,8 @@ struct ClientOptions {
 class ClientSession {
  public:
   ClientSession(const ViewInput& input, ClientOptions options);
+  // The session keeps a reference to its input: a temporary would dangle.
+  ClientSession(ViewInput&& input, ClientOptions options) = delete;
 
   // The hello (what is shown: body, names, units, counts) and the first frame.
   std::vector<Outgoing> start();

@@ -98,6 +98,8 @@ class Session {
  public:
   // Throws std::invalid_argument for a bad steering log or a robot that cannot be simulated.
   explicit Session(const ViewInput& input, std::vector<SteerCommand> steering = {});
+  // The session keeps a reference to its input: a temporary would dangle.
+  explicit Session(ViewInput&& input, std::vector<SteerCommand> steering = {}) = delete;
   ~Session();
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;

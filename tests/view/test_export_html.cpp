@@ -190,7 +190,8 @@ TEST(ViewExportHtml, TheHelloAndTheExportedPageCarryTheTerrain) {
   EXPECT_EQ(json::parse(element_text(page, "softevo-hello"))["terrain"], t);
 
   // Flat: no terrain at all.
-  view::ClientSession flat(test::block_input(TaskKind::gait, 0.1), {});
+  const view::ViewInput flat_input = test::block_input(TaskKind::gait, 0.1);
+  view::ClientSession flat(flat_input, {});
   EXPECT_FALSE(json::parse(flat.hello()).contains("terrain"));
   EXPECT_EQ(view::terrain_grid(flat.session()).nx, 0);
 }
