@@ -200,9 +200,12 @@ case "${1:-}" in
     # The MPI tests run at np=2 only: np=3 runs the same code with one more worker (both run in
     # the test mode), and instrumented it costs four minutes of the two cores.
     # The write-step fault tests take every other step per pass (tests/master/test_run.cpp).
+    # RoughWalk and ChampionsFast check how far champions walk (seconds of simulated time, 170 s
+    # of the instrumented suite's CPU); the same step code runs instrumented in the champion
+    # determinism tests (EvalDeterminism, every SIMD width), so here they would add time only.
     ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=print_stacktrace=1 SOFTEVO_TEST_STEP_STRIDE=2 \
       ctest --test-dir "$ROOT/build-sanitize" --output-on-failure -j"$JOBS" -LE "long|no_sanitize|browser" \
-      -E '^SoftevoMpiFaults\.|\.np3$'
+      -E '^SoftevoMpiFaults\.|\.np3$|^RoughWalk\.|^ChampionsFast\.'
     ;;
   clang)
     # The physics gives the same bits with clang as with GCC: the golden hashes (every SIMD
@@ -344,36 +347,52 @@ case "${1:-}" in
     # is on the readers only), so the clang bit tests (the `clang` mode) run here too, at the
     # cost of their three test programs.
     run_clang_bit_tests "$dir"
-    rc=0
-    for target in robot_file config archive; do
+    # fuzz_one TARGET: one fuzzer for the budget; its summary line, and on a failure the report.
+    fuzz_one() {
+      local target=$1 t0=$SECONDS rc=0
       # The corpus grows in the build tree (seeds from fuzz/make_seeds.cpp); a crashing input
       # is saved there as crash-* and printed.
-      corpus="$dir/fuzz/corpus/$target"
+      local corpus="$dir/fuzz/corpus/$target"
       mkdir -p "$corpus" "$dir/fuzz/artifacts"
       # An archive is one HDF5 file of ~30 kB: inputs up to 64 kB. Leaks are not checked there:
       # libhdf5 itself leaks on some of its error paths (an empty file leaks 37 kB in H5Fopen),
       # and libFuzzer's own -detect_leaks would run every such input twice. libhdf5 allocates
       # heavily, so a smaller quarantine (recent frees are still checked) and no malloc fill
       # keep the sanitizer from dominating: 2x the inputs per second.
-      extra=()
-      asan=allocator_may_return_null=1:detect_leaks=1
+      local extra=() asan=allocator_may_return_null=1:detect_leaks=1
       if [ "$target" = archive ]; then
         extra=(-max_len=65536 -detect_leaks=0)
         asan=allocator_may_return_null=1:detect_leaks=0:quarantine_size_mb=16:max_malloc_fill_size=0
       fi
-      t0=$SECONDS
-      if ! ASAN_OPTIONS=$asan "$dir/bin/fuzz_$target" \
+      ASAN_OPTIONS=$asan "$dir/bin/fuzz_$target" \
         -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
         -artifact_prefix="$dir/fuzz/artifacts/$target-" "${extra[@]}" \
-        "$corpus" "$dir/fuzz/seeds/$target" >"$dir/fuzz/$target.log" 2>&1; then
+        "$corpus" "$dir/fuzz/seeds/$target" >"$dir/fuzz/$target.log" 2>&1 || rc=1
+      local runs speed
+      runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$dir/fuzz/$target.log" | tail -1)
+      speed=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$dir/fuzz/$target.log" | tail -1)
+      echo "== fuzz_$target: ${runs:-?} inputs in $((SECONDS - t0)) s (${speed:-?}/s)" \
+        >"$dir/fuzz/$target.summary"
+      return $rc
+    }
+    # The three run at once: each fuzzer is one process, so one after the other would leave a
+    # core idle for the whole budget (each still gets its full time, at two thirds of a core).
+    pids=()
+    for target in robot_file config archive; do
+      fuzz_one "$target" &
+      pids+=($!)
+    done
+    rc=0
+    i=0
+    for target in robot_file config archive; do
+      if ! wait "${pids[$i]}"; then
         rc=1
         # The report's head (the error and its stack), then libFuzzer's summary and artifact.
         grep -m1 -A40 -E '^==[0-9]+== ?ERROR|runtime error:' "$dir/fuzz/$target.log" || true
         tail -12 "$dir/fuzz/$target.log"
       fi
-      runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$dir/fuzz/$target.log" | tail -1)
-      speed=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$dir/fuzz/$target.log" | tail -1)
-      echo "== fuzz_$target: ${runs:-?} inputs in $((SECONDS - t0)) s (${speed:-?}/s)"
+      cat "$dir/fuzz/$target.summary"
+      i=$((i + 1))
     done
     [ $rc -eq 0 ]
     ;;
