@@ -179,12 +179,7 @@ physics::Terrain ground_of(const io::Trace& trace) {
   if (t.kind == physics::TerrainKind::flat) return t;  // a kind this build does not know
   t.params.kind = t.kind;
   t.params.seed = std::strtoull(g.seed.c_str(), nullptr, 16);
-  t.params.amplitude = g.amplitude;
-  t.params.correlation_length = g.correlation_length;
-  t.params.step_height = g.step_height;
-  t.params.step_spacing = g.step_spacing;
-  t.params.slope_angle = g.slope_angle_deg;
-  t.params.slope_direction = g.slope_direction_deg;
+  t.params.shape = g.shape;
   // make_terrain derives everything else from the lattice; a trace records the derived
   // positions instead, so set them over a layout for a one-cell lattice.
   t = physics::make_terrain(t.params, {1, 1, 1}, trace.voxel_size);
