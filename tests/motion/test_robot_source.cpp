@@ -87,8 +87,8 @@ TEST_F(RobotSource, OnlyTheShownPosesAreKeptAndTheyAreThePosesShownFromAll) {
   EXPECT_EQ(kept.poses.front().time, all.poses.front().time);
   EXPECT_EQ(kept.poses.back().time, all.poses.back().time);
   for (const double t : shown) {
-    const render::Pose& a = all.poses[render::pose_at(all.poses, t)];
-    const render::Pose& k = kept.poses[render::pose_at(kept.poses, t)];
+    const scene::Pose& a = all.poses[render::pose_at(all.poses, t)];
+    const scene::Pose& k = kept.poses[render::pose_at(kept.poses, t)];
     EXPECT_EQ(k.time, a.time) << "at t = " << t;
     ASSERT_EQ(k.position.size(), a.position.size());
     for (std::size_t v = 0; v < a.position.size(); ++v) EXPECT_EQ(k.position[v], a.position[v]);
