@@ -88,6 +88,39 @@ bool terrain_steps(const Config& c) {
 bool terrain_slope(const Config& c) {
   return terrain_heightfield(c) && c.terrain.heightfield == HeightfieldKind::slope;
 }
+// When a key of heightfield `kind` applies, and the condition's text for the error.
+struct HeightfieldCondition {
+  bool (*holds)(const Config&);
+  const char* text;
+};
+HeightfieldCondition on_heightfield(HeightfieldKind kind) {
+  switch (kind) {
+    case HeightfieldKind::bumps:
+      return {terrain_bumps, "terrain.kind = \"heightfield\" and terrain.heightfield = \"bumps\""};
+    case HeightfieldKind::steps:
+      return {terrain_steps, "terrain.kind = \"heightfield\" and terrain.heightfield = \"steps\""};
+    case HeightfieldKind::slope:
+      break;
+  }
+  return {terrain_slope, "terrain.kind = \"heightfield\" and terrain.heightfield = \"slope\""};
+}
+// The keys of the heightfield's numbers (common/terrain_shape.hpp), in its table's order: each
+// printed and settable only on its heightfield.
+std::vector<KeyDef> terrain_shape_rows(TerrainShape& shape) {
+  std::vector<KeyDef> rows;
+  for (const TerrainShapeField& f : kTerrainShapeFields) {
+    const HeightfieldCondition when = on_heightfield(f.heightfield);
+    rows.push_back(only_when({.section = "terrain",
+                              .key = f.key,
+                              .target = &(shape.*f.member),
+                              .min = f.min,
+                              .max = f.max,
+                              .unit = f.unit,
+                              .min_exclusive = f.min_exclusive},
+                             when.holds, when.text));
+  }
+  return rows;
+}
 bool learning_on(const Config& c) {
   return c.learning.method != LearningMethod::none;
 }
@@ -138,7 +171,7 @@ std::vector<KeyDef> schema(Config& c) {
   auto& b = c.body;
   auto& l = c.learning;
   auto& n = c.neat;
-  return {
+  std::vector<KeyDef> rows = {
       {.section = "run", .key = "seed", .target = &r.seed, .min = 0, .max = 9.0e15},
       {.section = "run", .key = "generations", .target = &r.generations, .min = 0, .max = 1.0e7},
       {.section = "run",
@@ -261,56 +294,6 @@ std::vector<KeyDef> schema(Config& c) {
       {.section = "terrain", .key = "kind", .target = &tr.kind, .printed_if = terrain_not_flat},
       only_when({.section = "terrain", .key = "heightfield", .target = &tr.heightfield},
                 terrain_heightfield, "terrain.kind = \"heightfield\""),
-      only_when({.section = "terrain",
-                 .key = "amplitude",
-                 .target = &tr.amplitude,
-                 .min = 0,
-                 .max = 1,
-                 .unit = "m"},
-                terrain_bumps,
-                "terrain.kind = \"heightfield\" and terrain.heightfield = \"bumps\""),
-      only_when({.section = "terrain",
-                 .key = "correlation_length",
-                 .target = &tr.correlation_length,
-                 .min = 0,
-                 .max = 100,
-                 .unit = "m",
-                 .min_exclusive = true},
-                terrain_bumps,
-                "terrain.kind = \"heightfield\" and terrain.heightfield = \"bumps\""),
-      only_when({.section = "terrain",
-                 .key = "step_height",
-                 .target = &tr.step_height,
-                 .min = 0,
-                 .max = 1,
-                 .unit = "m"},
-                terrain_steps,
-                "terrain.kind = \"heightfield\" and terrain.heightfield = \"steps\""),
-      only_when({.section = "terrain",
-                 .key = "step_spacing",
-                 .target = &tr.step_spacing,
-                 .min = 0,
-                 .max = 100,
-                 .unit = "m",
-                 .min_exclusive = true},
-                terrain_steps,
-                "terrain.kind = \"heightfield\" and terrain.heightfield = \"steps\""),
-      only_when({.section = "terrain",
-                 .key = "slope_angle",
-                 .target = &tr.slope_angle,
-                 .min = -60,
-                 .max = 60,
-                 .unit = "deg"},
-                terrain_slope,
-                "terrain.kind = \"heightfield\" and terrain.heightfield = \"slope\""),
-      only_when({.section = "terrain",
-                 .key = "slope_direction",
-                 .target = &tr.slope_direction,
-                 .min = -360,
-                 .max = 360,
-                 .unit = "deg"},
-                terrain_slope,
-                "terrain.kind = \"heightfield\" and terrain.heightfield = \"slope\""),
       only_when({.section = "terrain", .key = "seed", .target = &tr.seed, .min = 0, .max = 9.0e15},
                 terrain_not_flat, "terrain.kind is not \"flat\""),
       only_when({.section = "terrain", .key = "resample", .target = &tr.resample}, terrain_not_flat,
@@ -592,6 +575,13 @@ std::vector<KeyDef> schema(Config& c) {
                  .max = 1e6},
                 learning_on, "learning.method is not \"none\""),
   };
+  // The heightfield's numbers follow terrain.heightfield: their place in the canonical text.
+  const auto heightfield = std::find_if(rows.begin(), rows.end(), [](const KeyDef& def) {
+    return std::string_view(def.section) == "terrain" && std::string_view(def.key) == "heightfield";
+  });
+  const std::vector<KeyDef> shape = terrain_shape_rows(tr.shape);
+  rows.insert(heightfield + 1, shape.begin(), shape.end());
+  return rows;
 }
 
 // Shortest text that parses back to exactly `v` (std::to_chars round-trip guarantee), written
@@ -870,13 +860,13 @@ void check_consistency(const Config& c, const std::string& source) {
   // Ground that cannot work: a tread shorter than a voxel puts a riser under every voxel centre
   // (physics/terrain.cpp refuses it, so every evaluation would fail), and value noise of cells
   // below a voxel is sampled less than once per cell (far below, it reads as flat ground).
-  if (terrain_steps(c) && !(c.terrain.step_spacing >= c.physics.voxel_size)) {
-    fail(at, "terrain.step_spacing = " + format_double(c.terrain.step_spacing) +
+  if (terrain_steps(c) && !(c.terrain.shape.step_spacing >= c.physics.voxel_size)) {
+    fail(at, "terrain.step_spacing = " + format_double(c.terrain.shape.step_spacing) +
                  " m must be at least one voxel (physics.voxel_size = " +
                  format_double(c.physics.voxel_size) + " m)");
   }
-  if (terrain_bumps(c) && !(c.terrain.correlation_length >= c.physics.voxel_size)) {
-    fail(at, "terrain.correlation_length = " + format_double(c.terrain.correlation_length) +
+  if (terrain_bumps(c) && !(c.terrain.shape.correlation_length >= c.physics.voxel_size)) {
+    fail(at, "terrain.correlation_length = " + format_double(c.terrain.shape.correlation_length) +
                  " m must be at least one voxel (physics.voxel_size = " +
                  format_double(c.physics.voxel_size) +
                  " m): finer noise is not resolved by the voxel contacts");

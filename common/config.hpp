@@ -16,15 +16,15 @@
 
 #include "common/body_plan.hpp"
 #include "common/choice.hpp"
+#include "common/terrain_shape.hpp"
 
 namespace softevo {
 
 // The choices of the config (common/choice.hpp), in the order of their config names.
-enum class FailurePolicy : std::uint8_t { killed, abort };          // run.on_failure
-enum class ControlLoop : std::uint8_t { open, closed };             // task.control (§4.1)
-enum class Integrator : std::uint8_t { pneuvox, symplectic };       // physics.integrator (§2.9)
-enum class GroundKind : std::uint8_t { flat, rows, heightfield };   // terrain.kind (§2.8a)
-enum class HeightfieldKind : std::uint8_t { bumps, steps, slope };  // terrain.heightfield
+enum class FailurePolicy : std::uint8_t { killed, abort };         // run.on_failure
+enum class ControlLoop : std::uint8_t { open, closed };            // task.control (§4.1)
+enum class Integrator : std::uint8_t { pneuvox, symplectic };      // physics.integrator (§2.9)
+enum class GroundKind : std::uint8_t { flat, rows, heightfield };  // terrain.kind (§2.8a)
 enum class TerrainResample : std::uint8_t { per_run, per_generation, per_evaluation };
 enum class SupplyScaling : std::uint8_t { none, inverse_volume };                      // (§3.8)
 enum class CrossoverMethod : std::uint8_t { one_point_per_layer, random, one_point };  // (§8.6)
@@ -149,13 +149,14 @@ struct PhysicsConfig {
 struct TerrainConfig {
   GroundKind kind = GroundKind::flat;  // flat, rows (the thesis system's fixed voxels), heightfield
   HeightfieldKind heightfield = HeightfieldKind::bumps;  // kind = heightfield: bumps, steps, slope
-  double amplitude = 0.01;           // bumps: largest height above / below the plane [m]
-  double correlation_length = 0.05;  // bumps: grid spacing of the value noise [m]
-  double step_height = 0.005;        // steps: rise of each step [m]
-  double step_spacing = 0.05;        // steps: tread length along +x [m]
-  double slope_angle = 10.0;         // slope: inclination [deg], > 0 uphill
-  double slope_direction = 0.0;      // slope: uphill direction from +x towards +y [deg]
-  std::int64_t seed = 1;             // terrain seed, mixed with run.seed
+  // kind = heightfield: its numbers (common/terrain_shape.hpp), at the config's defaults.
+  TerrainShape shape{.amplitude = 0.01,
+                     .correlation_length = 0.05,
+                     .step_height = 0.005,
+                     .step_spacing = 0.05,
+                     .slope_angle = 10.0,
+                     .slope_direction = 0.0};
+  std::int64_t seed = 1;  // terrain seed, mixed with run.seed
   // How often the ground is drawn anew: once per run, per generation (every genome of a
   // generation on the same ground), or per evaluation (genome and direction too).
   TerrainResample resample = TerrainResample::per_run;

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include "common/safe_write.hpp"
 #include "io/h5.hpp"
@@ -32,6 +34,32 @@ std::string shape(std::initializer_list<std::int64_t> dims) {
   std::string s = "[";
   for (const std::int64_t d : dims) s += (s.size() > 1 ? ", " : "") + std::to_string(d);
   return s + "]";
+}
+
+// The terrain's number attributes in file order (docs/trace.md), as (name, member of `g`):
+// each heightfield's numbers (common/terrain_shape.hpp) followed by where that ground starts,
+// then the rows' y span. One list for writing (`g` const) and reading, so the two cannot drift.
+template <class TraceTerrain>
+auto terrain_numbers(TraceTerrain& g) {
+  using Number = decltype(&g.row_y_min);  // double* or const double*
+  struct Start {
+    HeightfieldKind heightfield;
+    const char* name;
+    Number value;
+  };
+  const Start starts[] = {{HeightfieldKind::bumps, "terrain_bumps_start_x", &g.bumps_start_x},
+                          {HeightfieldKind::steps, "terrain_first_riser_x", &g.first_riser_x},
+                          {HeightfieldKind::slope, "terrain_slope_start", &g.slope_start}};
+  std::vector<std::pair<const char*, Number>> numbers;
+  for (const Start& start : starts) {
+    for (const TerrainShapeField& f : kTerrainShapeFields)
+      if (f.heightfield == start.heightfield)
+        numbers.emplace_back(f.trace_attribute, &(g.shape.*f.member));
+    numbers.emplace_back(start.name, start.value);
+  }
+  numbers.emplace_back("terrain_row_y_min", &g.row_y_min);
+  numbers.emplace_back("terrain_row_y_max", &g.row_y_max);
+  return numbers;
 }
 
 }  // namespace
@@ -77,19 +105,7 @@ void write_trace(const std::string& path, const Trace& t, Overwrite overwrite) {
     const Trace::Terrain& g = *t.terrain;
     file.write_string_attribute("terrain_kind", g.kind, Charset::ascii);
     file.write_string_attribute("terrain_seed", g.seed, Charset::ascii);
-    const std::pair<const char*, double> numbers[] = {
-        {"terrain_amplitude", g.amplitude},
-        {"terrain_correlation_length", g.correlation_length},
-        {"terrain_bumps_start_x", g.bumps_start_x},
-        {"terrain_step_height", g.step_height},
-        {"terrain_step_spacing", g.step_spacing},
-        {"terrain_first_riser_x", g.first_riser_x},
-        {"terrain_slope_angle_deg", g.slope_angle_deg},
-        {"terrain_slope_direction_deg", g.slope_direction_deg},
-        {"terrain_slope_start", g.slope_start},
-        {"terrain_row_y_min", g.row_y_min},
-        {"terrain_row_y_max", g.row_y_max}};
-    for (const auto& [name, value] : numbers) file.write_attribute<double>(name, value);
+    for (const auto& [name, value] : terrain_numbers(g)) file.write_attribute<double>(name, *value);
     file.write_dataset<double>("terrain_row_x", {static_cast<hsize_t>(g.row_x.size())}, g.row_x);
   }
   file.close();
@@ -181,19 +197,7 @@ Trace read_trace(const std::string& path) {
     Trace::Terrain g;
     g.kind = file.read_string_attribute("terrain_kind", kStringBytes);
     g.seed = file.read_string_attribute("terrain_seed", kStringBytes);
-    const std::pair<const char*, double*> numbers[] = {
-        {"terrain_amplitude", &g.amplitude},
-        {"terrain_correlation_length", &g.correlation_length},
-        {"terrain_bumps_start_x", &g.bumps_start_x},
-        {"terrain_step_height", &g.step_height},
-        {"terrain_step_spacing", &g.step_spacing},
-        {"terrain_first_riser_x", &g.first_riser_x},
-        {"terrain_slope_angle_deg", &g.slope_angle_deg},
-        {"terrain_slope_direction_deg", &g.slope_direction_deg},
-        {"terrain_slope_start", &g.slope_start},
-        {"terrain_row_y_min", &g.row_y_min},
-        {"terrain_row_y_max", &g.row_y_max}};
-    for (const auto& [name, value] : numbers) *value = file.read_attribute<double>(name);
+    for (const auto& [name, value] : terrain_numbers(g)) *value = file.read_attribute<double>(name);
     if (file.has_link("terrain_row_x"))
       g.row_x = file.open_dataset("terrain_row_x").read<double>(64);
     t.terrain = std::move(g);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/safe_write.hpp"
+#include "common/terrain_shape.hpp"
 
 namespace softevo::io {
 
@@ -47,18 +48,15 @@ struct Trace {
   // The ground of the traced evaluation (docs/model.md §2.8a, docs/trace.md): what a viewer
   // needs to draw it (or to rebuild it with physics::make_terrain). Absent = flat.
   struct Terrain {
-    std::string kind;                  // "rows", "bumps", "steps" or "slope"
-    std::string seed;                  // the evaluation's terrain seed, 16 hex digits
-    double amplitude = 0.0;            // [m] bumps
-    double correlation_length = 0.0;   // [m] bumps
-    double bumps_start_x = 0.0;        // [m] bumps fade in over one correlation length from here
-    double step_height = 0.0;          // [m] steps
-    double step_spacing = 0.0;         // [m] steps
-    double first_riser_x = 0.0;        // [m] steps: centre-frame x of the first riser
-    double slope_angle_deg = 0.0;      // [deg] slope
-    double slope_direction_deg = 0.0;  // [deg] slope
-    double slope_start = 0.0;          // [m] slope: distance along the direction where it starts
-    std::vector<double> row_x;         // [m] rows: x of each row's voxel centres
+    std::string kind;    // "rows", "bumps", "steps" or "slope"
+    std::string seed;    // the evaluation's terrain seed, 16 hex digits
+    TerrainShape shape;  // the heightfield's numbers (common/terrain_shape.hpp)
+    // Where the generated ground starts, as the evaluation laid it (make_terrain derives these
+    // from the body's lattice, which a trace does not keep).
+    double bumps_start_x = 0.0;  // [m] bumps fade in over one correlation length from here
+    double first_riser_x = 0.0;  // [m] steps: centre-frame x of the first riser
+    double slope_start = 0.0;    // [m] slope: distance along the direction where it starts
+    std::vector<double> row_x;   // [m] rows: x of each row's voxel centres
     double row_y_min = 0.0, row_y_max = 0.0;  // [m] rows: y span of the rows' centres
   };
   std::optional<Terrain> terrain;

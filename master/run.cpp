@@ -11,13 +11,13 @@
 #include <exception>
 #include <filesystem>
 #include <fstream>
-#include <numeric>
 
 #include "common/config_identity.hpp"
 #include "common/safe_write.hpp"
 #include "common/version.hpp"
 #include "evo/genome.hpp"
 #include "master/archive_check.hpp"
+#include "master/generation_record.hpp"
 #include "master/run_state.hpp"
 #include "master/signals.hpp"
 #include "master/unit_cost.hpp"
@@ -35,8 +35,6 @@ using io::check_output_path;
 using io::Checkpoint;
 using io::create_archive;
 using io::finish_archive;
-using io::fitness_stats;
-using io::FitnessStats;
 using io::GenerationRecord;
 using io::remove_archive_debris;
 using io::RunInfo;
@@ -73,16 +71,6 @@ std::int64_t generations_on_disk(const std::string& out) {
   } catch (const std::exception&) {
     return -1;
   }
-}
-
-// One row's learning columns (io::GenerationRecord), every row of a learning run.
-void record_learning(GenerationRecord& rec, double fitness_before, std::int64_t evaluations,
-                     std::vector<std::uint8_t> learned_genome, const std::vector<double>& curve) {
-  rec.learning_points = static_cast<std::int64_t>(curve.size());
-  rec.fitness_before.push_back(fitness_before);
-  rec.learn_evaluations.push_back(evaluations);
-  rec.learned_genome.push_back(std::move(learned_genome));
-  rec.learning_curve.insert(rec.learning_curve.end(), curve.begin(), curve.end());
 }
 
 // Archives generation `record.generation`; `info` counts it only once it is on disk. A failed
@@ -578,141 +566,53 @@ void RunLoop::check_failures(const GenerationScheduler& scheduler) const {
 
 void RunLoop::end_generation() {
   guarded([&] {
-    const Config& config = run_.config;
-    const std::string& out = run_.options.out_path;
-    const tasks::Task& task = *task_;
     GenerationScheduler& scheduler = *scheduler_;
     evo::Population& population = *run_.population;
-    const std::vector<evo::Individual>& members = population.members();
-    const std::int64_t g = scheduler.generation();
     const double eval_seconds = seconds_since(t_eval_);
     check_failures(scheduler);
-    // plan_.evaluate order; with learning, the learned genomes' outcomes
-    std::vector<GenomeOutcome> evaluated;
-    if (learning_) {
-      for (const LearnedResult& l : learning_->results()) evaluated.push_back(l.learned);
-    } else {
-      evaluated = scheduler.outcomes();
-    }
-    std::vector<const GenomeOutcome*> outcome_of(members.size(), nullptr);
-    std::vector<const LearnedResult*> learned_of(members.size(), nullptr);
-    for (std::size_t k = 0; k < plan_.evaluate.size(); ++k) {
-      outcome_of[plan_.evaluate[k]] = &evaluated[k];
-      if (learning_) learned_of[plan_.evaluate[k]] = &learning_->results()[k];
-    }
-
-    // Archive rows in id order.
-    std::vector<std::size_t> order(members.size());
-    std::iota(order.begin(), order.end(), std::size_t{0});
-    std::sort(order.begin(), order.end(),
-              [&](std::size_t a, std::size_t b) { return members[a].id < members[b].id; });
-    GenerationRecord rec;
-    rec.generation = g;
-    rec.units = task.units();
-    rec.component_columns = tasks::component_columns(task);
-    std::vector<evo::Evaluation> evaluations;
-    evaluations.reserve(members.size());
-    for (std::size_t i : order) {
-      const evo::Individual& m = members[i];
-      const ResultSource& source = plan_.source[i];
-      rec.id.push_back(m.id);
-      rec.parent1.push_back(m.parent1);
-      rec.parent2.push_back(m.parent2);
-      rec.species.push_back(m.species);
-      rec.genome.push_back(encoded_[i]);
-      rec.reused_from.push_back(source.origin_id);
-      if (source.kind == ResultSource::Kind::earlier_generation) {
-        const ReusableResult& r = *source.earlier;
-        rec.status.push_back(r.status);
-        rec.fitness.push_back(r.fitness);
-        rec.voxels.push_back(r.voxels);
-        rec.chambers.push_back(r.chambers);
-        rec.wall_seconds.push_back(0.0);
-        rec.worker_rank.push_back(-1);
-        rec.components.insert(rec.components.end(), r.components.begin(), r.components.end());
-        if (learning_)
-          record_learning(rec, r.fitness_before, r.learn_evaluations, r.learned_genome,
-                          r.learning_curve);
-      } else {
-        const bool copy = source.kind == ResultSource::Kind::same_generation;
-        const GenomeOutcome& o = *outcome_of[copy ? source.member : i];
-        rec.status.push_back(static_cast<std::uint8_t>(o.status));
-        rec.fitness.push_back(o.fitness);
-        rec.voxels.push_back(o.voxels);
-        rec.chambers.push_back(o.chambers);
-        rec.wall_seconds.push_back(copy ? 0.0 : o.wall_seconds);
-        rec.worker_rank.push_back(copy ? -1 : o.worker_rank);
-        for (const UnitFitness& u : o.components) {
-          const std::vector<double> row = tasks::component_row(u);
-          rec.components.insert(rec.components.end(), row.begin(), row.end());
-        }
-        if (learning_) {
-          const LearnedResult& l = *learned_of[copy ? source.member : i];
-          record_learning(rec, l.born.fitness, l.evaluations, evo::encode_genome(l.genome),
-                          l.curve);
-          if (!copy) rec.wall_seconds.back() = l.wall_seconds;
-        }
-      }
-      evaluations.push_back(evo::Evaluation{m.id, rec.fitness.back(), rec.status.back() != 0});
-    }
-    const FitnessStats fs = fitness_stats(rec.fitness);
-    rec.best = fs.best;
-    rec.mean = fs.mean;
-    rec.sd = fs.sd;
-    rec.species_count = static_cast<std::int64_t>(population.species_count());
-    // Work units of the generation's results, reused ones too: the attribute is part of
-    // content_digest, which reuse leaves as it was.
-    rec.evaluations = static_cast<std::int64_t>(members.size()) * task.units();
-    rec.eval_wall_seconds = eval_seconds;
-    const auto simulated = static_cast<std::int64_t>(units_before_ + scheduler.units_total());
-
-    try {
-      // Lamarckian inheritance: the learned controllers are what reproduces (§8.11).
-      if (learning_ && config.learning.inheritance == Inheritance::lamarckian)
-        for (std::size_t r = 0; r < rec.size(); ++r)
-          if (rec.learned_genome[r] != rec.genome[r])
-            population.adopt_controller(rec.id[r], evo::decode_genome(rec.learned_genome[r]));
-      population.advance(evaluations);
-    } catch (const std::exception& e) {
-      throw RunError("generation " + std::to_string(g) + ": reproduction failed: " + e.what());
-    }
-    StatsRow stats{static_cast<double>(g),
-                   rec.best,
-                   rec.mean,
-                   rec.sd,
-                   static_cast<double>(rec.species_count),
-                   eval_seconds > 0 ? static_cast<double>(simulated) / eval_seconds : 0.0};
-    commit_generation(out, run_.info, rec, stats,
-                      Checkpoint{population.generation(), population.serialize()},
-                      run_.options.archive_fault);
+    const GenerationLearning* learning = learning_ ? &*learning_ : nullptr;
+    const std::vector<GenomeOutcome> evaluated = evaluated_outcomes(scheduler, learning);
+    const GenerationRecord rec = generation_record(GenerationInputs{
+        .generation = scheduler.generation(),
+        .task = *task_,
+        .members = population.members(),
+        .encoded = encoded_,
+        .plan = plan_,
+        .evaluated = evaluated,
+        .learned = learning ? &learning->results() : nullptr,
+        .species_count = static_cast<std::int64_t>(population.species_count()),
+        .eval_wall_seconds = eval_seconds,
+    });
+    const GenerationWork work{
+        .simulated_units = static_cast<std::int64_t>(units_before_ + scheduler.units_total()),
+        .reused_units = static_cast<std::int64_t>(plan_.reused()) * task_->units(),
+    };
+    reproduce(rec);
+    commit_generation(
+        run_.options.out_path, run_.info, rec, stats_row(rec, work),
+        Checkpoint{.generation = population.generation(), .population = population.serialize()},
+        run_.options.archive_fault);
     run_.memory.remember(rec);
-    GenerationSummary summary{g,
-                              rec.best,
-                              rec.mean,
-                              rec.species_count,
-                              simulated,
-                              eval_seconds,
-                              seconds_since(t_generation_),
-                              {},
-                              0.0,
-                              task.fitness_unit(),
-                              static_cast<std::int64_t>(plan_.reused()) * task.units()};
-    if (learning_ && learning_->bodies_learning() > 0) {
-      summary.learned_bodies = static_cast<std::int64_t>(learning_->bodies_learning());
-      summary.learning_iterations = learning_->iterations();
-      summary.learning_gain_mean = learning_->mean_improvement();
-      summary.learning_gain_best = learning_->best_improvement();
-    }
-    for (std::size_t i = 0; i < rec.size(); ++i) {
-      if (rec.status[i] < summary.status_counts.size()) ++summary.status_counts[rec.status[i]];
-      if (rec.status[i] == static_cast<std::uint8_t>(EvalStatus::ok))
-        summary.max_abs_ok_fitness =
-            std::max(summary.max_abs_ok_fitness, std::fabs(rec.fitness[i]));
-    }
-    progress_.generation_finished(summary);
+    progress_.generation_finished(
+        generation_summary(rec, *task_, work, seconds_since(t_generation_), learning));
     scheduler_.reset();
     check_failed_generations(rec, evaluated);
   });
+}
+
+void RunLoop::reproduce(const GenerationRecord& rec) {
+  evo::Population& population = *run_.population;
+  try {
+    // Lamarckian inheritance: the learned controllers are what reproduces (§8.11).
+    if (learning_ && run_.config.learning.inheritance == Inheritance::lamarckian)
+      for (std::size_t r = 0; r < rec.size(); ++r)
+        if (rec.learned_genome[r] != rec.genome[r])
+          population.adopt_controller(rec.id[r], evo::decode_genome(rec.learned_genome[r]));
+    population.advance(evaluations(rec));
+  } catch (const std::exception& e) {
+    throw RunError("generation " + std::to_string(rec.generation) +
+                   ": reproduction failed: " + e.what());
+  }
 }
 
 void RunLoop::check_failed_generations(const GenerationRecord& rec,

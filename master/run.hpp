@@ -204,6 +204,9 @@ class RunLoop {
   void guarded(const Step& step);
   // RunError naming the first failed unit of `scheduler` under run.on_failure = "abort".
   void check_failures(const GenerationScheduler& scheduler) const;
+  // Learning's inheritance, then the population's next generation from the rows' fitness;
+  // RunError when reproduction fails.
+  void reproduce(const io::GenerationRecord& rec);
   // RunError (recorded as the archive's stop_reason) after run.stop_after_failed_generations
   // generations in a row in which no evaluation succeeded; `evaluated` gives the first cause.
   void check_failed_generations(const io::GenerationRecord& rec,

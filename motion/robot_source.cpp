@@ -27,8 +27,8 @@ bool is_json(const std::string& path) {
   return ext == ".json";
 }
 
-render::Pose pose_of(const worker::TraceFrame& frame) {
-  render::Pose pose;
+scene::Pose pose_of(const worker::TraceFrame& frame) {
+  scene::Pose pose;
   pose.time = frame.time;
   pose.position.assign(frame.positions.begin(), frame.positions.end());
   pose.orientation.reserve(frame.orientations.size());
@@ -45,7 +45,7 @@ class NearestPoses {
   explicit NearestPoses(std::optional<std::vector<double>> wanted) : wanted_(std::move(wanted)) {
     if (wanted_) std::sort(wanted_->begin(), wanted_->end());
   }
-  void offer(render::Pose pose) {
+  void offer(scene::Pose pose) {
     if (!wanted_) {
       kept_.push_back(std::move(pose));
       return;
@@ -64,7 +64,7 @@ class NearestPoses {
     previous_needed_ = keep_new;
   }
   // The kept poses, ascending; the last pose is among them (a clip's end is its time).
-  std::vector<render::Pose> finish() {
+  std::vector<scene::Pose> finish() {
     if (previous_) kept_.push_back(std::move(*previous_));
     previous_.reset();
     return std::move(kept_);
@@ -73,9 +73,9 @@ class NearestPoses {
  private:
   std::optional<std::vector<double>> wanted_;
   std::size_t next_ = 0;  // first wanted time later than every pose offered so far
-  std::optional<render::Pose> previous_;
+  std::optional<scene::Pose> previous_;
   bool previous_needed_ = false;
-  std::vector<render::Pose> kept_;
+  std::vector<scene::Pose> kept_;
 };
 
 // Refuses, before anything is simulated, a motion whose kept poses would need more than
@@ -107,7 +107,7 @@ Motion simulate_motion(Config config, const BodyPlan& plan, const ControllerSpec
                        const MotionRequest& request, const std::string& name,
                        const worker::EvaluationIds& ids = {}) {
   Motion motion;
-  motion.body = render::body_from_plan(plan, static_cast<int>(config.physics.material_count));
+  motion.body = scene::body_from_plan(plan, static_cast<int>(config.physics.material_count));
   motion.name = name;
   // Values of command options go through the config's range checks (--seconds nan or 1e10
   // would otherwise run 10 s or fail deep inside the simulation).
@@ -179,12 +179,7 @@ physics::Terrain ground_of(const io::Trace& trace) {
   if (t.kind == physics::TerrainKind::flat) return t;  // a kind this build does not know
   t.params.kind = t.kind;
   t.params.seed = std::strtoull(g.seed.c_str(), nullptr, 16);
-  t.params.amplitude = g.amplitude;
-  t.params.correlation_length = g.correlation_length;
-  t.params.step_height = g.step_height;
-  t.params.step_spacing = g.step_spacing;
-  t.params.slope_angle = g.slope_angle_deg;
-  t.params.slope_direction = g.slope_direction_deg;
+  t.params.shape = g.shape;
   // make_terrain derives everything else from the lattice; a trace records the derived
   // positions instead, so set them over a layout for a one-cell lattice.
   t = physics::make_terrain(t.params, {1, 1, 1}, trace.voxel_size);
@@ -201,15 +196,15 @@ physics::Terrain ground_of(const io::Trace& trace) {
 
 Motion static_motion(const BodyPlan& plan, int material_count, const std::string& name) {
   Motion motion;
-  motion.body = render::body_from_plan(plan, material_count);
-  motion.poses.push_back(render::rest_pose(motion.body));
+  motion.body = scene::body_from_plan(plan, material_count);
+  motion.poses.push_back(scene::rest_pose(motion.body));
   motion.name = name;
   return motion;
 }
 
 // Body of a trace: voxels from the trace, chamber cells from a robot file when known.
-render::Body trace_body(const io::Trace& trace, const std::string& path,
-                        const std::string& robot_file) {
+scene::Body trace_body(const io::Trace& trace, const std::string& path,
+                       const std::string& robot_file) {
   const auto voxels = static_cast<std::size_t>(trace.voxels);
   const auto cell = [&trace](std::size_t v) {
     return Eigen::Vector3i(trace.voxel_cells[3 * v], trace.voxel_cells[3 * v + 1],
@@ -221,9 +216,9 @@ render::Body trace_body(const io::Trace& trace, const std::string& path,
   } else if (!trace.robot_json.empty()) {
     robot = parse_robot_json(trace.robot_json, path + ":robot_json");
   }
-  render::Body body;
+  scene::Body body;
   if (robot) {
-    body = render::body_from_plan(robot->body);
+    body = scene::body_from_plan(robot->body);
     bool same = body.voxel_cells.size() == voxels;
     for (std::size_t v = 0; same && v < voxels; ++v) same = body.voxel_cells[v] == cell(v);
     if (!same) {
@@ -257,7 +252,7 @@ Motion load_trace(const std::string& path, const MotionRequest& request) {
       voxels);
   NearestPoses keep(wanted);
   for (std::size_t f = 0; f < static_cast<std::size_t>(trace.frames); ++f) {
-    render::Pose pose;
+    scene::Pose pose;
     pose.time = trace.time[f];
     pose.position.resize(voxels);
     pose.orientation.resize(voxels);

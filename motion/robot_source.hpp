@@ -4,8 +4,8 @@
 // `softevo replay`, and meant for the viewer.
 //
 // Its own room rather than io/: it re-simulates (worker/), develops genomes (evo/) and builds
-// the renderer's bodies (render/), while io/ is the storage layer that master/ and
-// softevo-mpi link and that must stay free of those.
+// bodies and poses (scene/), while io/ is the storage layer that master/ and softevo-mpi link
+// and that must stay free of those.
 #pragma once
 
 #include <cstdint>
@@ -17,14 +17,14 @@
 #include "common/config.hpp"
 #include "common/robot.hpp"
 #include "physics/terrain.hpp"
-#include "render/render.hpp"
+#include "scene/scene.hpp"
 
 namespace softevo::motion {
 
 // A body and its poses over time (one pose = static).
 struct Motion {
-  render::Body body;
-  std::vector<render::Pose> poses;      // ascending in time
+  scene::Body body;
+  std::vector<scene::Pose> poses;       // ascending in time
   std::string name;                     // label for pictures
   std::optional<double> direction_deg;  // target direction the motion was simulated towards
   std::string summary;                  // one line: fitness and status when simulated, "" otherwise

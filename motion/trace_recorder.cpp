@@ -38,14 +38,9 @@ std::optional<io::Trace::Terrain> trace_terrain(const physics::Terrain& t) {
   io::Trace::Terrain g;
   g.kind = physics::to_string(t.kind);
   g.seed = hash_hex(t.params.seed);
-  g.amplitude = t.params.amplitude;
-  g.correlation_length = t.params.correlation_length;
+  g.shape = t.params.shape;
   g.bumps_start_x = t.start_x;
-  g.step_height = t.params.step_height;
-  g.step_spacing = t.params.step_spacing;
   g.first_riser_x = t.first_riser_x;
-  g.slope_angle_deg = t.params.slope_angle;
-  g.slope_direction_deg = t.params.slope_direction;
   g.slope_start = t.start_d;
   if (t.kind == physics::TerrainKind::rows) {
     g.row_x.assign(t.row_x.begin(), t.row_x.end());

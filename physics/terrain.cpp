@@ -81,34 +81,35 @@ Terrain make_terrain(const TerrainParams& params, const std::array<int, 3>& latt
       break;
     }
     case TerrainKind::bumps: {
-      if (!(params.amplitude >= 0.0) || !std::isfinite(params.amplitude))
+      if (!(params.shape.amplitude >= 0.0) || !std::isfinite(params.shape.amplitude))
         fail("terrain.amplitude must be a finite number >= 0 [m]");
-      if (!(params.correlation_length > 0.0) || !std::isfinite(params.correlation_length))
+      if (!(params.shape.correlation_length > 0.0) ||
+          !std::isfinite(params.shape.correlation_length))
         fail("terrain.correlation_length must be > 0 [m]");
       std::uint64_t key = params.seed;
       key = (key ^ (key >> 33)) * 0xFF51AFD7ED558CCDULL;
       t.noise_key = key ^ (key >> 33);
-      t.inv_cell = 1.0 / params.correlation_length;
+      t.inv_cell = 1.0 / params.shape.correlation_length;
       t.start_x = front + 0.5 * s;
-      t.top = params.amplitude;
+      t.top = params.shape.amplitude;
       break;
     }
     case TerrainKind::steps:
-      if (!(params.step_height >= 0.0) || !std::isfinite(params.step_height))
+      if (!(params.shape.step_height >= 0.0) || !std::isfinite(params.shape.step_height))
         fail("terrain.step_height must be a finite number >= 0 [m]");
-      if (!(params.step_spacing >= s) || !std::isfinite(params.step_spacing))
+      if (!(params.shape.step_spacing >= s) || !std::isfinite(params.shape.step_spacing))
         fail("terrain.step_spacing must be at least one voxel (" + std::to_string(s) + " m)");
-      t.first_riser_x = front + params.step_spacing - 0.5 * s;
+      t.first_riser_x = front + params.shape.step_spacing - 0.5 * s;
       t.top = std::numeric_limits<double>::infinity();
       break;
     case TerrainKind::slope: {
-      if (!(std::fabs(params.slope_angle) < 80.0))
+      if (!(std::fabs(params.shape.slope_angle) < 80.0))
         fail("terrain.slope_angle must be in (-80, 80) deg");
-      if (!(std::fabs(params.slope_direction) <= 360.0))
+      if (!(std::fabs(params.shape.slope_direction) <= 360.0))
         fail("terrain.slope_direction must be in [-360, 360] deg");
       double sin_a = 0.0, cos_a = 1.0;
-      rmath::sincos(params.slope_angle * kRadiansPerDegree, sin_a, cos_a);
-      rmath::sincos(params.slope_direction * kRadiansPerDegree, t.sin_dir, t.cos_dir);
+      rmath::sincos(params.shape.slope_angle * kRadiansPerDegree, sin_a, cos_a);
+      rmath::sincos(params.shape.slope_direction * kRadiansPerDegree, t.sin_dir, t.cos_dir);
       t.gradient = sin_a / cos_a;
       t.slope_nx = -sin_a * t.cos_dir;
       t.slope_ny = -sin_a * t.sin_dir;
@@ -120,7 +121,7 @@ Terrain make_terrain(const TerrainParams& params, const std::array<int, 3>& latt
         for (double cy : {-0.5 * s, (lattice[1] - 0.5) * s})
           start = std::max(start, cx * t.cos_dir + cy * t.sin_dir);
       t.start_d = start;
-      t.top = params.slope_angle > 0.0 ? std::numeric_limits<double>::infinity() : 0.0;
+      t.top = params.shape.slope_angle > 0.0 ? std::numeric_limits<double>::infinity() : 0.0;
       break;
     }
   }
@@ -141,7 +142,8 @@ double terrain_height(const Terrain& t, double x, double y) {
     case TerrainKind::steps: {
       const double from_riser = x - t.first_riser_x;
       if (!(from_riser >= 0.0)) return 0.0;
-      return (std::floor(from_riser / t.params.step_spacing) + 1.0) * t.params.step_height;
+      return (std::floor(from_riser / t.params.shape.step_spacing) + 1.0) *
+             t.params.shape.step_height;
     }
     case TerrainKind::slope: {
       const double d = (x * t.cos_dir + y * t.sin_dir) - t.start_d;

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "common/config.hpp"  // GroundKind, HeightfieldKind
+#include "common/terrain_shape.hpp"
 
 namespace softevo::physics {
 
@@ -59,13 +60,8 @@ constexpr TerrainKind terrain_kind(GroundKind ground, HeightfieldKind heightfiel
 // evaluation (worker/terrain_seed). Recorded in traces so that a viewer can rebuild the ground.
 struct TerrainParams {
   TerrainKind kind = TerrainKind::flat;
-  std::uint64_t seed = 0;           // seed of this ground (bumps, rows)
-  double amplitude = 0.0;           // bumps: largest height above / below z = 0 [m]
-  double correlation_length = 0.0;  // bumps: grid spacing of the value noise [m]
-  double step_height = 0.0;         // steps: rise of each step [m]
-  double step_spacing = 0.0;        // steps: tread length along x [m]
-  double slope_angle = 0.0;         // slope: inclination [deg], > 0 uphill
-  double slope_direction = 0.0;     // slope: uphill direction, from +x towards +y [deg]
+  std::uint64_t seed = 0;  // seed of this ground (bumps, rows)
+  TerrainShape shape;      // the heightfield's numbers (common/terrain_shape.hpp)
 };
 
 // The thesis system's rows of fixed voxels (docs/model.md §2.8a), in lattice cells.
@@ -191,7 +187,7 @@ struct HeightSample {
     fade = smoothstep(ramp);
     fade_x = smoothstep_slope(ramp) * t.inv_cell;
   }
-  const double amp = t.params.amplitude;
+  const double amp = t.params.shape.amplitude;
   return {amp * (fade * noise), amp * (fade_x * noise + fade * (noise_u * t.inv_cell)),
           amp * (fade * (noise_v * t.inv_cell))};
 }
@@ -235,7 +231,7 @@ struct HeightSample {
 }
 
 [[gnu::always_inline]] inline FloorContact steps_contact(const Terrain& t, double x, double z) {
-  const double spacing = t.params.step_spacing, rise = t.params.step_height;
+  const double spacing = t.params.shape.step_spacing, rise = t.params.shape.step_height;
   const double from_riser = x - t.first_riser_x;
   if (!(from_riser >= 0.0) || !(from_riser < kNoiseLimit * spacing))
     return height_field_contact(0.0, 0.0, 0.0, z);

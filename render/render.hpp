@@ -22,8 +22,14 @@
 
 #include "common/body_plan.hpp"
 #include "common/safe_write.hpp"
+#include "scene/scene.hpp"
 
 namespace softevo::render {
+
+// What the renderer draws: a robot's cells and where they are (scene/scene.hpp, the plain types
+// that motion/ produces without depending on the renderer).
+using scene::Body;
+using scene::Pose;
 
 // 8-bit RGB image, rows top to bottom, 3 bytes per pixel.
 struct Image {
@@ -46,32 +52,6 @@ Image read_png(const std::string& path);
 // build has no PNG support, so a render fails before it simulates.
 void require_png_support(const std::string& path);
 
-// What is drawn of a robot: its cells, independent of where they are.
-struct Body {
-  double voxel_size = 0.01;  // [m]
-  int material_count = 10;   // structural materials 1..material_count (colour scale)
-  // Structural voxels in simulator order (x outer, y, z inner; docs/model.md §2.1).
-  std::vector<Eigen::Vector3i> voxel_cells;
-  std::vector<int> voxel_material;  // 1..material_count (voxels)
-  // Chamber cells (no voxel in the simulation) and their chamber index q = value - 11.
-  std::vector<Eigen::Vector3i> chamber_cells;
-  std::vector<int> chamber_index;  // (chamber cells)
-  int chamber_count = 0;
-};
-// Throws std::invalid_argument when the plan has no structural voxel or a cell out of range.
-Body body_from_plan(const BodyPlan& plan, int material_count = 10);
-
-// Where the voxels are at one instant.
-struct Pose {
-  double time = 0.0;                            // [s]
-  std::vector<Eigen::Vector3d> position;        // [m] voxel centres (voxels)
-  std::vector<Eigen::Quaterniond> orientation;  // unit quaternions (voxels)
-  std::vector<double> chamber_pressure;         // [Pa] absolute (chambers); may be empty
-};
-// The lattice at rest: centre = s * (i, j, k), identity orientation (docs/model.md §2.1).
-Pose rest_pose(const Body& body);
-// Mean voxel position [m] (the centroid of §5, but absolute rather than a displacement).
-Eigen::Vector3d centroid(const Pose& pose);
 // Where the chamber cells of `body` are drawn in `pose` (they have no voxel in the simulation):
 // between their wall voxels, as the renderer places them. Used by the browser viewer, which
 // draws the same picture. One position and orientation per chamber cell.

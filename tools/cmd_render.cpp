@@ -221,7 +221,7 @@ int run_render(const RenderArgs& args) {
   const std::optional<double> direction = args.direction ? args.direction : motion.direction_deg;
   if (direction && view != View::side) {
     scene.target_direction_deg = direction;
-    scene.target_origin = render::centroid(motion.poses.front());
+    scene.target_origin = scene::centroid(motion.poses.front());
   }
   // The title names the status: a killed robot is not to pass for a result.
   const render::Clip clip{

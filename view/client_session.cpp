@@ -64,7 +64,7 @@ ClientSession::ClientSession(const ViewInput& input, ClientOptions options)
     : input_(input), options_(std::move(options)), session_(std::make_unique<Session>(input)) {}
 
 std::string ClientSession::hello() const {
-  const render::Body& body = input_.body;
+  const scene::Body& body = input_.body;
   json j;
   j["type"] = "hello";
   j["name"] = input_.name;

@@ -53,7 +53,7 @@ std::int16_t quantised(double unit_value) {
 }
 
 // Positions and orientations of voxels and chamber cells in the record's compact form.
-void fill_pose(const render::Body& body, const render::Pose& pose, FrameRecord& r) {
+void fill_pose(const scene::Body& body, const scene::Pose& pose, FrameRecord& r) {
   std::vector<Eigen::Vector3d> chamber_pos;
   std::vector<Eigen::Quaterniond> chamber_rot;
   if (!body.chamber_cells.empty())
@@ -127,7 +127,7 @@ ViewInput load_view_input(const std::string& path, const ViewRequest& request) {
                              "softevo.run/1) nor a trace (/positions)");
   }
   in.body =
-      render::body_from_plan(in.robot.body, static_cast<int>(in.config.physics.material_count));
+      scene::body_from_plan(in.robot.body, static_cast<int>(in.config.physics.material_count));
   return in;
 }
 
@@ -363,7 +363,7 @@ void Session::append_live_record(int frame) {
   FrameRecord r;
   r.frame = frame;
   r.time = sim.time();
-  render::Pose pose;
+  scene::Pose pose;
   pose.position.assign(sim.state().pos.begin(), sim.state().pos.end());
   pose.orientation.reserve(sim.state().orient.size());
   for (const auto& q : sim.state().orient) pose.orientation.emplace_back(q.w, q.x, q.y, q.z);
@@ -395,7 +395,7 @@ void Session::append_live_record(int frame) {
 void Session::append_trace_record(int index) {
   const motion::Motion& m = input_.trace_motion;
   for (int i = index; i < static_cast<int>(m.poses.size()); ++i) {
-    const render::Pose& pose = m.poses[static_cast<std::size_t>(i)];
+    const scene::Pose& pose = m.poses[static_cast<std::size_t>(i)];
     FrameRecord r;
     r.frame = i;
     r.time = pose.time;
@@ -405,7 +405,7 @@ void Session::append_trace_record(int index) {
     if (input_.trace_valves.size() >= (static_cast<std::size_t>(i) + 1) * valves && valves > 0)
       r.valves.assign(input_.trace_valves.begin() + static_cast<std::ptrdiff_t>(i * valves),
                       input_.trace_valves.begin() + static_cast<std::ptrdiff_t>((i + 1) * valves));
-    const Eigen::Vector3d c0 = render::centroid(m.poses.front()), c = render::centroid(pose);
+    const Eigen::Vector3d c0 = scene::centroid(m.poses.front()), c = scene::centroid(pose);
     r.centroid_x = static_cast<float>(c.x() - c0.x());
     r.centroid_y = static_cast<float>(c.y() - c0.y());
     r.target_deg = static_cast<float>(m.direction_deg.value_or(0.0));

@@ -23,6 +23,7 @@
 #include "motion/robot_source.hpp"
 #include "physics/terrain.hpp"
 #include "render/render.hpp"
+#include "scene/scene.hpp"
 #include "tasks/task.hpp"
 
 namespace softevo::view {
@@ -47,7 +48,7 @@ const char* to_string(InputKind kind);
 struct ViewInput {
   InputKind kind = InputKind::robot;
   std::string name;  // label of the robot
-  render::Body body;
+  scene::Body body;
   // Live inputs.
   RobotFile robot;
   Config config;

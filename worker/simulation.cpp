@@ -49,12 +49,7 @@ physics::TerrainParams terrain_params(const Config& config, const EvaluationIds&
   physics::TerrainParams p;
   p.kind = physics::terrain_kind(tc.kind, tc.heightfield);
   if (p.kind == physics::TerrainKind::flat) return p;
-  p.amplitude = tc.amplitude;
-  p.correlation_length = tc.correlation_length;
-  p.step_height = tc.step_height;
-  p.step_spacing = tc.step_spacing;
-  p.slope_angle = tc.slope_angle;
-  p.slope_direction = tc.slope_direction;
+  p.shape = tc.shape;
   // -1 = "not part of this ground's identity" (derive_seed's convention for a missing id).
   const bool per_generation = tc.resample != TerrainResample::per_run;
   const bool per_evaluation = tc.resample == TerrainResample::per_evaluation;

@@ -23,6 +23,7 @@
 #include "python/src/bindings.hpp"
 #include "render/compose.hpp"
 #include "render/render.hpp"
+#include "scene/scene.hpp"
 #include "tasks/task.hpp"
 #include "worker/controller.hpp"
 #include "worker/evaluate.hpp"
@@ -304,16 +305,16 @@ class PySimulation {
     } catch (const std::invalid_argument& e) {
       throw py::value_error(std::string("render: ") + e.what());
     }
-    const render::Body body =
-        render::body_from_plan(body_, static_cast<int>(config_.physics.material_count));
-    render::Pose pose;
+    const scene::Body body =
+        scene::body_from_plan(body_, static_cast<int>(config_.physics.material_count));
+    scene::Pose pose;
     pose.time = sim_->time();
     for (const physics::Vec3& p : sim_->state().pos)
       pose.position.emplace_back(p.x(), p.y(), p.z());
     for (const auto& q : sim_->state().orient) pose.orientation.emplace_back(q.w, q.x, q.y, q.z);
     for (int q = 0; q < sim_->chambers(); ++q)
       pose.chamber_pressure.push_back(physics::chamber_pressure_pa(sim_->pneumatics(), q));
-    const std::vector<render::Pose> poses{pose};
+    const std::vector<scene::Pose> poses{pose};
     render::SceneOptions scene;
     scene.floor_z = -0.5 * body.voxel_size;
     scene.voxel_scale = 1.04;  // a deformed body: as `softevo render`, hide the cracks

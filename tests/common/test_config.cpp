@@ -128,7 +128,7 @@ TEST(Config, TerrainKeysEnterTheTextOnlyOffFlatGround) {
       "[terrain]\nkind = \"heightfield\"\nheightfield = \"bumps\"\namplitude = 0.02\n"
       "resample = \"per_generation\"\n",
       "r.toml");
-  EXPECT_EQ(rough.terrain.amplitude, 0.02);
+  EXPECT_EQ(rough.terrain.shape.amplitude, 0.02);
   const std::string text = canonical_text(rough);
   EXPECT_NE(text.find("[terrain]\nkind = \"heightfield\"\nheightfield = \"bumps\"\n"
                       "amplitude = 0.02\ncorrelation_length = 0.05\nseed = 1\n"

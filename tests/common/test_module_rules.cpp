@@ -1,6 +1,7 @@
 // Architecture rules (docs/architecture.md §1) that the compiler cannot see: physics/ and evo/
 // never include MPI or HDF5, evo/ never includes physics/, physics/ never includes evo/; only
-// mpi/ includes or calls MPI; master/ and worker/ never include each other.
+// mpi/ includes or calls MPI; master/ and worker/ never include each other; motion/ never
+// includes render/, and scene/ only common/.
 // The CMake target links enforce the same rules at link time.
 #include <gtest/gtest.h>
 
@@ -192,6 +193,18 @@ TEST(ModuleRules, MasterAndWorkerNeverIncludeEachOther) {
   EXPECT_TRUE(m.empty()) << describe(m);
   const auto w = forbidden_includes("worker", std::regex(R"(^master/)"));
   EXPECT_TRUE(w.empty()) << describe(w);
+}
+
+TEST(ModuleRules, MotionNeverSeesTheRendererAndSceneOnlyCommon) {
+  // motion/ makes bodies and poses, the plain types of scene/; it does not depend on the
+  // renderer for them. scene/ sits below motion/, render/ and view/.
+  const auto m = forbidden_includes("motion", std::regex(R"(^render/)"));
+  EXPECT_TRUE(m.empty()) << describe(m);
+  std::string others;
+  for (const auto& module : modules_except("common"))
+    if (module != "scene") others += (others.empty() ? "" : "|") + module;
+  const auto s = forbidden_includes("scene", std::regex("^(" + others + ")/"));
+  EXPECT_TRUE(s.empty()) << describe(s);
 }
 
 TEST(ModuleRules, DetectorFindsAPlantedViolation) {

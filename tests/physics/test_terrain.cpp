@@ -68,8 +68,8 @@ TEST(Terrain, RowContactPicksTheNearestFace) {
 TEST(Terrain, BumpsAreSmoothBoundedAndFlatUnderTheRobot) {
   TerrainParams p;
   p.kind = TerrainKind::bumps;
-  p.amplitude = 0.01;
-  p.correlation_length = 0.05;
+  p.shape.amplitude = 0.01;
+  p.shape.correlation_length = 0.05;
   p.seed = 99;
   const Terrain t = make_terrain(p, kLattice, kS);
   double highest = -1.0, lowest = 1.0;
@@ -93,9 +93,9 @@ TEST(Terrain, BumpsAreSmoothBoundedAndFlatUnderTheRobot) {
       EXPECT_NEAR(std::hypot(c.nx, c.ny, c.nz), 1.0, 1e-12);
       EXPECT_NEAR(c.penetration, 0.0f, 1e-9f) << "on the surface";
     }
-  EXPECT_LE(highest, p.amplitude);
-  EXPECT_GE(lowest, -p.amplitude);
-  EXPECT_GT(highest - lowest, p.amplitude) << "bumps of about the amplitude";
+  EXPECT_LE(highest, p.shape.amplitude);
+  EXPECT_GE(lowest, -p.shape.amplitude);
+  EXPECT_GT(highest - lowest, p.shape.amplitude) << "bumps of about the amplitude";
   // Another seed, another ground.
   p.seed = 100;
   const Terrain other = make_terrain(p, kLattice, kS);
@@ -109,8 +109,8 @@ TEST(Terrain, BumpsAreSmoothBoundedAndFlatUnderTheRobot) {
 TEST(Terrain, SlopeRisesAtItsAngleInItsDirection) {
   TerrainParams p;
   p.kind = TerrainKind::slope;
-  p.slope_angle = 20.0;
-  p.slope_direction = 90.0;  // uphill along +y
+  p.shape.slope_angle = 20.0;
+  p.shape.slope_direction = 90.0;  // uphill along +y
   const Terrain t = make_terrain(p, kLattice, kS);
   const double y0 = t.start_d;  // the robot's far side along +y
   EXPECT_NEAR(y0, 9.5 * kS, 1e-12);
@@ -124,7 +124,7 @@ TEST(Terrain, SlopeRisesAtItsAngleInItsDirection) {
                    [] {
                      TerrainParams q;
                      q.kind = TerrainKind::slope;
-                     q.slope_angle = 85.0;
+                     q.shape.slope_angle = 85.0;
                      return q;
                    }(),
                    kLattice, kS),
@@ -137,16 +137,16 @@ TEST(Terrain, SlopeRisesAtItsAngleInItsDirection) {
 TEST(Terrain, FlatGroundThroughTheTerrainContactKeepsTheFlatBits) {
   TerrainParams zero_bumps;
   zero_bumps.kind = TerrainKind::bumps;
-  zero_bumps.amplitude = 0.0;
-  zero_bumps.correlation_length = 0.01;
+  zero_bumps.shape.amplitude = 0.0;
+  zero_bumps.shape.correlation_length = 0.01;
   zero_bumps.seed = 5;
   TerrainParams level_slope;
   level_slope.kind = TerrainKind::slope;
-  level_slope.slope_angle = 0.0;
+  level_slope.shape.slope_angle = 0.0;
   TerrainParams flat_steps;
   flat_steps.kind = TerrainKind::steps;
-  flat_steps.step_height = 0.0;
-  flat_steps.step_spacing = 0.05;
+  flat_steps.shape.step_height = 0.0;
+  flat_steps.shape.step_spacing = 0.05;
   for (const char* integrator : {"pneuvox", "symplectic"}) {
     const std::uint64_t flat = golden::run_scene(integrator, Simd::scalar);
     for (Simd simd : simd_widths()) {
@@ -164,8 +164,8 @@ TEST(Terrain, FlatGroundThroughTheTerrainContactKeepsTheFlatBits) {
 TEST(Terrain, BumpyGroundIsTheSameAtEverySimdWidth) {
   TerrainParams bumps;
   bumps.kind = TerrainKind::bumps;
-  bumps.amplitude = 0.002;
-  bumps.correlation_length = 0.02;
+  bumps.shape.amplitude = 0.002;
+  bumps.shape.correlation_length = 0.02;
   bumps.seed = 3;
   for (const char* integrator : {"pneuvox", "symplectic"}) {
     const double onto = 0.2;  // [m]

@@ -290,7 +290,7 @@ TerrainScene one_voxel_on(PhysicsConfig cfg, const TerrainParams& t) {
 TerrainParams slope_of(double angle_deg) {
   TerrainParams t;
   t.kind = TerrainKind::slope;
-  t.slope_angle = angle_deg;
+  t.shape.slope_angle = angle_deg;
   return t;
 }
 
@@ -345,17 +345,17 @@ TEST_P(Validation, VoxelDroppedOnAStepRestsAtTheStepHeight) {
   cfg.collision_damping = 1.0;
   TerrainParams t;
   t.kind = TerrainKind::steps;
-  t.step_height = 0.005;
-  t.step_spacing = 0.05;
+  t.shape.step_height = 0.005;
+  t.shape.step_spacing = 0.05;
   auto [m, st, sc] = one_voxel_on(cfg, t);
-  const double x = m.terrain.first_riser_x + 0.5 * t.step_spacing;
+  const double x = m.terrain.first_riser_x + 0.5 * t.shape.step_spacing;
   st.pos[0] = Vec3(x, 0.0, 0.02);
   run(m, st, sc, static_cast<int>(0.3 / m.dt));
   const double sag = m.voxel_mass[0] * cfg.gravity / m.voxel_const[0].k_pen;
-  const double expected = t.step_height - sag;
+  const double expected = t.shape.step_height - sag;
   std::printf("[%s] step: rests at z %.6e m, step height - m g / k_pen %.6e m, speed %.2e m/s\n",
               GetParam().c_str(), st.pos[0].z(), expected, max_speed(m, st));
-  EXPECT_NEAR(st.pos[0].z(), expected, 0.01 * t.step_height);
+  EXPECT_NEAR(st.pos[0].z(), expected, 0.01 * t.shape.step_height);
   EXPECT_NEAR(st.pos[0].x(), x, 1e-6);
   EXPECT_LT(max_speed(m, st), 1e-3);
 }
@@ -389,8 +389,8 @@ TEST_P(Validation, BlockShovedOverBumpsNeverSinksIn) {
   PhysicsConfig cfg = base_config();
   TerrainParams t;
   t.kind = TerrainKind::bumps;
-  t.amplitude = 0.01;
-  t.correlation_length = 0.05;
+  t.shape.amplitude = 0.01;
+  t.shape.correlation_length = 0.05;
   t.seed = 7;
   BuildOptions opt;
   opt.terrain = t;

@@ -16,7 +16,7 @@ struct MovingBar {
     plan.lattice = {3, 1, 1};
     plan.cells.assign(3, 10);
     plan.voxel_size = 0.01;
-    body = body_from_plan(plan);
+    body = scene::body_from_plan(plan);
     const Pose rest = rest_pose(body);
     for (int f = 0; f <= 10; ++f) {
       Pose p = rest;

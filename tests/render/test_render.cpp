@@ -160,21 +160,9 @@ TEST(RenderPng, UnwritablePathIsAnErrorNamingIt) {
   }
 }
 
-TEST(RenderBody, SimulatorVoxelOrderAndChambers) {
-  const Body body = body_from_plan(block_with_chamber(true));
-  ASSERT_EQ(body.voxel_cells.size(), 26u);
-  EXPECT_EQ(body.voxel_cells[0], Eigen::Vector3i(0, 0, 0));
-  EXPECT_EQ(body.voxel_cells[1], Eigen::Vector3i(0, 0, 1));  // z inner
-  ASSERT_EQ(body.chamber_cells.size(), 1u);
-  EXPECT_EQ(body.chamber_cells[0], Eigen::Vector3i(1, 1, 1));
-  EXPECT_EQ(body.chamber_count, 1);
-  BodyPlan empty = bar(3, 0);
-  EXPECT_THROW(body_from_plan(empty), std::invalid_argument);
-}
-
 TEST(RenderImage, TopViewShowsTheBodyWhereTheCameraPutsIt) {
-  const Body body = body_from_plan(bar(5, 10));
-  const Pose pose = rest_pose(body);
+  const Body body = scene::body_from_plan(bar(5, 10));
+  const Pose pose = scene::rest_pose(body);
   // Top view, 2000 pixel/m, centred on the bar's middle voxel: the bar is 5 cm = 100 px long
   // and 1 cm = 20 px wide, centred in a 300 x 200 image.
   Camera cam = view_camera(View::top, 300, 200);
@@ -195,8 +183,8 @@ TEST(RenderImage, TopViewShowsTheBodyWhereTheCameraPutsIt) {
 TEST(RenderImage, OrientationTurnsTheCubes) {
   // One voxel seen from above: turning it 45 degrees about z makes its footprint wider
   // (diagonal sqrt(2) s instead of s).
-  const Body body = body_from_plan(bar(1, 10));
-  Pose pose = rest_pose(body);
+  const Body body = scene::body_from_plan(bar(1, 10));
+  Pose pose = scene::rest_pose(body);
   Camera cam = view_camera(View::top, 200, 200);
   cam.scale = 5000.0;
   cam.center = Eigen::Vector3d::Zero();
@@ -212,8 +200,8 @@ TEST(RenderImage, OrientationTurnsTheCubes) {
 }
 
 TEST(RenderImage, MovingThePoseMovesTheImage) {
-  const Body body = body_from_plan(bar(2, 10));
-  Pose pose = rest_pose(body);
+  const Body body = scene::body_from_plan(bar(2, 10));
+  Pose pose = scene::rest_pose(body);
   Camera cam = view_camera(View::side, 400, 200);
   cam.scale = 2000.0;
   cam.center = Eigen::Vector3d(0.005, 0.0, 0.0);
@@ -234,8 +222,8 @@ TEST(RenderImage, ChamberShowsDarkThroughTheBody) {
   SceneOptions opt;
   opt.supersample = 1;
   auto centre_brightness = [&](bool chamber) {
-    const Body body = body_from_plan(block_with_chamber(chamber));
-    const auto p = render_poses(body, {rest_pose(body)}, cam, opt).pixel(60, 60);
+    const Body body = scene::body_from_plan(block_with_chamber(chamber));
+    const auto p = render_poses(body, {scene::rest_pose(body)}, cam, opt).pixel(60, 60);
     return p[0] + p[1] + p[2];
   };
   EXPECT_LT(centre_brightness(true) + 60, centre_brightness(false));
@@ -244,8 +232,8 @@ TEST(RenderImage, ChamberShowsDarkThroughTheBody) {
 TEST(RenderImage, ChamberCellsFollowTheirWalls) {
   // The whole block moved by 2 cm: the dark centre moves with it (chamber cells are placed
   // from their wall voxels, they have no position of their own).
-  const Body body = body_from_plan(block_with_chamber(true));
-  Pose pose = rest_pose(body);
+  const Body body = scene::body_from_plan(block_with_chamber(true));
+  Pose pose = scene::rest_pose(body);
   for (auto& p : pose.position) p.x() += 0.02;
   Camera cam = view_camera(View::top, 200, 120);
   cam.scale = 3000.0;
@@ -260,8 +248,8 @@ TEST(RenderImage, ChamberCellsFollowTheirWalls) {
 }
 
 TEST(RenderImage, TargetLineGoesTheRequestedWay) {
-  const Body body = body_from_plan(bar(1, 10));
-  const Pose pose = rest_pose(body);
+  const Body body = scene::body_from_plan(bar(1, 10));
+  const Pose pose = scene::rest_pose(body);
   Camera cam = view_camera(View::top, 200, 100);
   cam.scale = 1000.0;
   cam.center = Eigen::Vector3d::Zero();
@@ -281,8 +269,8 @@ TEST(RenderImage, TargetLineGoesTheRequestedWay) {
 // body is drawn where it is, shaded by its slope, in the side and the top view; the plane
 // elsewhere looks as without a ground.
 TEST(RenderImage, GroundIsDrawnAsItIs) {
-  const Body body = body_from_plan(bar(1, 10));
-  const Pose pose = rest_pose(body);
+  const Body body = scene::body_from_plan(bar(1, 10));
+  const Pose pose = scene::rest_pose(body);
   SceneOptions flat;
   flat.supersample = 1;
   SceneOptions ramp = flat;
@@ -316,8 +304,8 @@ TEST(RenderImage, GroundIsDrawnAsItIs) {
 TEST(RenderImage, SideViewFloorFillsTheFrameBelowTheStage) {
   // A side view framed with room below the floor: every pixel of the bottom row is floor (the
   // floor's grey), none is the pale background, with and without a terrain.
-  const Body body = body_from_plan(bar(3, 10));
-  const Pose pose = rest_pose(body);
+  const Body body = scene::body_from_plan(bar(3, 10));
+  const Pose pose = scene::rest_pose(body);
   Camera cam = view_camera(View::side, 200, 150);
   cam.scale = 2000.0;
   cam.center = Eigen::Vector3d(kS, 0.0, 0.02);  // the floor (z = -s/2) sits low in the frame
@@ -339,8 +327,8 @@ TEST(RenderImage, SideViewFloorFillsTheFrameBelowTheStage) {
 }
 
 TEST(RenderImage, FitCameraKeepsEverythingInside) {
-  const Body body = body_from_plan(block_with_chamber(true));
-  const Pose pose = rest_pose(body);
+  const Body body = scene::body_from_plan(block_with_chamber(true));
+  const Pose pose = scene::rest_pose(body);
   for (View v : {View::side, View::top, View::iso}) {
     const Camera cam = fit_camera(v, pose_bounds(body, pose), 160, 120);
     SceneOptions opt;
@@ -358,8 +346,8 @@ TEST(RenderImage, FitCameraKeepsEverythingInside) {
 }
 
 TEST(RenderImage, MismatchedPoseIsAnError) {
-  const Body body = body_from_plan(bar(3, 5));
-  Pose pose = rest_pose(body);
+  const Body body = scene::body_from_plan(bar(3, 5));
+  Pose pose = scene::rest_pose(body);
   pose.position.pop_back();
   EXPECT_THROW(render_poses(body, {pose}, view_camera(View::top, 10, 10), {}),
                std::invalid_argument);

@@ -153,8 +153,8 @@ TEST(ViewExportHtml, TheHelloAndTheExportedPageCarryTheTerrain) {
   view::ViewInput in = test::block_input(TaskKind::gait, 0.1);
   in.config.terrain.kind = GroundKind::heightfield;
   in.config.terrain.heightfield = HeightfieldKind::bumps;
-  in.config.terrain.amplitude = 0.01;
-  in.config.terrain.correlation_length = 0.05;
+  in.config.terrain.shape.amplitude = 0.01;
+  in.config.terrain.shape.correlation_length = 0.05;
   view::ClientSession client(in, {});
   const json hello = json::parse(client.hello());
   ASSERT_TRUE(hello.contains("terrain"));

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "common/config.hpp"
-#include "render/render.hpp"
+#include "scene/scene.hpp"
 #include "tests/test_controller_spec.hpp"
 #include "tests/worker/two_chamber_block.hpp"
 #include "view/session.hpp"
@@ -26,7 +26,7 @@ inline view::ViewInput block_input(TaskKind kind, double seconds) {
   in.config.task.eval_seconds = seconds;
   in.config.run.eval_timeout_seconds = 0.0;
   if (directed) in.config.task.directions = {0.0};
-  in.body = render::body_from_plan(in.robot.body);
+  in.body = scene::body_from_plan(in.robot.body);
   return in;
 }
 

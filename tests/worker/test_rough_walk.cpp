@@ -39,8 +39,8 @@ Config rough_config(const RobotFile& robot, const std::string& integrator) {
   c.physics.integrator = parse_choice<Integrator>(integrator, "integrator");
   c.terrain.kind = GroundKind::heightfield;
   c.terrain.heightfield = HeightfieldKind::bumps;
-  c.terrain.amplitude = 0.01;  // 1 cm [m]
-  c.terrain.correlation_length = 0.05;
+  c.terrain.shape.amplitude = 0.01;  // 1 cm [m]
+  c.terrain.shape.correlation_length = 0.05;
   c.terrain.seed = 4;
   return c;
 }

@@ -155,7 +155,7 @@ TEST(Simulation, TerrainSeedFollowsTheResampleChoice) {
     config.terrain.resample = parse_choice<TerrainResample>(resample, "resample");
     const physics::TerrainParams p = worker::terrain_params(config, {generation, id}, unit);
     EXPECT_EQ(p.kind, physics::TerrainKind::bumps);
-    EXPECT_EQ(p.amplitude, config.terrain.amplitude);
+    EXPECT_EQ(p.shape.amplitude, config.terrain.shape.amplitude);
     return p.seed;
   };
   EXPECT_EQ(seed("per_run", 0, 0, 0), seed("per_run", 5, 9, 2));
