@@ -189,11 +189,25 @@ EvalRequest decode_eval_request(std::span<const std::uint8_t> message) {
   return request;
 }
 
-static EvalStatus checked_status(std::uint8_t value, const char* what) {
+EvalStatus checked_status(std::uint8_t value, const char* what) {
   if (value > static_cast<std::uint8_t>(EvalStatus::invalid_body)) {
     throw WireError(std::string(what) + ": unknown status " + std::to_string(value));
   }
   return static_cast<EvalStatus>(value);
+}
+
+void write_unit_fitness(WireWriter& w, const UnitFitness& unit) {
+  w.f64(unit.fitness);
+  w.u8(static_cast<std::uint8_t>(unit.status));
+  w.f64_vector(unit.values);
+}
+
+UnitFitness read_unit_fitness(WireReader& r, const char* what) {
+  UnitFitness unit;
+  unit.fitness = r.f64("component.fitness");
+  unit.status = checked_status(r.u8("component.status"), what);
+  unit.values = r.f64_vector("component.values");
+  return unit;
 }
 
 std::vector<std::uint8_t> encode_eval_result(const EvalResult& result) {
@@ -203,11 +217,7 @@ std::vector<std::uint8_t> encode_eval_result(const EvalResult& result) {
   w.u8(static_cast<std::uint8_t>(result.status));
   w.f64(result.fitness);
   w.u32(static_cast<std::uint32_t>(result.components.size()));
-  for (const auto& c : result.components) {
-    w.f64(c.fitness);
-    w.u8(static_cast<std::uint8_t>(c.status));
-    w.f64_vector(c.values);
-  }
+  for (const auto& c : result.components) write_unit_fitness(w, c);
   w.i32(result.voxels);
   w.i32(result.chambers);
   w.i64(result.steps);
@@ -233,11 +243,7 @@ EvalResult decode_eval_result(std::span<const std::uint8_t> message) {
                     " does not fit in the remaining " + std::to_string(r.remaining()) + " bytes");
   }
   result.components.resize(n_components);
-  for (auto& c : result.components) {
-    c.fitness = r.f64("component.fitness");
-    c.status = checked_status(r.u8("component.status"), "eval result component");
-    c.values = r.f64_vector("component.values");
-  }
+  for (auto& c : result.components) c = read_unit_fitness(r, "eval result component");
   result.voxels = r.i32("voxels");
   result.chambers = r.i32("chambers");
   result.steps = r.i64("steps");

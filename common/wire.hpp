@@ -30,6 +30,9 @@ enum class MessageKind : std::uint16_t {
   population = 5,
   // 6 was config_text, never sent (the config travels as a broadcast, mpi/protocol.hpp); a new
   // kind takes 7 so that no build reads another's 6 differently.
+  // The controller learning of a generation in flight, between two rounds (a run's checkpoint,
+  // master/learning_rounds.hpp); never sent.
+  learning_state = 7,
 };
 
 // Malformed, truncated or oversized input: the message names the field and the offsets.
@@ -83,6 +86,13 @@ class WireReader {
   std::size_t offset_ = 0;
   std::string what_;
 };
+
+// A status byte as EvalStatus; throws WireError naming `what` for a value that is none.
+EvalStatus checked_status(std::uint8_t value, const char* what);
+// One unit's score inside a message (fitness, status, values), as an eval result carries each
+// of its components; the reader throws WireError naming `what` for an unknown status.
+void write_unit_fitness(WireWriter& w, const UnitFitness& unit);
+UnitFitness read_unit_fitness(WireReader& r, const char* what);
 
 // Frame a payload with the header / check and strip the header (kind must match).
 std::vector<std::uint8_t> frame_message(MessageKind kind, std::span<const std::uint8_t> payload);

@@ -93,4 +93,54 @@ int ControllerLearner::tell(const std::vector<CandidateScore>& scores) {
   return best;
 }
 
+void ControllerLearner::save(WireWriter& w) const {
+  if (!candidates_.empty())
+    throw std::logic_error("controller learning: save() with candidates pending");
+  w.bytes(encode_genome(parent_));
+  w.bytes(encode_genome(born_));
+  w.boolean(moved_);
+  w.f64(factor_);
+  w.f64(parent_score_.fitness);
+  w.boolean(parent_score_.ok);
+  w.i64(iterations_);
+  w.i32(lambda_);
+  for (std::uint64_t word : rng_.state()) w.u64(word);
+  w.i64(iteration_);
+  w.f64_vector(curve_);
+}
+
+ControllerLearner ControllerLearner::load(WireReader& r) {
+  const auto fail = [](const std::string& what) {
+    throw WireError("controller learning state: " + what);
+  };
+  ControllerLearner l;
+  l.parent_ = decode_genome(r.bytes("learner parent"));
+  l.born_ = decode_genome(r.bytes("learner born genome"));
+  l.moved_ = r.boolean("learner moved");
+  l.factor_ = r.f64("learner step size factor");
+  l.parent_score_.fitness = r.f64("learner parent fitness");
+  l.parent_score_.ok = r.boolean("learner parent ok");
+  l.iterations_ = r.i64("learner iterations");
+  l.lambda_ = r.i32("learner lambda");
+  Rng::State state{};
+  for (std::uint64_t& word : state) word = r.u64("learner rng state");
+  try {
+    l.rng_.set_state(state);
+  } catch (const std::exception& e) {
+    fail(std::string("rng state: ") + e.what());
+  }
+  l.iteration_ = r.i64("learner iteration");
+  l.curve_ = r.f64_vector("learner curve");
+  if (!l.parent_.has_controller() || !l.born_.has_controller()) fail("a genome without controller");
+  if (!(l.factor_ > 0.0) || !std::isfinite(l.factor_) || !std::isfinite(l.parent_score_.fitness))
+    fail("non-finite or non-positive numbers");
+  if (l.iterations_ < 0 || l.lambda_ < 1 || l.iteration_ < 0 || l.iteration_ > l.iterations_)
+    fail("iteration " + std::to_string(l.iteration_) + " of " + std::to_string(l.iterations_) +
+         " with lambda " + std::to_string(l.lambda_));
+  if (l.curve_.size() != static_cast<std::size_t>(l.iteration_) + 1)
+    fail(std::to_string(l.curve_.size()) + " curve points after " + std::to_string(l.iteration_) +
+         " iterations");
+  return l;
+}
+
 }  // namespace softevo::evo

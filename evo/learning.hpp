@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "common/rng.hpp"
+#include "common/wire.hpp"
 #include "evo/genome.hpp"
 
 namespace softevo::evo {
@@ -74,14 +75,23 @@ class ControllerLearner {
   // Best fitness so far after the born evaluation and after every completed iteration.
   const std::vector<double>& curve() const { return curve_; }
 
+  // The strategy's whole state between iterations, generator included, for a run's checkpoint
+  // within a learning generation (master/learning_rounds.hpp): a loaded copy proposes and
+  // selects exactly as the saved one would have. Throws std::logic_error while candidates are
+  // pending (proposed, not yet told): they are a function of the saved state.
+  void save(WireWriter& w) const;
+  // Throws WireError on malformed or inconsistent bytes.
+  static ControllerLearner load(WireReader& r);
+
  private:
-  Genome parent_;  // step sizes in the strategy's units (x factor)
-  Genome born_;    // kept to return it bit for bit while no candidate was taken
+  ControllerLearner() = default;  // load() fills every field
+  Genome parent_;                 // step sizes in the strategy's units (x factor)
+  Genome born_;                   // kept to return it bit for bit while no candidate was taken
   bool moved_ = false;
-  double factor_;
+  double factor_ = 1.0;
   CandidateScore parent_score_;
-  std::int64_t iterations_;
-  int lambda_;
+  std::int64_t iterations_ = 0;
+  int lambda_ = 1;
   Rng rng_;
   std::int64_t iteration_ = 0;
   std::vector<Genome> candidates_;  // pending: proposed, not yet told

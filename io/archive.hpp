@@ -147,9 +147,14 @@ struct StatsRow {
 
 // The population that continues the run: Population::serialize() after the last evaluated
 // generation, i.e. the NEXT population; `generation` = its generation number = generations_done.
+// With controller learning, the checkpoint within that generation after each completed learning
+// round adds the learning's state (master/learning_rounds.hpp, docs/model.md §8.11), opaque
+// here; empty = none (every checkpoint of a run without learning, and of older builds).
 struct Checkpoint {
   std::int64_t generation = 0;
   std::vector<std::uint8_t> population;
+  std::vector<std::uint8_t>
+      learning{};  // {}: Checkpoint{generation, population} needs no third initializer (-Wextra)
 };
 
 // Population statistics of a fitness column (best = max, sd with divisor n; empty -> zeros).
@@ -184,6 +189,11 @@ void create_archive(const std::string& path, const RunInfo& info, const std::str
 // RUN.h5.d/ as packed-<G>.h5, by a hard link where possible).
 void append_generation(const std::string& path, const RunInfo& info, const GenerationRecord& record,
                        const StatsRow& stats, const Checkpoint& checkpoint,
+                       const WriteStepHook& hook = {});
+// Replaces /checkpoint and the root attributes: a checkpoint within the generation in flight
+// (its controller learning's state after a round). `checkpoint.generation` and
+// `info.generations_done` must equal the archive's generations_done (ArchiveError otherwise).
+void update_checkpoint(const std::string& path, const RunInfo& info, const Checkpoint& checkpoint,
                        const WriteStepHook& hook = {});
 // Replaces the root attributes (state changes, end time). `info.generations_done` must equal
 // the archive's: a state change never claims generations (ArchiveError otherwise).

@@ -237,6 +237,13 @@ std::optional<Checkpoint> Archive::checkpoint() const {
     if (population.dims().size() != 1)
       throw ArchiveError(path_ + ": /checkpoint/population is not one-dimensional");
     c.population = population.read<std::uint8_t>(ArchiveLimits::checkpoint_bytes);
+    // Absent in every checkpoint but one within a learning generation (and in older builds').
+    if (g.has_link("learning")) {
+      const h5::Dataset learning = g.open_dataset("learning");
+      if (learning.dims().size() != 1)
+        throw ArchiveError(path_ + ": /checkpoint/learning is not one-dimensional");
+      c.learning = learning.read<std::uint8_t>(ArchiveLimits::checkpoint_bytes);
+    }
     return c;
   });
 }

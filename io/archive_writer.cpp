@@ -176,6 +176,9 @@ void write_checkpoint(const h5::File& file, const Checkpoint& checkpoint) {
   cg.write_dataset<std::uint8_t>("population", {static_cast<hsize_t>(checkpoint.population.size())},
                                  checkpoint.population);
   cg.write_attribute<std::int64_t>("generation", checkpoint.generation);
+  if (!checkpoint.learning.empty())
+    cg.write_dataset<std::uint8_t>("learning", {static_cast<hsize_t>(checkpoint.learning.size())},
+                                   checkpoint.learning);
 }
 
 void write_generation_group(const h5::Group& parent, const std::string& name,
@@ -407,16 +410,19 @@ int remove_unreferenced_segments(const std::string& path) {
   return removed;
 }
 
-// A new root with new attributes (and /config, when given): the state changes of a run.
+// A new root with new attributes (and /config or /checkpoint, when given): the state changes
+// of a run, and its checkpoints within a generation.
 void update_root(const std::string& path, const RunInfo& info,
-                 const std::optional<std::string>& config_text, const WriteStepHook& hook) {
+                 const std::optional<std::string>& config_text, const Checkpoint* checkpoint,
+                 const WriteStepHook& hook) {
   const WriteSteps steps(hook);
   archive_update(path, [&] {
-    RootContent c = read_root(path, true);
+    RootContent c = read_root(path, checkpoint == nullptr);
     require_generations_done(path, c, info);
     keep_generation_data_apart(path, c, steps);
     c.info = info;
     if (config_text) c.config_text = *config_text;
+    if (checkpoint) c.checkpoint = *checkpoint;
     write_root(path, c, steps);
   });
 }
@@ -457,12 +463,21 @@ void append_generation(const std::string& path, const RunInfo& info, const Gener
 }
 
 void update_run_info(const std::string& path, const RunInfo& info, const WriteStepHook& hook) {
-  update_root(path, info, std::nullopt, hook);
+  update_root(path, info, std::nullopt, nullptr, hook);
 }
 
 void update_run_config(const std::string& path, const RunInfo& info, const std::string& config_text,
                        const WriteStepHook& hook) {
-  update_root(path, info, config_text, hook);
+  update_root(path, info, config_text, nullptr, hook);
+}
+
+void update_checkpoint(const std::string& path, const RunInfo& info, const Checkpoint& checkpoint,
+                       const WriteStepHook& hook) {
+  if (checkpoint.generation != info.generations_done)
+    throw ArchiveError(path + ": a checkpoint for generation " +
+                       std::to_string(checkpoint.generation) +
+                       " with generations_done = " + std::to_string(info.generations_done));
+  update_root(path, info, std::nullopt, &checkpoint, hook);
 }
 
 namespace {

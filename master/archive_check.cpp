@@ -9,6 +9,7 @@
 #include "common/config_identity.hpp"
 #include "common/eval_types.hpp"
 #include "evo/population.hpp"
+#include "master/learning_rounds.hpp"
 #include "tasks/task.hpp"
 
 namespace softevo::master {
@@ -176,6 +177,8 @@ ArchiveCheck check_archive(const io::Archive& archive) {
           problem(-1, "checkpoint",
                   "/checkpoint population is at generation " + std::to_string(p.generation()) +
                       ", its attribute says " + std::to_string(cp->generation));
+        else if (!cp->learning.empty())  // throws as the resume would
+          GenerationLearning::deserialize(cp->learning, *config, p.params(), cp->generation);
       }
     }
   } catch (const std::exception& e) {

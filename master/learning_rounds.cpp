@@ -5,7 +5,48 @@
 #include <string>
 #include <utility>
 
+#include "common/wire.hpp"
+
 namespace softevo::master {
+
+namespace {
+
+// Layout of serialize(): bump on any change (a checkpoint of another layout is refused, and the
+// generation then learns again from round 0, which gives the same bits).
+constexpr std::uint32_t kLearningStateVersion = 1;
+
+void write_outcome(WireWriter& w, const GenomeOutcome& o) {
+  w.i64(o.genome_id);
+  w.u8(static_cast<std::uint8_t>(o.status));
+  w.f64(o.fitness);
+  w.u64(o.components.size());
+  for (const UnitFitness& u : o.components) write_unit_fitness(w, u);
+  w.i32(o.voxels);
+  w.i32(o.chambers);
+  w.f64(o.wall_seconds);
+  w.i32(o.worker_rank);
+  w.string(o.message);
+}
+
+GenomeOutcome read_outcome(WireReader& r) {
+  GenomeOutcome o;
+  o.genome_id = r.i64("outcome genome id");
+  o.status = checked_status(r.u8("outcome status"), "learning state outcome");
+  o.fitness = r.f64("outcome fitness");
+  const std::uint64_t units = r.u64("outcome units");
+  if (units > r.remaining() / 17)  // each unit takes at least 17 bytes
+    throw WireError("learning state: outcome units exceed the message length");
+  for (std::uint64_t k = 0; k < units; ++k)
+    o.components.push_back(read_unit_fitness(r, "learning state outcome unit"));
+  o.voxels = r.i32("outcome voxels");
+  o.chambers = r.i32("outcome chambers");
+  o.wall_seconds = r.f64("outcome wall seconds");
+  o.worker_rank = r.i32("outcome worker rank");
+  o.message = r.string("outcome message");
+  return o;
+}
+
+}  // namespace
 
 GenerationLearning::GenerationLearning(const Config& config, const evo::EvoParams& params,
                                        std::int64_t generation, std::vector<std::int64_t> ids,
@@ -103,6 +144,102 @@ void GenerationLearning::end_iteration(const std::vector<GenomeOutcome>& outcome
   }
   round_genomes_.clear();
   ++iteration_;
+}
+
+std::vector<std::uint8_t> GenerationLearning::serialize() const {
+  if (!round_genomes_.empty())
+    throw std::logic_error("generation learning: serialize() with a round in flight");
+  WireWriter w;
+  w.u32(kLearningStateVersion);
+  w.i64(generation_);
+  w.i64(iterations_);
+  w.i64(iteration_);
+  w.i32(lambda_);
+  w.u64(results_.size());
+  for (const LearnedResult& r : results_) {
+    write_outcome(w, r.born);
+    write_outcome(w, r.learned);
+    w.bytes(evo::encode_genome(r.genome));
+    w.i64(r.evaluations);
+    w.f64_vector(r.curve);
+    w.f64(r.wall_seconds);
+  }
+  w.u64(learners_.size());
+  for (const Body& b : learners_) {
+    w.u64(b.member);
+    w.f64(b.cost);
+    b.learner.save(w);
+  }
+  return frame_message(MessageKind::learning_state, w.data());
+}
+
+GenerationLearning GenerationLearning::deserialize(std::span<const std::uint8_t> bytes,
+                                                   const Config& config,
+                                                   const evo::EvoParams& params,
+                                                   std::int64_t generation) {
+  WireReader r(unframe_message(bytes, MessageKind::learning_state), "learning state");
+  const auto fail = [](const std::string& what) { throw WireError("learning state: " + what); };
+  const std::uint32_t version = r.u32("layout version");
+  if (version != kLearningStateVersion)
+    fail("unsupported layout version " + std::to_string(version) + " (expected " +
+         std::to_string(kLearningStateVersion) + ")");
+  GenerationLearning l(params, r.i64("generation"));
+  l.iterations_ = r.i64("iterations");
+  l.iteration_ = r.i64("iteration");
+  l.lambda_ = r.i32("lambda");
+  const std::uint64_t members = r.u64("member count");
+  if (members > r.remaining() / 64) fail("member count exceeds the message length");
+  l.results_.resize(static_cast<std::size_t>(members));
+  for (LearnedResult& m : l.results_) {
+    m.born = read_outcome(r);
+    m.learned = read_outcome(r);
+    m.genome = evo::decode_genome(r.bytes("learned genome"));
+    m.evaluations = r.i64("evaluations");
+    m.curve = r.f64_vector("curve");
+    m.wall_seconds = r.f64("wall seconds");
+    if (m.curve.size() != static_cast<std::size_t>(l.iterations_) + 1)
+      fail("a curve of " + std::to_string(m.curve.size()) + " points for " +
+           std::to_string(l.iterations_) + " iterations");
+  }
+  const std::uint64_t bodies = r.u64("learner count");
+  if (bodies > members) fail("more learners than members");
+  for (std::uint64_t k = 0; k < bodies; ++k) {
+    const std::uint64_t member = r.u64("learner member");
+    const double cost = r.f64("learner cost");
+    if (member >= members || (!l.learners_.empty() && member <= l.learners_.back().member))
+      fail("learner members not ascending member indices");
+    evo::ControllerLearner learner = evo::ControllerLearner::load(r);
+    if (learner.iteration() != l.iteration_ || learner.iterations() != l.iterations_ ||
+        learner.lambda() != l.lambda_)
+      fail("a learner at iteration " + std::to_string(learner.iteration()) + " of " +
+           std::to_string(learner.iterations()) + ", its generation at " +
+           std::to_string(l.iteration_) + " of " + std::to_string(l.iterations_));
+    l.learners_.push_back(Body{static_cast<std::size_t>(member), std::move(learner), cost});
+  }
+  r.finish();
+  if (l.generation_ != generation)
+    throw std::invalid_argument("learning state of generation " + std::to_string(l.generation_) +
+                                ", expected " + std::to_string(generation));
+  if (config.learning.method == LearningMethod::none)
+    throw std::invalid_argument("learning state, but the config has no learning");
+  const std::int64_t iterations =
+      evo::learning_iterations(config.learning.evaluations, config.learning.population);
+  if (l.iterations_ != iterations || l.lambda_ != config.learning.population)
+    throw std::invalid_argument("learning state of " + std::to_string(l.iterations_) +
+                                " iterations of " + std::to_string(l.lambda_) +
+                                " candidates, the config has " + std::to_string(iterations) +
+                                " of " + std::to_string(config.learning.population));
+  if (l.iteration_ < 0 || l.finished())
+    throw std::invalid_argument("learning state at iteration " + std::to_string(l.iteration_) +
+                                " of " + std::to_string(l.iterations_) + ": no round left");
+  return l;
+}
+
+std::vector<std::int64_t> GenerationLearning::ids() const {
+  std::vector<std::int64_t> ids;
+  ids.reserve(results_.size());
+  for (const LearnedResult& r : results_) ids.push_back(r.born.genome_id);
+  return ids;
 }
 
 double GenerationLearning::mean_improvement() const {

@@ -7,12 +7,17 @@
 // strategies advance only when the round is complete. Results are stored by candidate, never by
 // arrival, so the learned controllers are the same for any rank count and timing.
 //
+// Between two rounds the whole state (every body's strategy, generator included, and the results
+// so far) serializes into the run's checkpoint (io::Checkpoint::learning), so a run killed in a
+// generation's learning continues after the last completed round (docs/model.md §8.11).
+//
 // A candidate's work unit carries the candidate's own genome (the body's CPPN with the
 // candidate controller) under a round-local id (its index in the round), so workers evaluate
 // it like any genome: nothing on the worker side knows about learning.
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "common/config.hpp"
@@ -55,6 +60,20 @@ class GenerationLearning {
   // The round's outcomes in unit-id order: every body's strategy takes its candidates' scores.
   void end_iteration(const std::vector<GenomeOutcome>& outcomes);
 
+  // The state between rounds (after round 0 or an iteration, before the next begin_iteration)
+  // as a framed message (kind learning_state), for the run's checkpoint. Throws
+  // std::logic_error while a round is in flight.
+  std::vector<std::uint8_t> serialize() const;
+  // The learning serialize() saved, to continue with the next round: `config` must give the
+  // saved iterations and lambda, and `generation` be the saved one; the strategies propose
+  // with `params` (the population's, as for the constructor). Throws WireError on malformed
+  // bytes, std::invalid_argument for a state of another generation or config, or one with no
+  // round left (never saved: the last round's results go straight into the archive).
+  static GenerationLearning deserialize(std::span<const std::uint8_t> bytes, const Config& config,
+                                        const evo::EvoParams& params, std::int64_t generation);
+  // The ids of the members, constructor order (a restored state must be for the same members).
+  std::vector<std::int64_t> ids() const;
+
   // Per member in constructor order; complete once finished().
   const std::vector<LearnedResult>& results() const { return results_; }
   // Mean and largest (learned - born) fitness over the learning bodies so far.
@@ -62,6 +81,8 @@ class GenerationLearning {
   double best_improvement() const;
 
  private:
+  GenerationLearning(const evo::EvoParams& params, std::int64_t generation)
+      : params_(params), generation_(generation) {}
   struct Body {
     std::size_t member = 0;  // index into results_
     evo::ControllerLearner learner;

@@ -331,6 +331,7 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
   } abandon_on_throw{run.lock};
   // Only now, under the lock, is "does the archive exist" an answer that stays true.
   const bool exists = fs::exists(out, ec);
+  std::vector<std::uint8_t> learning_state;  // of a checkpoint within a learning generation
   if (exists && options.resume) {
     try {
       const Archive archive(out);
@@ -383,6 +384,13 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
       }
       if (unwritable) throw StartupError(*unwritable);
       const std::optional<Checkpoint> cp = archive.checkpoint();
+      if (cp && !cp->learning.empty()) {
+        if (cp->generation != old.generations_done)
+          throw StartupError(out + ": cannot resume: the learning checkpoint is for generation " +
+                             std::to_string(cp->generation) +
+                             ", generations_done = " + std::to_string(old.generations_done));
+        learning_state = cp->learning;
+      }
       if (old.generations_done > 0) {
         if (!cp || cp->generation != old.generations_done)
           throw StartupError(out + ": cannot resume: no checkpoint for generation " +
@@ -412,6 +420,14 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
   if (!run.population)
     run.population.emplace(evo::Population::create(config, task_inputs(config),
                                                    static_cast<std::uint64_t>(config.run.seed)));
+  if (!learning_state.empty()) {
+    try {
+      run.learning.emplace(GenerationLearning::deserialize(
+          learning_state, config, run.population->params(), run.population->generation()));
+    } catch (const std::exception& e) {
+      throw StartupError(out + ": cannot resume: bad learning checkpoint: " + e.what());
+    }
+  }
   return run;
 }
 
@@ -498,9 +514,32 @@ GenerationScheduler& RunLoop::begin_generation() {
     }
     learning_.reset();
     units_before_ = 0;
+    t_eval_ = Clock::now();
+    if (run_.learning) {
+      // --resume within this generation's learning: round 0 and the iterations before the
+      // checkpoint are not evaluated again (§8.11, "Checkpoints").
+      learning_.emplace(std::move(*run_.learning));
+      run_.learning.reset();
+      if (learning_->ids() != evaluated_ids)
+        throw RunError("the learning checkpoint of generation " +
+                       std::to_string(run_.population->generation()) +
+                       " is for other members than the generation evaluates");
+      progress_.generation_started(run_.population->generation(), 0);
+      const std::int64_t done = learning_->iteration();
+      const std::string iterations_done = done == 0   ? ""
+                                          : done == 1 ? " and iteration 1"
+                                                      : " and iterations 1-" + std::to_string(done);
+      progress_.message(("generation " + std::to_string(run_.population->generation()) +
+                         ": controller learning continues from the checkpoint at iteration " +
+                         std::to_string(done + 1) + "/" + std::to_string(learning_->iterations()) +
+                         " (" + std::to_string(learning_->bodies_learning()) +
+                         " bodies; their born evaluations" + iterations_done + " restored)")
+                            .c_str());
+      start_learning_round();
+      return;
+    }
     scheduler_.emplace(run_.population->generation(), evaluated_ids, *task_, costs_);
     progress_.generation_started(scheduler_->generation(), scheduler_->units_total());
-    t_eval_ = Clock::now();
   });
   return *scheduler_;
 }
@@ -537,20 +576,34 @@ GenerationScheduler* RunLoop::continue_generation() {
     } else {
       learning_->end_iteration(scheduler.outcomes());
     }
+    // The last round's results go straight into the generation's archive record.
     if (learning_->finished()) return;
     units_before_ += scheduler.units_total();
-    std::vector<std::int64_t> unit_ids;
-    std::vector<double> costs;
-    learning_->begin_iteration(unit_ids, costs);
-    if (!run_.options.longest_first) costs.clear();
-    scheduler_.emplace(g, std::move(unit_ids), *task_, costs);
-    progress_.learning_started(LearningProgress{
-        learning_->iteration() + 1, learning_->iterations(), learning_->bodies_learning(),
-        learning_->mean_improvement(), learning_->best_improvement()});
-    progress_.unit_done(0, scheduler_->units_total());
+    checkpoint_learning();
+    start_learning_round();
     next = &*scheduler_;
   });
   return next;
+}
+
+void RunLoop::checkpoint_learning() {
+  const evo::Population& population = *run_.population;
+  io::update_checkpoint(
+      run_.options.out_path, run_.info,
+      Checkpoint{population.generation(), population.serialize(), learning_->serialize()},
+      run_.options.archive_fault);
+}
+
+void RunLoop::start_learning_round() {
+  std::vector<std::int64_t> unit_ids;
+  std::vector<double> costs;
+  learning_->begin_iteration(unit_ids, costs);
+  if (!run_.options.longest_first) costs.clear();
+  scheduler_.emplace(run_.population->generation(), std::move(unit_ids), *task_, costs);
+  progress_.learning_started(LearningProgress{
+      learning_->iteration() + 1, learning_->iterations(), learning_->bodies_learning(),
+      learning_->mean_improvement(), learning_->best_improvement()});
+  progress_.unit_done(0, scheduler_->units_total());
 }
 
 void RunLoop::check_failures(const GenerationScheduler& scheduler) const {

@@ -120,6 +120,9 @@ struct PreparedRun {
   std::optional<io::RunLock> lock;
   // The results of the latest archived generation (rebuilt from the archive on --resume).
   ResultMemory memory;
+  // --resume of an archive checkpointed within a learning generation: that generation's
+  // controller learning after its last completed round, which the run continues.
+  std::optional<GenerationLearning> learning;
 };
 
 // Descriptors a job needs beside one run lock per run: this process's configs, the archive
@@ -202,6 +205,10 @@ class RunLoop {
  private:
   template <class Step>
   void guarded(const Step& step);
+  // The generation's learning after a completed round into the archive's checkpoint (a kill
+  // from here on loses no round before it), then its next round in a new scheduler.
+  void checkpoint_learning();
+  void start_learning_round();
   // RunError naming the first failed unit of `scheduler` under run.on_failure = "abort".
   void check_failures(const GenerationScheduler& scheduler) const;
   // Learning's inheritance, then the population's next generation from the rows' fitness;

@@ -144,6 +144,71 @@ TEST(ControllerLearner, ImprovesAndIsDeterministic) {
   EXPECT_NE(after, learn(born, 100, 10, 2025));  // the seed matters
 }
 
+// One iteration on the stand-in objective; returns the index told back.
+int step(ControllerLearner& learner) {
+  std::vector<CandidateScore> scores;
+  for (const Genome& c : learner.propose(params())) scores.push_back({distance_fitness(c), true});
+  return learner.tell(scores);
+}
+
+// A run's checkpoint within a learning generation: a learner saved after some iterations and
+// loaded again continues exactly as the original (candidates, selection, curve, learned genome).
+TEST(ControllerLearner, SavedAndLoadedContinuesBitForBit) {
+  const Genome born = born_genome(12);
+  ControllerLearner original(born, {distance_fitness(born), true}, 6, 4, 31, 0.1);
+  step(original);
+  step(original);
+  WireWriter w;
+  original.save(w);
+  WireReader r(w.data(), "learner");
+  ControllerLearner loaded = ControllerLearner::load(r);
+  r.finish();
+  EXPECT_EQ(loaded.iteration(), 2);
+  EXPECT_EQ(loaded.curve(), original.curve());
+  while (!original.done()) {
+    const std::vector<Genome> expected = original.propose(params());
+    const std::vector<Genome> got = loaded.propose(params());
+    ASSERT_EQ(got.size(), expected.size());
+    for (std::size_t k = 0; k < got.size(); ++k)
+      EXPECT_EQ(encode_genome(got[k]), encode_genome(expected[k]));
+    EXPECT_EQ(step(loaded), step(original));
+  }
+  EXPECT_TRUE(loaded.done());
+  EXPECT_EQ(loaded.curve(), original.curve());
+  EXPECT_EQ(loaded.evaluations(), original.evaluations());
+  EXPECT_EQ(encode_genome(loaded.best()), encode_genome(original.best()));
+  EXPECT_GT(original.best_score().fitness, distance_fitness(born));  // it did move
+  // Nothing taken: the born genome comes back bit for bit (not rescaled by the factor).
+  ControllerLearner unmoved(born, {1e9, true}, 3, 2, 5, 0.3);
+  step(unmoved);
+  WireWriter u;
+  unmoved.save(u);
+  WireReader ur(u.data(), "learner");
+  EXPECT_EQ(encode_genome(ControllerLearner::load(ur).best()), encode_genome(born));
+}
+
+TEST(ControllerLearner, SaveRefusesPendingCandidatesAndLoadRefusesBadState) {
+  const Genome born = born_genome(13);
+  ControllerLearner learner(born, {0.0, true}, 3, 2, 7);
+  learner.propose(params());
+  WireWriter pending;
+  EXPECT_THROW(learner.save(pending), std::logic_error);
+  learner.tell({{1.0, true}, {0.0, true}});
+  WireWriter w;
+  learner.save(w);
+  std::vector<std::uint8_t> bytes = w.data();
+  {
+    WireReader truncated(std::span<const std::uint8_t>(bytes).first(bytes.size() - 1), "learner");
+    EXPECT_THROW(ControllerLearner::load(truncated), WireError);
+  }
+  // The iteration (after the curve's count and points, from the end) beyond the iterations.
+  std::vector<std::uint8_t> beyond = bytes;
+  const std::size_t iteration_at = beyond.size() - 8 * (1 + learner.curve().size()) - 8;
+  beyond[iteration_at] = 9;
+  WireReader bad(beyond, "learner");
+  EXPECT_THROW(ControllerLearner::load(bad), WireError);
+}
+
 TEST(PopulationAdoptController, TakesTheLearnedControllerOfTheSameBodyOnly) {
   Config config;
   config.body.lattice = {5, 5, 5};

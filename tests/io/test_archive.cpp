@@ -123,6 +123,45 @@ TEST(Archive, RoundTripsEveryField) {
   EXPECT_THROW(a.generation(1), ArchiveError);
 }
 
+// A checkpoint within a generation (a learning run's state after a round): it replaces the
+// root's /checkpoint, stays through state changes and the pack, leaves the digests alone, and
+// the next generation's checkpoint has none again.
+TEST(Archive, CheckpointWithinAGenerationHoldsItsLearningStateUntilTheNextGeneration) {
+  TmpDir d;
+  const std::string p = d.path + "/run.h5";
+  RunInfo info = sample_info();
+  create_archive(p, info, "cfg");
+  const GenerationRecord r0 = sample_record(0, 4, 1);
+  info.generations_done = 1;
+  append_generation(p, info, r0, StatsRow{0, r0.best, r0.mean, r0.sd, 2, 1.0}, Checkpoint{1, {5}});
+  EXPECT_TRUE(Archive(p).checkpoint()->learning.empty());
+  const std::uint64_t content = content_digest(Archive(p));
+  const std::uint64_t fitness = fitness_digest(Archive(p));
+  // Generation 0 is done: a checkpoint within generation 0 or 2 is refused.
+  EXPECT_THROW(update_checkpoint(p, info, Checkpoint{0, {5}, {1}}), ArchiveError);
+  EXPECT_THROW(update_checkpoint(p, info, Checkpoint{2, {5}, {1}}), ArchiveError);
+  update_checkpoint(p, info, Checkpoint{1, {5}, {7, 8, 9}});
+  {
+    const Archive a(p);
+    EXPECT_EQ(a.checkpoint()->population, (std::vector<std::uint8_t>{5}));
+    EXPECT_EQ(a.checkpoint()->learning, (std::vector<std::uint8_t>{7, 8, 9}));
+    EXPECT_EQ(a.generations(), std::vector<std::int64_t>{0});
+    EXPECT_EQ(a.stats().size(), 1u);
+    EXPECT_EQ(content_digest(a), content);
+    EXPECT_EQ(fitness_digest(a), fitness);
+  }
+  info.state = "interrupted";
+  update_run_info(p, info);
+  EXPECT_EQ(Archive(p).checkpoint()->learning, (std::vector<std::uint8_t>{7, 8, 9}));
+  finish_archive(p, info);
+  ASSERT_TRUE(Archive(p).self_contained());
+  EXPECT_EQ(Archive(p).checkpoint()->learning, (std::vector<std::uint8_t>{7, 8, 9}));
+  const GenerationRecord r1 = sample_record(1, 4, 1);
+  info.generations_done = 2;
+  append_generation(p, info, r1, StatsRow{1, r1.best, r1.mean, r1.sd, 2, 1.0}, Checkpoint{2, {6}});
+  EXPECT_TRUE(Archive(p).checkpoint()->learning.empty());
+}
+
 TEST(Archive, FailedUpdateLeavesThePreviousFileIntact) {
   TmpDir d;
   const std::string p = d.path + "/run.h5";

@@ -2,6 +2,11 @@
 // bytes, so a run of a few generations takes milliseconds. Shared by the run-loop tests.
 #pragma once
 
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <functional>
 #include <string>
 
 #include "common/fnv1a.hpp"
@@ -49,6 +54,23 @@ inline RunOutcome run_once(const Config& config, const std::string& out, bool re
   LocalExecutor executor(fake_evaluation);
   ProgressReporter progress = ProgressReporter::silent();
   return execute_run(run, executor, progress);
+}
+
+// Runs `body` in a child process (fork) that exits when it returns or throws; true when the
+// child died of SIGKILL instead (the body killed itself at the instant under test).
+inline bool killed_in_child(const std::function<void()>& body) {
+  const pid_t child = ::fork();
+  if (child == 0) {
+    try {
+      body();
+    } catch (...) {
+      ::_exit(3);
+    }
+    ::_exit(0);
+  }
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  return WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL;
 }
 
 inline std::string fitness_digest_of(const std::string& path) {

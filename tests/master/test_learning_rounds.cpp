@@ -6,7 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <set>
+#include <string>
+#include <vector>
 
 #include "master/signals.hpp"
 #include "tests/io/tmp_dir.hpp"
@@ -85,6 +88,102 @@ TEST(GenerationLearning, RoundsOfCandidatesAdvanceEveryBodysStrategy) {
   EXPECT_EQ(evo::encode_genome(r[2].genome), evo::encode_genome(born[2]));
   EXPECT_EQ(learning.best_improvement(), 2.0);
   EXPECT_EQ(learning.mean_improvement(), 1.0);
+}
+
+// The 3 bodies of the test above after round 0, with outcome(id, fitness) for round-0 outcomes.
+GenerationLearning three_bodies(const Config& config, const evo::EvoParams& params) {
+  Rng rng(1);
+  std::vector<evo::Genome> genomes;
+  for (int i = 0; i < 3; ++i) genomes.push_back(evo::random_genome(params, rng));
+  return GenerationLearning(
+      config, params, 4, {10, 11, 12}, genomes,
+      {outcome(10, 1.0), outcome(11, 0.0, EvalStatus::invalid_body), outcome(12, 2.0)},
+      {5.0, 0.0, 9.0});
+}
+
+// Round `it`'s outcomes of three_bodies: body 10 gains in iteration 1, body 12 never.
+std::vector<GenomeOutcome> round_outcomes(int it) {
+  return {outcome(0, it == 1 ? 0.5 : -1.0), outcome(1, it == 1 ? 3.0 : 0.2),
+          outcome(2, 7.0, EvalStatus::killed_flipped), outcome(3, 1.0)};
+}
+
+void run_round(GenerationLearning& learning, int it) {
+  std::vector<std::int64_t> ids;
+  std::vector<double> costs;
+  learning.begin_iteration(ids, costs);
+  learning.end_iteration(round_outcomes(it));
+}
+
+// The run's checkpoint within a learning generation: serialized after round 0 or any
+// iteration, the learning continues from the bytes exactly as it would have (candidates sent,
+// learned genomes, curves, evaluations, timings).
+TEST(GenerationLearning, SerializedBetweenRoundsContinuesBitForBit) {
+  const Config config = learning_config();
+  const evo::EvoParams params = evo::evo_params(config, 0);
+  for (int saved_after = 0; saved_after < 3; ++saved_after) {
+    SCOPED_TRACE("saved after " + std::to_string(saved_after) + " iterations");
+    GenerationLearning original = three_bodies(config, params);
+    for (int it = 0; it < saved_after; ++it) run_round(original, it);
+    GenerationLearning restored =
+        GenerationLearning::deserialize(original.serialize(), config, params, 4);
+    EXPECT_EQ(restored.ids(), (std::vector<std::int64_t>{10, 11, 12}));
+    EXPECT_EQ(restored.iteration(), saved_after);
+    EXPECT_EQ(restored.bodies_learning(), 2u);
+    for (int it = saved_after; it < 3; ++it) {
+      std::vector<std::int64_t> ids_o, ids_r;
+      std::vector<double> costs_o, costs_r;
+      original.begin_iteration(ids_o, costs_o);
+      restored.begin_iteration(ids_r, costs_r);
+      EXPECT_EQ(ids_r, ids_o);
+      EXPECT_EQ(costs_r, costs_o);
+      for (std::int64_t id : ids_o)
+        EXPECT_EQ(restored.request(WorkUnit{0, id, 0}, 1).genome,
+                  original.request(WorkUnit{0, id, 0}, 1).genome);
+      original.end_iteration(round_outcomes(it));
+      restored.end_iteration(round_outcomes(it));
+    }
+    ASSERT_TRUE(restored.finished());
+    for (std::size_t m = 0; m < 3; ++m) {
+      const LearnedResult &a = restored.results()[m], &b = original.results()[m];
+      EXPECT_EQ(a.learned.fitness, b.learned.fitness);
+      EXPECT_EQ(a.learned.genome_id, b.learned.genome_id);
+      EXPECT_EQ(a.born.status, b.born.status);
+      EXPECT_EQ(evo::encode_genome(a.genome), evo::encode_genome(b.genome));
+      EXPECT_EQ(a.curve, b.curve);
+      EXPECT_EQ(a.evaluations, b.evaluations);
+      EXPECT_EQ(a.wall_seconds, b.wall_seconds);
+    }
+    EXPECT_EQ(restored.results()[0].learned.fitness, 3.0);  // it learned across the restore
+  }
+}
+
+TEST(GenerationLearning, SerializedStateIsRefusedForAnotherGenerationOrConfig) {
+  const Config config = learning_config();
+  const evo::EvoParams params = evo::evo_params(config, 0);
+  GenerationLearning learning = three_bodies(config, params);
+  run_round(learning, 0);
+  const std::vector<std::uint8_t> bytes = learning.serialize();
+  EXPECT_THROW(GenerationLearning::deserialize(bytes, config, params, 5), std::invalid_argument);
+  Config other = config;
+  other.learning.population = 3;
+  EXPECT_THROW(GenerationLearning::deserialize(bytes, other, params, 4), std::invalid_argument);
+  other = config;
+  other.learning.method = LearningMethod::none;
+  EXPECT_THROW(GenerationLearning::deserialize(bytes, other, params, 4), std::invalid_argument);
+  EXPECT_THROW(
+      GenerationLearning::deserialize(std::span(bytes).first(bytes.size() - 1), config, params, 4),
+      WireError);
+  // Not while a round is in flight (its candidates are drawn from the saved generators).
+  std::vector<std::int64_t> ids;
+  std::vector<double> costs;
+  learning.begin_iteration(ids, costs);
+  EXPECT_THROW(learning.serialize(), std::logic_error);
+  // A finished learning is never saved: its results go into the archive.
+  learning.end_iteration(round_outcomes(1));
+  run_round(learning, 2);
+  ASSERT_TRUE(learning.finished());
+  EXPECT_THROW(GenerationLearning::deserialize(learning.serialize(), config, params, 4),
+               std::invalid_argument);
 }
 
 // Every row of every generation of a learning archive, with what the archive promises.
@@ -168,30 +267,166 @@ TEST(LearningRun, ElitesKeepTheirLearnedResultAndNeverLearnAgain) {
             fitness_digest_of(dir.file("baldwinian.h5")));
 }
 
-TEST(LearningRun, ResumeAfterAStopInALearningRoundGivesTheUninterruptedArchive) {
-  test::TmpDir dir;
-  const Config config = learning_config();
-  const std::string ref = dir.file("ref.h5"), out = dir.file("run.h5");
-  ASSERT_EQ(run_once(config, ref, false), RunOutcome::complete);
+// A new run of `config` into `out` stopped at its evaluation number `n` (from 1): by a
+// stop-now request there (as SIGTERM makes), or with `kill` by a SIGKILL of the process.
+RunOutcome run_stopped_at_evaluation(const Config& config, const std::string& out, std::size_t n,
+                                     bool kill) {
   RunOptions options;
   options.out_path = out;
   PreparedRun run = prepare_run(config, options, 1);
   std::size_t evaluated = 0;
   LocalExecutor executor([&](const EvalRequest& request) {
-    if (++evaluated == 20) {  // in generation 0's second learning round (6 born, 12 per round)
+    if (++evaluated == n) {
+      if (kill) ::raise(SIGKILL);
       request_stop(StopRequest::now);
       return EvalResult{};
     }
     return fake_evaluation(request);
   });
   ProgressReporter progress = ProgressReporter::silent();
-  EXPECT_EQ(execute_run(run, executor, progress), RunOutcome::interrupted);
+  const RunOutcome outcome = execute_run(run, executor, progress);
   clear_stop_request();
-  run.lock.reset();
+  return outcome;
+}
+
+TEST(LearningRun, ResumeAfterAStopInALearningRoundGivesTheUninterruptedArchive) {
+  test::TmpDir dir;
+  const Config config = learning_config();
+  const std::string ref = dir.file("ref.h5"), out = dir.file("run.h5");
+  ASSERT_EQ(run_once(config, ref, false), RunOutcome::complete);
+  // In generation 0's second learning round (6 born, 12 per round).
+  EXPECT_EQ(run_stopped_at_evaluation(config, out, 20, false), RunOutcome::interrupted);
   EXPECT_EQ(Archive(out).info().generations_done, 0);
   ASSERT_EQ(run_once(config, out, true), RunOutcome::complete);
   EXPECT_EQ(fitness_digest_of(out), fitness_digest_of(ref));
   EXPECT_EQ(io::content_digest(Archive(out)), io::content_digest(Archive(ref)));
+}
+
+// One run (or resume) of `config` into `out` with the stand-in evaluator: the work units it
+// evaluated, and its console lines into `lines` when given.
+std::size_t evaluations_of_run(const Config& config, const std::string& out, bool resume,
+                               std::string* lines = nullptr) {
+  RunOptions options;
+  options.out_path = out;
+  options.resume = resume;
+  PreparedRun run = prepare_run(config, options, 1);
+  std::size_t evaluated = 0;
+  LocalExecutor executor([&](const EvalRequest& request) {
+    ++evaluated;
+    return fake_evaluation(request);
+  });
+  std::FILE* console = std::tmpfile();
+  ProgressReporter progress(console, nullptr, nullptr, config.run.generations);
+  const RunOutcome outcome = execute_run(run, executor, progress);
+  EXPECT_EQ(outcome, RunOutcome::complete);
+  std::rewind(console);
+  for (int c = std::fgetc(console); lines != nullptr && c != EOF; c = std::fgetc(console))
+    lines->push_back(static_cast<char>(c));
+  std::fclose(console);
+  return evaluated;
+}
+
+void expect_archives_equal(const std::string& out, const std::string& ref) {
+  EXPECT_EQ(fitness_digest_of(out), fitness_digest_of(ref));
+  EXPECT_EQ(io::content_digest(Archive(out)), io::content_digest(Archive(ref)));
+  EXPECT_EQ(Archive(out).info().state, "complete");
+  ASSERT_TRUE(Archive(out).checkpoint().has_value());
+  EXPECT_TRUE(Archive(out).checkpoint()->learning.empty());  // none after the last generation
+}
+
+// Generation 0 of learning_config: 6 born evaluations (round 0), then 6 bodies x 2 candidates
+// per iteration, 3 iterations.
+constexpr std::size_t kRound0Units = 6;
+constexpr std::size_t kIterationUnits = 12;
+
+// SIGKILL in the middle of generation 0's third round (round 0 and iterations 1-2 complete and
+// checkpointed): --resume continues with iteration 3, evaluates none of the 30 units before
+// it again, and writes the uninterrupted archive.
+TEST(LearningRun, KillWithinALearningRoundResumesAfterTheLastCompletedRound) {
+  test::TmpDir dir;
+  const Config config = learning_config();
+  const std::string ref = dir.file("ref.h5"), out = dir.file("run.h5");
+  const std::size_t total = evaluations_of_run(config, ref, false);
+  const std::size_t kill_at = kRound0Units + 2 * kIterationUnits + 5;
+  ASSERT_TRUE(killed_in_child([&] { run_stopped_at_evaluation(config, out, kill_at, true); }));
+  {
+    const Archive killed(out);
+    EXPECT_EQ(killed.info().generations_done, 0);
+    ASSERT_TRUE(killed.checkpoint().has_value());
+    EXPECT_EQ(killed.checkpoint()->generation, 0);
+    EXPECT_FALSE(killed.checkpoint()->learning.empty());
+  }
+  std::string lines;
+  EXPECT_EQ(evaluations_of_run(config, out, true, &lines),
+            total - kRound0Units - 2 * kIterationUnits);
+  EXPECT_NE(
+      lines.find("generation 0: controller learning continues from the checkpoint at "
+                 "iteration 3/3 (6 bodies; their born evaluations and iterations 1-2 restored)"),
+      std::string::npos)
+      << lines;
+  expect_archives_equal(out, ref);
+}
+
+// A kill at every write step of the checkpoint after generation 0's round 0: before the new
+// root is in place the resume starts the generation again, after it the born evaluations are
+// kept; either way the archive is the uninterrupted one.
+TEST(LearningRun, KillAtEveryWriteStepOfALearningCheckpoint) {
+  test::TmpDir dir;
+  Config config = learning_config();
+  config.run.generations = 1;  // 22 runs: keep each short
+  const std::string ref = dir.file("ref.h5"), out = dir.file("run.h5");
+  const std::size_t total = evaluations_of_run(config, ref, false);
+  // The run's write steps: the archive's creation (a root), then the learning checkpoints of
+  // generation 0 (each a root), then its segment.
+  std::vector<std::string> steps;
+  const std::string count = dir.file("count.h5");
+  run_once(config, count, false, [&](const std::string& step) { steps.push_back(step); });
+  const auto created = std::find(steps.begin(), steps.end(), "root: fsync directory");
+  ASSERT_NE(created, steps.end());
+  const std::size_t first = static_cast<std::size_t>(created - steps.begin()) + 1;
+  const auto checkpointed = std::find(steps.begin() + static_cast<std::ptrdiff_t>(first),
+                                      steps.end(), "root: fsync directory");
+  ASSERT_NE(checkpointed, steps.end());
+  const std::size_t last = static_cast<std::size_t>(checkpointed - steps.begin());
+  ASSERT_EQ(steps[first], "root: create");
+  ASSERT_EQ(last - first, 10u);  // create .. fsync directory, /checkpoint included
+  bool renamed = false;
+  for (std::size_t k = first; k <= last; ++k) {
+    SCOPED_TRACE("killed before step " + std::to_string(k) + " (" + steps[k] + ")");
+    io::remove_archive(out);
+    ASSERT_TRUE(killed_in_child([&] {
+      std::size_t index = 0;
+      run_once(config, out, false, [&](const std::string&) {
+        if (index++ == k) ::raise(SIGKILL);
+      });
+    }));
+    renamed = renamed || steps[k - 1] == "root: rename";
+    EXPECT_EQ(evaluations_of_run(config, out, true), total - (renamed ? kRound0Units : 0));
+    expect_archives_equal(out, ref);
+  }
+  EXPECT_TRUE(renamed);
+}
+
+// An archive of an older build (or of a layout the build cannot read) killed within a learning
+// generation has a checkpoint without learning state: --resume learns that generation again
+// from round 0, with the same bits. Generation 0's 42 units are kept in both cases.
+TEST(LearningRun, ResumeOfACheckpointWithoutLearningStateLearnsTheGenerationAgain) {
+  test::TmpDir dir;
+  const Config config = learning_config();
+  const std::string ref = dir.file("ref.h5"), out = dir.file("run.h5");
+  const std::size_t total = evaluations_of_run(config, ref, false);
+  const std::size_t generation0 = kRound0Units + 3 * kIterationUnits;
+  // In generation 1's learning rounds.
+  EXPECT_EQ(run_stopped_at_evaluation(config, out, generation0 + 10, false),
+            RunOutcome::interrupted);
+  io::RunInfo info = Archive(out).info();
+  ASSERT_EQ(info.generations_done, 1);
+  io::Checkpoint cp = *Archive(out).checkpoint();
+  ASSERT_FALSE(cp.learning.empty());
+  cp.learning.clear();  // as an older build wrote it
+  io::update_checkpoint(out, info, cp);
+  EXPECT_EQ(evaluations_of_run(config, out, true), total - generation0);
+  expect_archives_equal(out, ref);
 }
 
 TEST(LearningRun, ConfigWithoutLearningKeepsItsTextAndHash) {

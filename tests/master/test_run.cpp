@@ -253,21 +253,12 @@ TEST(RunArchive, FailureWhilePackingKeepsEveryGeneration) {
 // write step `kill_at` (counted over the whole run); true when the child was killed there.
 bool killed_at_step(const Config& config, const std::string& out, bool resume,
                     std::size_t kill_at) {
-  const pid_t child = ::fork();
-  if (child == 0) {
+  return killed_in_child([&] {
     std::size_t index = 0;
-    try {
-      run_once(config, out, resume, [&](const std::string&) {
-        if (index++ == kill_at) ::raise(SIGKILL);
-      });
-    } catch (...) {
-      ::_exit(3);
-    }
-    ::_exit(0);
-  }
-  int status = 0;
-  ::waitpid(child, &status, 0);
-  return WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL;
+    run_once(config, out, resume, [&](const std::string&) {
+      if (index++ == kill_at) ::raise(SIGKILL);
+    });
+  });
 }
 
 // A kill at every write step of a run - its creation, a generation (segment, root), the final

@@ -7,6 +7,7 @@ import signal
 import subprocess
 import threading
 
+import numpy as np
 import pytest
 
 import softevo
@@ -50,6 +51,43 @@ def test_evolve_writes_the_archive_of_the_command_line(tiny_config, tmp_path):
     # The best robot re-evaluates to its archived fitness (it carries its run's config).
     last = seen[-1]
     assert softevo.evaluate(last.best_robot).fitness == last.best
+
+
+# Controller learning on the tiny problem (docs/model.md §8.11): 2 generations, every new body
+# learns for 5 evaluations (born + 2 iterations of 2 candidates).
+LEARNING = {"learning.method": "es", "learning.evaluations": 5, "learning.population": 2}
+
+
+def test_evolve_with_controller_learning_writes_the_archive_of_the_command_line(tiny_config,
+                                                                                tmp_path):
+    cli = tmp_path / "cli.h5"
+    sets = [arg for key, value in LEARNING.items() for arg in ("--set", f"{key}={value}")]
+    subprocess.run([str(binary("softevo")), "evolve", "--config", str(tiny_config),
+                    "--generations", "2", "-j", "2", "-q", "--out", str(cli), *sets], check=True)
+    seen = []
+    run = softevo.evolve(tiny_config, workers=2, out=tmp_path / "py.h5", generations=2,
+                         overrides=LEARNING, callback=seen.append)
+    assert run.info["state"] == "complete"
+    assert run.info["experiment"] == "gait-open-learn"
+    assert run.fitness_digest() == softevo.open_run(cli).fitness_digest()
+    assert digests(tmp_path / "py.h5") == digests(cli)
+    assert [g.generation for g in seen] == [0, 1]
+
+    rows = run.individuals()
+    fresh = rows[np.asarray(rows["reused_from"]) == -1]
+    assert len(fresh) >= 6
+    assert (np.asarray(fresh["learn_evaluations"]) == 5).all()
+    reused = rows[np.asarray(rows["reused_from"]) != -1]
+    assert (np.asarray(reused["learn_evaluations"]) == 5).all()  # repeats its origin's
+    gained = 0
+    for before, after, curve in zip(rows["fitness_before"], rows["fitness"],
+                                    rows["learning_curve"]):
+        assert len(curve) == 3 and curve[0] == before and curve[-1] == after
+        assert np.all(np.diff(curve) >= 0)
+        gained += after > before
+    assert gained > 0  # learning found better controllers on the real problem
+    # The best robot of the last generation is the learned one: it evaluates to its fitness.
+    assert softevo.evaluate(seen[-1].best_robot).fitness == seen[-1].best
 
 
 def test_a_config_object_and_the_iterator(tiny_config, tmp_path):
