@@ -377,14 +377,15 @@ case "${1:-}" in
     }
     # The three run at once: each fuzzer is one process, so one after the other would leave a
     # core idle for the whole budget (each still gets its full time, at two thirds of a core).
+    targets=(robot_file config archive)
     pids=()
-    for target in robot_file config archive; do
+    for target in "${targets[@]}"; do
       fuzz_one "$target" &
       pids+=($!)
     done
     rc=0
-    i=0
-    for target in robot_file config archive; do
+    for i in "${!targets[@]}"; do
+      target=${targets[$i]}
       if ! wait "${pids[$i]}"; then
         rc=1
         # The report's head (the error and its stack), then libFuzzer's summary and artifact.
@@ -392,7 +393,6 @@ case "${1:-}" in
         tail -12 "$dir/fuzz/$target.log"
       fi
       cat "$dir/fuzz/$target.summary"
-      i=$((i + 1))
     done
     [ $rc -eq 0 ]
     ;;
