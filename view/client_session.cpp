@@ -58,12 +58,24 @@ std::string without_paths(std::string message, const std::vector<std::string>& p
   return message;
 }
 
+// The ground's grid as the page reads it: float32 heights little-endian in base64.
+json terrain_json(const TerrainGrid& g) {
+  std::string bytes(g.z.size() * sizeof(float), '\0');
+  std::memcpy(bytes.data(), g.z.data(), bytes.size());
+  return {{"kind", g.kind}, {"x0", g.x0}, {"y0", g.y0},        {"step", g.step},
+          {"nx", g.nx},     {"ny", g.ny}, {"z", base64(bytes)}};
+}
+
 }  // namespace
 
 ClientSession::ClientSession(const ViewInput& input, ClientOptions options)
     : input_(input), options_(std::move(options)), session_(std::make_unique<Session>(input)) {}
 
 std::string ClientSession::hello() const {
+  return hello_json(terrain_grid(*session_, options_.terrain_margin_m)).dump();
+}
+
+json ClientSession::hello_json(const TerrainGrid& ground) const {
   const scene::Body& body = input_.body;
   json j;
   j["type"] = "hello";
@@ -109,13 +121,8 @@ std::string ClientSession::hello() const {
                            : json(nullptr);
   j["task"] = to_string(input_.config.task.kind);
   // The ground when it is not the flat floor: heights sampled here from physics/terrain (the
-  // page draws them, it never computes a height itself), float32 little-endian in base64.
-  if (const TerrainGrid g = terrain_grid(*session_); g.nx > 0) {
-    std::string bytes(g.z.size() * sizeof(float), '\0');
-    std::memcpy(bytes.data(), g.z.data(), bytes.size());
-    j["terrain"] = {{"kind", g.kind}, {"x0", g.x0}, {"y0", g.y0},        {"step", g.step},
-                    {"nx", g.nx},     {"ny", g.ny}, {"z", base64(bytes)}};
-  }
+  // page draws them, it never computes a height itself) under the path so far.
+  if (ground.nx > 0) j["terrain"] = terrain_json(ground);
   if (input_.archived) {
     const auto& a = *input_.archived;
     json arch{
@@ -128,7 +135,7 @@ std::string ClientSession::hello() const {
     j["archived"] = arch;
   }
   if (input_.trace_fitness) j["trace_fitness"] = *input_.trace_fitness;
-  return j.dump();
+  return j;
 }
 
 std::string ClientSession::state_json() const {
@@ -142,7 +149,9 @@ std::string ClientSession::state_json() const {
 
 std::vector<Outgoing> ClientSession::start() {
   std::vector<Outgoing> out;
-  out.push_back(text(hello()));
+  ground_sent_ = terrain_grid(*session_, options_.terrain_margin_m);
+  out.push_back(text(hello_json(ground_sent_).dump()));
+  ground_sent_.z = {};
   out.push_back(text(state_json()));
   show(0, out);
   return out;
@@ -154,6 +163,13 @@ void ClientSession::show(int record, std::vector<Outgoing>& out) {
   shown_ = record;
   const bool last = session_->finished() && record == session_->records() - 1;
   out.push_back({true, encode_frame(session_->record(record), last)});
+  // A robot near the edge of the page's ground gets the ground under its path so far.
+  if (ground_sent_.nx == 0) return;
+  if (auto ground = terrain_update(*session_, ground_sent_, record, options_.terrain_margin_m)) {
+    out.push_back(text(json{{"type", "terrain"}, {"terrain", terrain_json(*ground)}}.dump()));
+    ground_sent_ = std::move(*ground);
+    ground_sent_.z = {};
+  }
 }
 
 std::string ClientSession::run_to_end() {

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "view/protocol.hpp"
 #include "view/session.hpp"
 
@@ -38,6 +40,9 @@ struct ClientOptions {
   // Live simulation per tick at most this long [s] of wall clock, so that a slow robot cannot
   // stall the server's other work.
   double max_simulation_seconds_per_tick = 0.05;
+  // The ground's grid reaches this far [m] beyond the robot's path, and a new one is sent when
+  // the robot comes within half of it of the edge (a live robot walks off any fixed square).
+  double terrain_margin_m = kTerrainGridMargin;
 };
 
 class ClientSession {
@@ -70,6 +75,7 @@ class ClientSession {
   void note_end(std::vector<Outgoing>& out);
   std::string ended_json() const;
   std::string state_json() const;
+  nlohmann::json hello_json(const TerrainGrid& ground) const;
   // Writes the trace and steering log; an error names no path of the machine.
   void save_files(const std::filesystem::path& path);
 
@@ -81,6 +87,8 @@ class ClientSession {
   double play_time_ = 0.0;  // simulated time the playback has reached [s]
   int shown_ = -1;
   bool end_noted_ = false;
+  // Where the page's ground grid lies (its heights dropped once sent; nx = 0: flat, none sent).
+  TerrainGrid ground_sent_;
   int saves_ = 0;
   bool saved_ = false;  // this session (since its last reset) is saved
   std::optional<std::chrono::steady_clock::time_point> last_save_;

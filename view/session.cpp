@@ -262,29 +262,56 @@ const physics::Terrain& Session::terrain() const {
   return live_ ? live_->sim->model().terrain : input_.trace_motion.terrain;
 }
 
-TerrainGrid terrain_grid(const Session& session) {
+bool TerrainGrid::covers(double x, double y, double margin) const {
+  if (nx < 2 || ny < 2) return false;
+  return x >= x0 + margin && x <= x0 + (nx - 1) * step - margin && y >= y0 + margin &&
+         y <= y0 + (ny - 1) * step - margin;
+}
+
+std::array<double, 2> record_centre(const FrameRecord& record) {
+  const std::vector<float>& p = record.positions;
+  const std::size_t items = p.size() / 3;
+  double cx = 0.0, cy = 0.0;
+  for (std::size_t i = 0; i < items; ++i) cx += p[3 * i], cy += p[3 * i + 1];
+  if (items > 0) cx /= static_cast<double>(items), cy /= static_cast<double>(items);
+  return {cx, cy};
+}
+
+TerrainGrid terrain_grid(const Session& session, double margin) {
   const physics::Terrain& terrain = session.terrain();
   TerrainGrid g;
   if (terrain.kind == physics::TerrainKind::flat || session.records() == 0) return g;
-  // Centred on the start (the centre of the first record's items).
-  const std::vector<float>& p = session.record(0).positions;
-  double cx = 0.0, cy = 0.0;
-  const std::size_t items = p.size() / 3;
-  for (std::size_t i = 0; i < items; ++i) cx += p[3 * i], cy += p[3 * i + 1];
-  if (items > 0) cx /= static_cast<double>(items), cy /= static_cast<double>(items);
+  double lo_x = std::numeric_limits<double>::infinity(), lo_y = lo_x;
+  double hi_x = -lo_x, hi_y = -lo_x;
+  for (int r = 0; r < session.records(); ++r) {
+    const auto [x, y] = record_centre(session.record(r));
+    lo_x = std::min(lo_x, x), hi_x = std::max(hi_x, x);
+    lo_y = std::min(lo_y, y), hi_y = std::max(hi_y, y);
+  }
+  lo_x -= margin, lo_y -= margin, hi_x += margin, hi_y += margin;
   const double s = session.input().body.voxel_size;
   g.kind = physics::to_string(terrain.kind);
-  g.step = std::max(s, 2.0 * kTerrainGridHalfWidth / (kTerrainGridMaxSide - 1));
-  const int half = static_cast<int>(std::floor(kTerrainGridHalfWidth / g.step));
-  g.nx = g.ny = 2 * half + 1;
-  g.x0 = cx - half * g.step;
-  g.y0 = cy - half * g.step;
+  // Two samples of the side are spent on snapping both ends outwards to the lattice.
+  g.step = std::max(s, std::max(hi_x - lo_x, hi_y - lo_y) / (kTerrainGridMaxSide - 3));
+  const double first_i = std::floor(lo_x / g.step), first_j = std::floor(lo_y / g.step);
+  g.nx = static_cast<int>(std::ceil(hi_x / g.step) - first_i) + 1;
+  g.ny = static_cast<int>(std::ceil(hi_y / g.step) - first_j) + 1;
+  g.x0 = first_i * g.step;
+  g.y0 = first_j * g.step;
   g.z.reserve(static_cast<std::size_t>(g.nx) * static_cast<std::size_t>(g.ny));
   for (int j = 0; j < g.ny; ++j)
     for (int i = 0; i < g.nx; ++i)
       g.z.push_back(static_cast<float>(
           physics::terrain_height(terrain, g.x0 + i * g.step, g.y0 + j * g.step) - 0.5 * s));
   return g;
+}
+
+std::optional<TerrainGrid> terrain_update(const Session& session, const TerrainGrid& shown,
+                                          int record, double margin) {
+  if (session.terrain().kind == physics::TerrainKind::flat) return std::nullopt;
+  const auto [x, y] = record_centre(session.record(record));
+  if (shown.covers(x, y, 0.5 * margin)) return std::nullopt;
+  return terrain_grid(session, margin);
 }
 
 bool Session::finished() const {

@@ -10,6 +10,7 @@
 // only other input, so a session is a pure function of its input and its log.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -158,18 +159,31 @@ class Session {
 
 // The ground of a session sampled for drawing: surface heights [m] (physics::terrain_height, half
 // a voxel below the height a voxel centre rests at, as `softevo render` draws it) on a square
-// grid around the start, x fastest. Empty (nx = 0) for the flat floor.
+// lattice of points, x fastest. Empty (nx = 0) for the flat floor.
 struct TerrainGrid {
   std::string kind;       // physics::to_string of the terrain kind
   double x0 = 0, y0 = 0;  // first sample [m]
   double step = 0;        // grid spacing [m]
   int nx = 0, ny = 0;     // samples along x, y
   std::vector<float> z;   // [ny][nx] surface height [m]
+  // Whether (x, y) [m] lies inside the grid at least `margin` [m] from each edge.
+  bool covers(double x, double y, double margin) const;
 };
-// Half width [m] of the sampled square and the most samples along one side.
-inline constexpr double kTerrainGridHalfWidth = 1.0;
+// How far [m] the grid reaches beyond the robot's path, and the most samples along one side.
+inline constexpr double kTerrainGridMargin = 1.0;
 inline constexpr int kTerrainGridMaxSide = 401;
-TerrainGrid terrain_grid(const Session& session);
+// Absolute centroid (x, y) [m] of a record's items.
+std::array<double, 2> record_centre(const FrameRecord& record);
+// The grid under every record so far (the whole path of a trace or a finished session; the
+// path up to now of a live one), `margin` [m] beyond it on each side. Samples lie on the
+// lattice of multiples of the step, so grids sent one after another agree where they overlap;
+// the step is the voxel size, coarser only when a side would exceed kTerrainGridMaxSide.
+TerrainGrid terrain_grid(const Session& session, double margin = kTerrainGridMargin);
+// The grid a page needs next: nullopt while the record's centroid is at least margin / 2 inside
+// `shown` (the grid it has), else terrain_grid of the records so far. A flat ground never needs
+// one.
+std::optional<TerrainGrid> terrain_update(const Session& session, const TerrainGrid& shown,
+                                          int record, double margin = kTerrainGridMargin);
 
 // Path of the steering log beside a trace: X.h5 -> X.steering.json.
 std::string steering_log_path(const std::string& trace_path);

@@ -7,7 +7,8 @@
 //   3b. exports of robots with hostile names (closing </SCRIPT> and the like): no script runs;
 //   4. malformed WebSocket messages: each is answered with an error, the server keeps serving;
 //   5. the ground (issue 30): exported on a bumpy config the page draws the terrain mesh, and
-//      its floor pixels are shaded, unlike the flat floor of 3.
+//      its floor pixels are shaded, unlike the flat floor of 3; a live page takes the new ground
+//      the server sends as its robot walks on.
 // Prints the measurements (simulation speed vs real time, render frame rate, socket bytes/s,
 // exported size). Exit 77 (skipped) when the reference champions or chromium are absent.
 //
@@ -369,6 +370,23 @@ try {
   check(roughFloor.grey > 10000 && roughFloor.fraction > 0.6 && roughFloor.fraction > 2 * flatFloor.fraction,
     `the terrain is shaded: ${(100 * roughFloor.fraction).toFixed(0)} % of the floor pixels differ from the flat floor's colour (flat: ${(100 * flatFloor.fraction).toFixed(0)} %)`);
   if (shots) await rough.screenshot({ path: path.join(shots, 'export-terrain.png') });
+
+  // 5b. A live page replaces its ground with the one the server sends when the robot nears the
+  // edge of its grid (the server's side: ViewClientSession.ALiveRobotNearTheEdgeOfItsGroundGetsMore).
+  const liveRough = await browser.newPage();
+  liveRough.on('pageerror', (e) => console.log('live rough page error:', e.message));
+  await liveRough.goto(await serve([gaitBot, '--config', path.join(sourceDir, 'configs', 'gait-rough-open.toml'), '--seconds', '1']));
+  await waitFor(liveRough, () => window.softevo.frames > 0 && window.softevo.hello && window.softevo.hello.terrain, undefined, 30000);
+  const moved = await liveRough.evaluate(() => {
+    const t = window.softevo.hello.terrain;
+    const next = { ...t, x0: t.x0 + 1.0 };  // the same heights, laid 1 m further along x
+    window.softevo.socket.onmessage({ data: JSON.stringify({ type: 'terrain', terrain: next }) });
+    return { updates: window.softevo.terrainUpdates, x0: window.softevo.hello.terrain.x0, want: next.x0,
+      vertices: window.softevo.terrainVertices, samples: t.nx * t.ny };
+  });
+  check(moved.updates === 1 && moved.x0 === moved.want && moved.vertices === moved.samples,
+    `a live page takes the ground the server sends (${moved.updates} update, ${moved.vertices} vertices, x0 ${moved.x0.toFixed(2)} m)`);
+  await liveRough.close();
 
   // ------------------------------------------------------------ 3b. hostile names, exported
   // A shared robot file's name must never run as script in the page exported from it.

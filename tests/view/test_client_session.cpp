@@ -4,6 +4,7 @@
 // directory and tells the page only the file names.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 
 #include <nlohmann/json.hpp>
@@ -202,4 +203,46 @@ TEST(ViewClientSession, SavesAreBoundedAndTheirErrorsNameNoPath) {
   const std::string error = saved_one(e);
   EXPECT_NE(error.find("the save failed"), std::string::npos) << error;
   EXPECT_EQ(error.find('/'), std::string::npos) << error;
+}
+
+// Issue 30: a live robot near the edge of the ground its page has gets the ground under its path
+// so far, so that every frame shown lies inside the page's grid. The rough-ground walker that
+// ships in robots/, with a margin of a millimetre: its centimetres of walking cross it often.
+TEST(ViewClientSession, ALiveRobotNearTheEdgeOfItsGroundGetsMore) {
+  const char* source = std::getenv("SOFTEVO_SOURCE_DIR");
+  ASSERT_NE(source, nullptr) << "SOFTEVO_SOURCE_DIR is set by ctest";
+  view::ViewRequest request;
+  request.config_file = std::string(source) + "/configs/gait-rough-open.toml";
+  request.seconds = 2.0;
+  const view::ViewInput in =
+      view::load_view_input(std::string(source) + "/robots/gait-rough-walker.robot.json", request);
+  view::ClientOptions options;
+  options.terrain_margin_m = 0.001;
+  options.max_simulation_seconds_per_tick = 10.0;
+  view::ClientSession c(in, options);
+  view::TerrainGrid page;  // the page's ground: the hello's, then each "terrain" message's
+  const auto take = [&](const std::vector<view::Outgoing>& out) {
+    int updates = 0;
+    for (const json& j : texts(out)) {
+      const json* t = j["type"] == "hello" ? &j.at("terrain") : nullptr;
+      if (j["type"] == "terrain") t = &j.at("terrain"), ++updates;
+      if (!t) continue;
+      page.x0 = (*t)["x0"], page.y0 = (*t)["y0"], page.step = (*t)["step"];
+      page.nx = (*t)["nx"], page.ny = (*t)["ny"];
+    }
+    return updates;
+  };
+  take(c.start());
+  ASSERT_GT(page.nx, 1);
+  int updates = 0;
+  while (!c.session().finished() || c.shown() + 1 < c.session().records()) {
+    updates += take(c.handle(R"({"type":"step"})", true));
+    const auto [x, y] = view::record_centre(c.session().record(c.shown()));
+    ASSERT_TRUE(page.covers(x, y, 0.5 * options.terrain_margin_m - 1e-12)) << c.shown();
+  }
+  EXPECT_GT(updates, 0);
+  // A flat floor sends none.
+  const view::ViewInput flat = test::block_input(TaskKind::gait, 0.2);
+  view::ClientSession f(flat, {});
+  for (const json& j : texts(f.start())) EXPECT_FALSE(j.contains("terrain"));
 }

@@ -189,3 +189,81 @@ TEST(ViewSession, SavesATraceWithItsLogThatPlaysBack) {
   }
   EXPECT_EQ(b.record(5).valves, a.record(5).valves);
 }
+
+namespace {
+
+// A trace of the test block sliding `metres` along +x over `poses` poses on a 10% slope (the
+// ground rises from x = 0 on), for the ground grid's coverage.
+view::ViewInput sliding_trace(double metres, int poses) {
+  view::ViewInput in = test::block_input(TaskKind::gait, 0.1);
+  in.kind = view::InputKind::trace;
+  in.trace_motion.body = in.body;
+  physics::Terrain& ground = in.trace_motion.terrain;
+  ground.kind = physics::TerrainKind::slope;
+  ground.voxel_size = in.body.voxel_size;
+  ground.gradient = 0.1;
+  for (int k = 0; k < poses; ++k) {
+    scene::Pose pose = scene::rest_pose(in.body);
+    for (Eigen::Vector3d& p : pose.position) p.x() += metres * k / (poses - 1);
+    pose.time = 0.1 * k;
+    in.trace_motion.poses.push_back(std::move(pose));
+  }
+  return in;
+}
+
+}  // namespace
+
+// Issue 30: the ground a page draws covers the whole path (and 1 m around it), at the voxel
+// spacing while a side fits 401 points, coarser beyond; a live robot near the edge of the grid
+// its page has gets a new one.
+TEST(ViewSession, TheGroundGridCoversThePathSoFar) {
+  const view::ViewInput walk = sliding_trace(1.5, 31);
+  const view::Session session(walk);
+  ASSERT_EQ(session.records(), 31);
+  const view::TerrainGrid grid = view::terrain_grid(session);
+  EXPECT_EQ(grid.kind, "slope");
+  EXPECT_EQ(grid.step, walk.body.voxel_size);
+  EXPECT_LE(grid.nx, view::kTerrainGridMaxSide);
+  ASSERT_EQ(grid.z.size(), static_cast<std::size_t>(grid.nx) * grid.ny);
+  for (int r = 0; r < session.records(); ++r) {
+    const auto [x, y] = view::record_centre(session.record(r));
+    EXPECT_TRUE(grid.covers(x, y, view::kTerrainGridMargin - 1e-9)) << r;
+  }
+  // On the lattice of the step, each sample the simulation's ground half a voxel down.
+  EXPECT_EQ(grid.x0, std::floor(grid.x0 / grid.step) * grid.step);
+  const double half = 0.5 * walk.body.voxel_size;
+  for (int i = 0; i < grid.nx; i += 17) {
+    const double want =
+        physics::terrain_height(walk.trace_motion.terrain, grid.x0 + i * grid.step, grid.y0) - half;
+    EXPECT_EQ(grid.z[static_cast<std::size_t>(i)], static_cast<float>(want)) << i;
+  }
+  // The grid of the start alone does not cover the end of the walk: the update does.
+  view::ViewInput first = walk;
+  first.trace_motion.poses.resize(1);
+  const view::Session at_start(first);
+  const view::TerrainGrid start_grid = view::terrain_grid(at_start);
+  EXPECT_LT(start_grid.nx, grid.nx);
+  EXPECT_FALSE(view::terrain_update(session, start_grid, 0).has_value());
+  const auto update = view::terrain_update(session, start_grid, 30);
+  ASSERT_TRUE(update.has_value());
+  EXPECT_EQ(update->nx, grid.nx);
+  EXPECT_EQ(update->x0, grid.x0);
+  EXPECT_FALSE(view::terrain_update(session, grid, 30).has_value());
+  // A walk longer than 401 voxels: the step grows and a side stays within 401 points.
+  const view::ViewInput far = sliding_trace(6.0, 7);
+  const view::Session far_session(far);
+  const view::TerrainGrid coarse = view::terrain_grid(far_session);
+  EXPECT_GT(coarse.step, far.body.voxel_size);
+  EXPECT_LE(coarse.nx, view::kTerrainGridMaxSide);
+  EXPECT_LE(coarse.ny, view::kTerrainGridMaxSide);
+  for (int r : {0, 6}) {
+    const auto [x, y] = view::record_centre(far_session.record(r));
+    EXPECT_TRUE(coarse.covers(x, y, view::kTerrainGridMargin - 1e-9)) << r;
+  }
+  // Flat ground: no grid and no update.
+  view::ViewInput flat = walk;
+  flat.trace_motion.terrain = physics::Terrain{};
+  const view::Session flat_session(flat);
+  EXPECT_EQ(view::terrain_grid(flat_session).nx, 0);
+  EXPECT_FALSE(view::terrain_update(flat_session, start_grid, 30).has_value());
+}

@@ -39,6 +39,7 @@ let voxelMesh = null, chamberMesh = null, floorGroup = null, targetLine = null, 
 let start = new THREE.Vector3();  // centroid of the first frame [m]
 let floorZ = -0.005;
 let lastCentroid = null;
+let floorCentre = null;  // where the floor, its grid and the scale bar are centred [m]
 let pathCount = 0, pathLast = -1;  // centroid path points drawn, last record among them
 const matrix = new THREE.Matrix4(), quat = new THREE.Quaternion(), pos = new THREE.Vector3();
 const scaleVec = new THREE.Vector3(1, 1, 1), hidden = new THREE.Vector3(0, 0, 0);
@@ -143,6 +144,7 @@ function terrainMesh(t, s) {
 
 function buildFloor(center) {
   if (floorGroup) scene.remove(floorGroup);
+  floorCentre = center.clone();
   floorGroup = new THREE.Group();
   const s = hello.voxel_size;
   const extent = 2.0;  // [m] half width
@@ -177,6 +179,17 @@ function buildFloor(center) {
   floorGroup.add(text);
   scene.add(floorGroup);
   probe.terrainVertices = hello.terrain && terrainZ ? terrainZ.length : 0;
+}
+
+// The server sends the ground under the path so far when the robot nears the edge of the grid
+// the page has (a live robot walks off any fixed square).
+function groundChanged(t) {
+  changed();
+  hello.terrain = t;
+  terrainZ = decodeTerrain(t);
+  probe.terrainUpdates = (probe.terrainUpdates || 0) + 1;
+  buildFloor(lastCentroid || start);
+  if (targetLine) setTarget(dialDeg);
 }
 
 function setTarget(deg) {
@@ -327,6 +340,8 @@ function showFrame(f) {
     controls.target.add(delta);
   }
   lastCentroid = c;
+  // The floor follows a robot that walks more than 1 m from where it was laid.
+  if (floorCentre && Math.hypot(c.x - floorCentre.x, c.y - floorCentre.y) > 1.0) buildFloor(c);
   // Centroid path on the floor: a point per new record (scrubbing back keeps what was walked).
   if (f.index > pathLast) {
     const p = pathLine.geometry.attributes.position;
@@ -459,6 +474,7 @@ function startLive() {
     const m = JSON.parse(ev.data);
     if (m.type === 'hello') setup(m);
     else if (m.type === 'ended') ended(m);
+    else if (m.type === 'terrain') groundChanged(m.terrain);
     else if (m.type === 'error') { probe.errors.push(m.message); $('note').textContent = 'server: ' + m.message; }
     else if (m.type === 'saved') { probe.saved = m; $('note').textContent = `saved ${m.trace} and ${m.steering} (in the server's --save-dir)`; }
     else if (m.type === 'state') { playing = m.playing; $('play').textContent = playing ? 'Pause' : 'Play'; }
