@@ -20,6 +20,7 @@
 #include <thread>
 #include <vector>
 
+#include "io/child_process.hpp"
 #include "io/h5.hpp"
 #include "io/open_probe.hpp"
 
@@ -273,14 +274,8 @@ class Walker {
 };
 
 [[noreturn]] void probe_in_child(const std::string& path, std::uint64_t file_bytes) {
-  // The parent's crash handlers (Open MPI's print a backtrace) are not this child's business:
-  // a crash here is the expected outcome for a damaged file, reported by the parent.
-  for (const int signal : {SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT}) {
-    struct sigaction action {};
-    action.sa_handler = SIG_DFL;
-    sigemptyset(&action.sa_mask);
-    ::sigaction(signal, &action, nullptr);
-  }
+  // A crash here is the expected outcome for a damaged file, reported by the parent.
+  restore_default_crash_handlers();
   silence_error_printing();
   // The fork's copy of the parent's pages is this child's starting point.
   const std::uint64_t resident_at_start = peak_resident_bytes();
@@ -306,11 +301,8 @@ std::string describe_failure(int status, std::uint64_t file_bytes) {
            std::to_string(probe_memory_allowance(file_bytes) >> 20) +
            " MB of memory in a separate test process (libhdf5 sizes buffers by a damaged "
            "length field)";
-  if (WIFSIGNALED(status)) {
-    const int signal = WTERMSIG(status);
-    return "libhdf5 crashed (signal " + std::to_string(signal) + ": " + ::strsignal(signal) +
-           ") while a separate test process read the file's structure";
-  }
+  if (WIFSIGNALED(status))
+    return crash_text(status) + " while a separate test process read the file's structure";
   return "the separate test process that read the file's structure with libhdf5 failed (exit "
          "status " +
          std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) + ")";
