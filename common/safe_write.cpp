@@ -90,8 +90,16 @@ AtomicOutput::AtomicOutput(std::string path, Overwrite overwrite)
   temp_path_.assign(buf.data());
 }
 
+AtomicOutput::AtomicOutput(std::string path, Overwrite overwrite, std::string existing)
+    : path_(std::move(path)),
+      temp_path_(std::move(existing)),
+      overwrite_(overwrite),
+      owns_temp_(false) {
+  check_output_target(path_, overwrite_);
+}
+
 AtomicOutput::~AtomicOutput() {
-  if (!committed_ && !temp_path_.empty()) ::unlink(temp_path_.c_str());
+  if (!committed_ && owns_temp_ && !temp_path_.empty()) ::unlink(temp_path_.c_str());
 }
 
 void AtomicOutput::commit(const CommitStepHook& before_step) {

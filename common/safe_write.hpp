@@ -45,6 +45,10 @@ using CommitStepHook = std::function<void(const std::string& step)>;
 class AtomicOutput {
  public:
   AtomicOutput(std::string path, Overwrite overwrite);
+  // The temporary is `existing`, a file of the caller's in the target's file system (space
+  // reserved in advance: io/archive_writer.cpp), renamed over `path` on commit() and left in
+  // place when commit() is never reached.
+  AtomicOutput(std::string path, Overwrite overwrite, std::string existing);
   AtomicOutput(const AtomicOutput&) = delete;
   AtomicOutput& operator=(const AtomicOutput&) = delete;
   ~AtomicOutput();
@@ -62,6 +66,7 @@ class AtomicOutput {
   std::string path_;
   std::string temp_path_;
   Overwrite overwrite_;
+  bool owns_temp_ = true;
   bool committed_ = false;
 };
 

@@ -172,7 +172,11 @@ FitnessStats fitness_stats(const std::vector<double>& fitness);
 // before every write step of an archive update. A hook that throws (e.g.
 // std::system_error(ENOSPC)) makes that step fail as a full disk would; the update then fails
 // like a real one (ArchiveError, temporary removed, archive unchanged). A hook that kills the
-// process shows what a kill at that instant leaves. Empty = no hook.
+// process shows what a kill at that instant leaves. The pack's steps from "pack: create" to
+// "pack: close" run in the pack's own child process (finish_archive): there the hook's effects
+// stay in the child (a throw or a crash fails the pack). "root: reserve" grows the space kept
+// for the stop's root; "reserved root: ..." are the steps of a stop's root written into it
+// (update_run_info). Empty = no hook.
 using WriteStepHook = std::function<void(const std::string& step)>;
 
 // Throws ArchiveError unless the archive can be written at `path`: its directory exists and is
@@ -196,7 +200,10 @@ void append_generation(const std::string& path, const RunInfo& info, const Gener
 void update_checkpoint(const std::string& path, const RunInfo& info, const Checkpoint& checkpoint,
                        const WriteStepHook& hook = {});
 // Replaces the root attributes (state changes, end time). `info.generations_done` must equal
-// the archive's: a state change never claims generations (ArchiveError otherwise).
+// the archive's: a state change never claims generations (ArchiveError otherwise). A state
+// other than "running" that cannot be written as a new root (a full disk) is written into the
+// space every root write reserves for it (RUN.h5.d/reserved-root, as large as the root and
+// 16 kB): the stop of a run is recorded on a disk with no block free (docs/archive.md).
 void update_run_info(const std::string& path, const RunInfo& info, const WriteStepHook& hook = {});
 // As update_run_info, and /config replaced by `config_text`: a run continued with another run
 // length (--resume --generations N) records the config it now runs.
@@ -204,7 +211,10 @@ void update_run_config(const std::string& path, const RunInfo& info, const std::
                        const WriteStepHook& hook = {});
 // Sets the root attributes (as update_run_info) and packs the archive into one self-contained
 // file (every generation group copied as written), replacing the root atomically, then removes
-// the segments. A failure leaves the archive as it was (consistent, in either form).
+// the segments and the reserved space. A failure leaves the archive as it was (consistent, in
+// either form). Refused when the file system has no room for the copy; the copy is written by
+// a forked child process (io/child_process.hpp), so a crash of libhdf5 there (another process
+// filling the disk during the copy) is an ArchiveError naming the signal, not this process's.
 void finish_archive(const std::string& path, const RunInfo& info, const WriteStepHook& hook = {});
 // Removes what a writer killed in the middle of an update left behind: temporaries of dead
 // processes beside `path` and in RUN.h5.d/, and segments the root does not reference (written

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -19,6 +20,7 @@
 #include "common/safe_write.hpp"
 #include "io/archive.hpp"
 #include "io/archive_internal.hpp"
+#include "io/child_process.hpp"
 #include "io/h5.hpp"
 
 namespace softevo::io {
@@ -63,6 +65,16 @@ class WriteSteps {
   const WriteStepHook& hook_;
 };
 
+// The bytes an unprivileged writer may still take in `directory`'s file system; the maximum
+// when unknown (statvfs failed: the writes' own errors will say). `no_inode`: set when no
+// file can be created there any more.
+std::uint64_t free_bytes_in(const std::string& directory, bool* no_inode = nullptr) {
+  struct statvfs vfs {};
+  if (::statvfs(directory.c_str(), &vfs) != 0) return UINT64_MAX;
+  if (no_inode != nullptr) *no_inode = vfs.f_favail == 0;
+  return static_cast<std::uint64_t>(vfs.f_bavail) * static_cast<std::uint64_t>(vfs.f_frsize);
+}
+
 // When a write into `directory` failed, the reason HDF5 reports is often generic ("file write
 // failed", "flush failed", "Input/output error"): it does not pass errno on. A full file system
 // is by far the most common cause and the one the user must act on, so say so when it is the
@@ -70,11 +82,9 @@ class WriteSteps {
 std::string with_space_diagnosis(const std::string& message, const std::string& directory) {
   constexpr std::uint64_t kLowSpaceBytes = 1 << 20;
   if (message.find(std::strerror(ENOSPC)) != std::string::npos) return message;
-  struct statvfs vfs {};
-  if (::statvfs(directory.c_str(), &vfs) != 0) return message;
-  const std::uint64_t free_bytes =
-      static_cast<std::uint64_t>(vfs.f_bavail) * static_cast<std::uint64_t>(vfs.f_frsize);
-  if (free_bytes >= kLowSpaceBytes && vfs.f_favail != 0) return message;
+  bool no_inode = false;
+  const std::uint64_t free_bytes = free_bytes_in(directory, &no_inode);
+  if (free_bytes >= kLowSpaceBytes && !no_inode) return message;
   return message + " (" + std::strerror(ENOSPC) + ": " + directory + " has " +
          std::to_string(free_bytes) + " bytes free)";
 }
@@ -234,38 +244,124 @@ std::string make_segment_directory(const std::string& path) {
   return dir;
 }
 
-// The new, small root: run attributes, /config, /stats, a link per generation, /checkpoint.
-// Written whole to a temporary and renamed over `path` (its size does not depend on the data
-// of the generations, only on their count: one link and one /stats row each).
+// The space kept for the root that records a run's stop (docs/archive.md "What survives which
+// fault"): a failed write usually means a full disk, and the new root with state `interrupted`
+// then had no room beside the old one until the rename (issue 29: 4 of 31 packed full-disk scan
+// sizes left an archive `running`). Every root write first makes sure this file, in RUN.h5.d/,
+// holds at least as many allocated bytes as the new root plus kStopRootMarginBytes; a state
+// change that ends the run and finds no room writes its root into these bytes (no new block is
+// needed to overwrite allocated ones) and renames the file over the root.
+constexpr const char* kReservedRootName = "reserved-root";
+// What the stop's root may take beyond the root it replaces: the same groups with state, end
+// time and a stop reason (attributes of at most ArchiveLimits::string_bytes each, in HDF5's
+// global heap collections of at least 4 kB).
+constexpr std::uint64_t kStopRootMarginBytes = std::uint64_t{16} << 10;
+
+std::string reserved_root_path(const std::string& path) {
+  return segment_directory(path) + "/" + kReservedRootName;
+}
+
+// Grows the reserved file of `path` to at least `root_bytes` + kStopRootMarginBytes allocated
+// bytes (posix_fallocate: allocated, not a sparse hole); never shrinks it.
+void reserve_stop_root(const std::string& path, std::uint64_t root_bytes) {
+  const std::string reserve = make_segment_directory(path) + "/" + kReservedRootName;
+  const std::uint64_t wanted = root_bytes + kStopRootMarginBytes;
+  const int fd = ::open(reserve.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (fd < 0)
+    throw ArchiveError(
+        reserve + ": cannot open the space reserved for the stop's root: " + std::strerror(errno));
+  struct stat st {};
+  int error = ::fstat(fd, &st) != 0 ? errno : 0;
+  if (error == 0 && static_cast<std::uint64_t>(st.st_size) < wanted)
+    error = ::posix_fallocate(fd, 0, static_cast<off_t>(wanted));
+  ::close(fd);
+  if (error != 0)
+    throw ArchiveError(reserve + ": cannot reserve " + std::to_string(wanted) +
+                       " bytes for the root that records the run's stop: " + std::strerror(error));
+}
+
+// The content of a small root (run attributes, /config, /stats, a link per generation,
+// /checkpoint) written into `file`.
+void fill_root(h5::File& file, const std::string& path, const RootContent& c,
+               const PartSteps& step) {
+  step("attributes");
+  write_run_info(file, c.info);
+  step("/config");
+  file.write_string_dataset("config", c.config_text, Charset::utf8);
+  step("/stats");
+  write_stats(file, c.stats);
+  step("/generations");
+  const h5::Group generations = file.create_group("generations");
+  for (const GenerationStorage& s : c.generations) {
+    if (s.file.empty())
+      throw ArchiveError(path + ": internal error: generation " + std::to_string(s.generation) +
+                         " has no segment");
+    generations.create_external_link(generation_group_name(s.generation), {s.file, s.object});
+  }
+  if (c.checkpoint) {
+    step("/checkpoint");
+    write_checkpoint(file, *c.checkpoint);
+  }
+  step("flush");
+  file.flush();
+}
+
+// The new, small root, written whole to a temporary and renamed over `path` (its size does not
+// depend on the data of the generations, only on their count: one link and one /stats row
+// each). Before the rename, the reserved space grows to hold a root of its size.
 void write_root(const std::string& path, const RootContent& c, const WriteSteps& steps) {
   const PartSteps step(steps, "root");
   AtomicOutput out(path, Overwrite::replace);
   {
     step("create");
     h5::File file = h5::File::create(out.temp_path(), nullptr, path);
-    step("attributes");
-    write_run_info(file, c.info);
-    step("/config");
-    file.write_string_dataset("config", c.config_text, Charset::utf8);
-    step("/stats");
-    write_stats(file, c.stats);
-    step("/generations");
-    const h5::Group generations = file.create_group("generations");
-    for (const GenerationStorage& s : c.generations) {
-      if (s.file.empty())
-        throw ArchiveError(path + ": internal error: generation " + std::to_string(s.generation) +
-                           " has no segment");
-      generations.create_external_link(generation_group_name(s.generation), {s.file, s.object});
-    }
-    if (c.checkpoint) {
-      step("/checkpoint");
-      write_checkpoint(file, *c.checkpoint);
-    }
-    step("flush");
-    file.flush();
+    fill_root(file, path, c, step);
     step("close");
     file.close();
   }
+  step("reserve");
+  reserve_stop_root(path, fs::file_size(out.temp_path()));
+  out.commit(step.commit_hook());
+}
+
+// The small root written into the reserved space and renamed over `path`: built in memory, its
+// bytes overwrite the reserved file's allocated ones (ArchiveError when it does not fit), the
+// file is cut to the root's size and renamed. Atomic as write_root; the reservation is used up.
+void write_root_into_reserve(const std::string& path, const RootContent& c,
+                             const WriteSteps& steps) {
+  const PartSteps step(steps, "reserved root");
+  const std::string reserve = reserved_root_path(path);
+  struct stat st {};
+  if (::lstat(reserve.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
+    throw ArchiveError(reserve + ": no space reserved for the stop's root");
+  std::vector<std::uint8_t> image;
+  {
+    step("create");
+    h5::File file = h5::File::create_in_memory(path);
+    fill_root(file, path, c, step);
+    image = file.image();
+    step("close");
+    file.close();
+  }
+  if (image.size() > static_cast<std::uint64_t>(st.st_size))
+    throw ArchiveError(reserve + ": the stop's root takes " + std::to_string(image.size()) +
+                       " bytes, " + std::to_string(st.st_size) + " are reserved");
+  AtomicOutput out(path, Overwrite::replace, reserve);
+  step("write");
+  const int fd = ::open(reserve.c_str(), O_WRONLY | O_NOFOLLOW | O_CLOEXEC);
+  if (fd < 0) throw ArchiveError(reserve + ": cannot open: " + std::strerror(errno));
+  int error = 0;
+  for (std::size_t done = 0; done < image.size() && error == 0;) {
+    const ssize_t put =
+        ::pwrite(fd, image.data() + done, image.size() - done, static_cast<off_t>(done));
+    if (put < 0 && errno != EINTR) error = errno;
+    if (put == 0) error = ENOSPC;
+    if (put > 0) done += static_cast<std::size_t>(put);
+  }
+  if (error == 0 && ::ftruncate(fd, static_cast<off_t>(image.size())) != 0) error = errno;
+  ::close(fd);
+  if (error != 0)
+    throw ArchiveError(reserve + ": cannot write the stop's root: " + std::strerror(error));
   out.commit(step.commit_hook());
 }
 
@@ -387,16 +483,25 @@ int remove_unreferenced_segments(const std::string& path) {
   struct stat st {};
   if (::lstat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) return 0;
   std::vector<std::string> referenced;
-  if (fs::exists(path)) {
+  bool packed = false;
+  const bool root_exists = fs::exists(path);
+  if (root_exists) {
     try {
-      for (const GenerationStorage& s : Archive(path).generation_storage())
+      const Archive root(path);
+      for (const GenerationStorage& s : root.generation_storage()) {
         referenced.push_back(s.file);
+        packed = packed || s.file.empty();
+      }
     } catch (const std::exception&) {
       return 0;  // a damaged root: its segments may be all that is left of the run
     }
   }
   int removed = remove_stale_temporaries_in(dir);
   std::error_code ec;
+  // The reserved space belongs to a root in its running form (or a new one, without
+  // generations yet); without a root, or beside a packed archive, it is debris.
+  if (!root_exists || packed)
+    if (fs::remove(reserved_root_path(path), ec)) ++removed;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     const std::string name = entry.path().filename().string();
     const std::string as_linked = segment_directory_link_name(path) + "/" + name;
@@ -411,7 +516,9 @@ int remove_unreferenced_segments(const std::string& path) {
 }
 
 // A new root with new attributes (and /config or /checkpoint, when given): the state changes
-// of a run, and its checkpoints within a generation.
+// of a run, and its checkpoints within a generation. A state that ends the run (not
+// `running`), when its root cannot be written as a new file (a full disk), goes into the space
+// reserved for it.
 void update_root(const std::string& path, const RunInfo& info,
                  const std::optional<std::string>& config_text, const Checkpoint* checkpoint,
                  const WriteStepHook& hook) {
@@ -423,7 +530,19 @@ void update_root(const std::string& path, const RunInfo& info,
     c.info = info;
     if (config_text) c.config_text = *config_text;
     if (checkpoint) c.checkpoint = *checkpoint;
-    write_root(path, c, steps);
+    const bool ends_the_run = info.state != "running" && !config_text && checkpoint == nullptr;
+    try {
+      write_root(path, c, steps);
+    } catch (const std::exception& e) {
+      struct stat st {};
+      if (!ends_the_run || ::lstat(reserved_root_path(path).c_str(), &st) != 0) throw;
+      try {
+        write_root_into_reserve(path, c, steps);
+      } catch (const std::exception& reserved) {
+        throw ArchiveError(std::string(e.what()) +
+                           "; nor into the space reserved for it: " + reserved.what());
+      }
+    }
   });
 }
 
@@ -501,20 +620,51 @@ std::uint64_t bytes_to_pack(const std::string& path, const Archive& source) {
 // Refuses to pack when the file system of `path` cannot take the packed copy. libhdf5 1.10
 // crashed (SIGSEGV in H5Ocopy) when the disk filled during the copy (issue 29); a write that is
 // never started cannot fail there, and the archive stays readable as a root with segments.
-void require_room_to_pack(const std::string& path, const Archive& source) {
+// Returns the bytes the pack wants free.
+std::uint64_t require_room_to_pack(const std::string& path, const Archive& source) {
   // HDF5's own overhead (headers, free-space tracking, the checkpoint) on top of the groups.
   constexpr std::uint64_t kMarginBytes = std::uint64_t{64} << 10;
   const std::uint64_t needed = bytes_to_pack(path, source);
   const std::uint64_t wanted = needed + needed / 8 + kMarginBytes;
   const std::string dir = directory_of(path);
-  struct statvfs vfs {};
-  if (::statvfs(dir.c_str(), &vfs) != 0) return;  // unknown: the pack's own errors will say
-  const std::uint64_t free_bytes =
-      static_cast<std::uint64_t>(vfs.f_bavail) * static_cast<std::uint64_t>(vfs.f_frsize);
+  const std::uint64_t free_bytes = free_bytes_in(dir);
   if (free_bytes < wanted)
     throw ArchiveError(path + ": not packed into one file: " + std::strerror(ENOSPC) + ": " + dir +
                        " has " + std::to_string(free_bytes) + " bytes free, the pack needs about " +
                        std::to_string(wanted));
+  return wanted;
+}
+
+// The packed archive written to `temp`: every group of `source` copied as written.
+// `from` = the source's /generations.
+void write_packed(const std::string& temp, const std::string& path, const Archive& source,
+                  const h5::Group& from, const RunInfo& info, const PartSteps& step) {
+  step("create");
+  // Persistent free-space tracking: an older build that continues this archive edits it in
+  // place, and reuses the space of each replaced /checkpoint.
+  h5::PropertyList creation = h5::PropertyList::file_creation();
+  creation.persist_free_space();
+  h5::File file = h5::File::create(temp, &creation, path);
+  step("attributes");
+  write_run_info(file, info);
+  step("/config");
+  file.write_string_dataset("config", source.config_text(), Charset::utf8);
+  step("/stats");
+  write_stats(file, source.stats());
+  step("/generations");
+  const h5::Group to = file.create_group("generations");
+  // Object copies (links followed): every byte and attribute of a group as written, the digest
+  // included, so the integrity checks still see what the run wrote.
+  for (const std::int64_t g : source.generations())
+    from.copy_object(generation_group_name(g), to, generation_group_name(g));
+  if (const std::optional<Checkpoint> cp = source.checkpoint()) {
+    step("/checkpoint");
+    write_checkpoint(file, *cp);
+  }
+  step("flush");
+  file.flush();
+  step("close");
+  file.close();
 }
 
 }  // namespace
@@ -525,45 +675,36 @@ void finish_archive(const std::string& path, const RunInfo& info, const WriteSte
     const PartSteps step(steps, "pack");
     {
       const Archive source(path);
-      require_room_to_pack(path, source);
+      const std::uint64_t wanted = require_room_to_pack(path, source);
       RootContent c;
       c.info = source.info();
       require_generations_done(path, c, info);
       AtomicOutput out(path, Overwrite::replace);
-      {
-        step("create");
-        // Persistent free-space tracking: an older build that continues this archive edits it
-        // in place, and reuses the space of each replaced /checkpoint.
-        h5::PropertyList creation = h5::PropertyList::file_creation();
-        creation.persist_free_space();
-        h5::File file = h5::File::create(out.temp_path(), &creation, path);
-        step("attributes");
-        write_run_info(file, info);
-        step("/config");
-        file.write_string_dataset("config", source.config_text(), Charset::utf8);
-        step("/stats");
-        write_stats(file, source.stats());
-        step("/generations");
-        const h5::Group to = file.create_group("generations");
-        const h5::Group from = source.file_->open_group("generations");
-        // Object copies (links followed): every byte and attribute of a group as written,
-        // the digest included, so the integrity checks still see what the run wrote.
-        for (const std::int64_t g : source.generations())
-          from.copy_object(generation_group_name(g), to, generation_group_name(g));
-        if (const std::optional<Checkpoint> cp = source.checkpoint()) {
-          step("/checkpoint");
-          write_checkpoint(file, *cp);
-        }
-        step("flush");
-        file.flush();
-        step("close");
-        file.close();
+      // In a child process: libhdf5 1.10 crashed (SIGSEGV in H5Ocopy) when another process
+      // filled the disk during the copy (issue 29). A crash there costs the pack, not the run:
+      // the half-written temporary is removed, the archive stays as it was (root and segments).
+      const h5::Group from = source.file_->open_group("generations");
+      const std::string failure = run_in_child(
+          "the pack", [&] { write_packed(out.temp_path(), path, source, from, info, step); });
+      if (!failure.empty()) {
+        const std::string dir = directory_of(path);
+        const std::uint64_t free_bytes = free_bytes_in(dir);
+        throw ArchiveError(
+            path + ": not packed into one file: " + failure +
+            (free_bytes < wanted
+                 ? "; the disk filled during the pack (" + std::string(std::strerror(ENOSPC)) +
+                       ": " + dir + " has " + std::to_string(free_bytes) +
+                       " bytes free, the pack needs about " + std::to_string(wanted) + ")"
+                 : std::string()) +
+            "; the archive is kept as it was, readable as a root with its segments");
       }
       out.commit(step.commit_hook());
     }
     // The root is self-contained now: the segments are unreferenced (a kill here leaves them
     // for the next start to remove).
     step("remove segments");
+    std::error_code ec;
+    fs::remove(reserved_root_path(path), ec);  // a packed archive records no stop any more
     remove_unreferenced_segments(path);
   });
 }

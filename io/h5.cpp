@@ -787,6 +787,24 @@ File File::create(const std::string& path, const PropertyList* creation, const s
               w);
 }
 
+File File::create_in_memory(const std::string& label) {
+  silence_error_printing();
+  const Where w{label, "/"};
+  const Id access =
+      kChecksummedFormats
+          ? checksummed_format_access(w)
+          : Id(w.check(H5Pcreate(H5P_FILE_ACCESS), "create file access properties"), H5Pclose);
+  // Grown in steps of 64 kB; nothing is written to any file.
+  w.check_status(H5Pset_fapl_core(access.get(), std::size_t{64} << 10, false),
+                 "select the in-memory driver");
+  // The name only tells open files apart: never a file on disk.
+  const std::string name = label + " (in memory)";
+  return File(
+      Id(w.check(H5Fcreate(name.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, access.get()), "create file"),
+         H5Fclose),
+      w);
+}
+
 File File::open(const std::string& path, Access access, const std::string& label) {
   silence_error_printing();
   const Where w{label.empty() ? path : label, "/"};
@@ -817,6 +835,14 @@ bool File::is_hdf5(const std::string& path) {
 
 void File::flush() const {
   where_.check_status(H5Fflush(id(), H5F_SCOPE_GLOBAL), "flush file");
+}
+
+std::vector<std::uint8_t> File::image() const {
+  const ssize_t size = H5Fget_file_image(id(), nullptr, 0);
+  where_.check(size, "get the file image size");
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(size));
+  where_.check(H5Fget_file_image(id(), bytes.data(), bytes.size()), "get the file image");
+  return bytes;
 }
 
 void File::close() {

@@ -340,6 +340,9 @@ class File : public Group {
   // `label` = the file's name in error messages ("" = `path`; a temporary copy names its target).
   static File create(const std::string& path, const PropertyList* creation = nullptr,
                      const std::string& label = "");
+  // A file held in memory only (HDF5's core driver, no backing store), laid out as create()
+  // lays out a file on disk; image() gives its bytes. `label` names it in error messages.
+  static File create_in_memory(const std::string& label);
   enum class Access { read_only, read_write };
   // Throws naming the path when it is missing, unreadable or not HDF5.
   static File open(const std::string& path, Access access = Access::read_only,
@@ -348,6 +351,8 @@ class File : public Group {
   static bool is_hdf5(const std::string& path);
 
   void flush() const;
+  // The bytes of the file as they would be on disk now (flush() first).
+  std::vector<std::uint8_t> image() const;
   // Closes now and reports a failure (the destructor closes silently).
   void close();
 

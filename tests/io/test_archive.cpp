@@ -9,10 +9,13 @@
 #include <hdf5.h>
 #include <sys/file.h>
 #include <sys/mount.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cmath>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -179,7 +182,8 @@ TEST(Archive, FailedUpdateLeavesThePreviousFileIntact) {
   EXPECT_TRUE(bytes_of(p) == before);
   for (const auto& e : fs::recursive_directory_iterator(d.path)) {
     const std::string name = e.path().filename().string();
-    EXPECT_TRUE(name == "run.h5" || name == "run.h5.d" || name == "gen-000000.h5")
+    EXPECT_TRUE(name == "run.h5" || name == "run.h5.d" || name == "gen-000000.h5" ||
+                name == "reserved-root")
         << "left behind: " << e.path();
   }
 }
@@ -416,14 +420,21 @@ TEST(Archive, FitnessStatsUsePopulationSd) {
   EXPECT_EQ(s.sd, 1.0);
 }
 
+// A tmpfs of `size` mounted at d.path/small (root only): its path, or "" (errno says why).
+std::string mount_small_tmpfs(const TmpDir& d, const char* size) {
+  const std::string mnt = d.path + "/small";
+  fs::create_directory(mnt);
+  const std::string options = std::string("size=") + size;
+  return ::mount("tmpfs", mnt.c_str(), "tmpfs", 0, options.c_str()) == 0 ? mnt : "";
+}
+
 // A pack that the file system cannot take is refused before it writes anything (issue 29:
 // libhdf5 1.10 crashed in H5Ocopy when the disk filled during the copy): a real 1 MiB tmpfs
 // (root only; skipped elsewhere) left with less free space than the archive's files take.
 TEST(Archive, PackRefusedWithoutRoomAndArchiveKept) {
   TmpDir d;
-  const std::string mnt = d.path + "/small";
-  fs::create_directory(mnt);
-  if (::mount("tmpfs", mnt.c_str(), "tmpfs", 0, "size=1m") != 0)
+  const std::string mnt = mount_small_tmpfs(d, "1m");
+  if (mnt.empty())
     GTEST_SKIP() << "cannot mount a small tmpfs (" << std::strerror(errno) << "; needs root)";
   const test::LazyUnmount unmount{mnt};
   const std::string p = mnt + "/run.h5";
@@ -461,6 +472,173 @@ TEST(Archive, PackRefusedWithoutRoomAndArchiveKept) {
   EXPECT_EQ(content_digest(a), content);
   for (const auto& e : fs::directory_iterator(mnt))
     EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
+}
+
+// Fills the file system of `dir` with a file `dir`/filler until fewer than `leave` bytes are
+// free (ENOSPC ends it early): another process taking the space.
+void fill_disk(const std::string& dir, std::uint64_t leave) {
+  const int fd = ::open((dir + "/filler").c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  if (fd < 0) return;
+  const std::string block(4096, 'x');
+  while (fs::space(dir).available >= leave + block.size())
+    if (::write(fd, block.data(), block.size()) <= 0) break;
+  ::close(fd);
+}
+
+// A root with segments of three generations whose checkpoint takes `checkpoint_bytes`.
+void write_run_with_checkpoint(const std::string& p, RunInfo& info, std::size_t checkpoint_bytes) {
+  create_archive(p, info, "[run]\nseed = 3\n");
+  for (std::int64_t g = 0; g < 3; ++g) {
+    const GenerationRecord r = sample_record(g, 40, 3);
+    info.generations_done = g + 1;
+    std::vector<std::uint8_t> population(checkpoint_bytes);
+    for (std::size_t i = 0; i < population.size(); ++i)
+      population[i] = static_cast<std::uint8_t>(i * 7 + static_cast<std::size_t>(g));
+    append_generation(p, info, r, StatsRow{static_cast<double>(g), r.best, r.mean, r.sd, 2, 1.0},
+                      Checkpoint{g + 1, population});
+  }
+}
+
+// Issue 29: on a shared, full disk the stop's new root found no room beside the old one, and
+// the archive stayed `running` (4 of 31 packed full-disk scan sizes). The space reserved at
+// every root write takes it: on a disk with not one block free, the stop still records
+// `interrupted` with the longest stop reason, and the archive is otherwise unchanged.
+TEST(Archive, StopStateRecordedOnAFullDisk) {
+  TmpDir d;
+  const std::string mnt = mount_small_tmpfs(d, "2m");
+  if (mnt.empty())
+    GTEST_SKIP() << "cannot mount a small tmpfs (" << std::strerror(errno) << "; needs root)";
+  const test::LazyUnmount unmount{mnt};
+  const std::string p = mnt + "/run.h5";
+  RunInfo info = sample_info();
+  write_run_with_checkpoint(p, info, 200'000);  // a root of about 200 kB
+  std::uint64_t fitness = 0;
+  {
+    const Archive a(p);
+    fitness = fitness_digest(a);
+  }
+  fill_disk(mnt, 0);
+  ASSERT_LT(fs::space(mnt).available, 4096u);
+  info.state = "interrupted";
+  info.end_time = "2026-01-01T01:00:00Z";
+  info.stop_reason = std::string(static_cast<std::size_t>(ArchiveLimits::string_bytes), 'r');
+  update_run_info(p, info);
+  const Archive a(p);
+  EXPECT_EQ(a.info().state, "interrupted");
+  EXPECT_EQ(a.info().stop_reason, info.stop_reason);
+  EXPECT_EQ(a.info().generations_done, 3);
+  EXPECT_EQ(fitness_digest(a), fitness);
+  EXPECT_EQ(a.checkpoint()->population.size(), 200'000u);
+  for (const auto& e : fs::recursive_directory_iterator(mnt))
+    EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
+  // The reservation is used up; a state change that keeps the run going never takes it.
+  EXPECT_FALSE(fs::exists(mnt + "/run.h5.d/reserved-root"));
+}
+
+// The reserved space follows the root: it holds the root's size and a margin after every
+// root write, and goes with the segments when the archive is packed or removed.
+TEST(Archive, ReservedSpaceForTheStopFollowsTheRoot) {
+  TmpDir d;
+  const std::string p = d.path + "/run.h5";
+  const std::string reserve = d.path + "/run.h5.d/reserved-root";
+  RunInfo info = sample_info();
+  create_archive(p, info, "[run]\nseed = 3\n");
+  ASSERT_TRUE(fs::exists(reserve));
+  EXPECT_GE(fs::file_size(reserve), fs::file_size(p));
+  write_run_with_checkpoint(p, info, 100'000);
+  EXPECT_GE(fs::file_size(reserve), fs::file_size(p) + 16 * 1024);
+  // Allocated, not a hole: 512-byte blocks.
+  struct stat st {};
+  ASSERT_EQ(::stat(reserve.c_str(), &st), 0);
+  EXPECT_GE(static_cast<std::uint64_t>(st.st_blocks) * 512, fs::file_size(p));
+  EXPECT_EQ(remove_archive_debris(p), 0);  // kept for a running archive
+  EXPECT_TRUE(fs::exists(reserve));
+  finish_archive(p, info);
+  EXPECT_FALSE(fs::exists(d.path + "/run.h5.d"));
+}
+
+// Issue 29: another process filling the disk during the pack crashed libhdf5 (SIGSEGV in
+// H5Ocopy), and with it the run. The pack runs in a child process: a crash there (here made
+// by the step hook, in the pack's process) is an error naming the signal, the archive stays
+// as it was (root and segments, no temporary), and this process lives on.
+TEST(Archive, CrashWhilePackingKillsOnlyThePacksProcess) {
+  TmpDir d;
+  const std::string p = d.path + "/run.h5";
+  RunInfo info = sample_info();
+  write_three_generations(p, info);
+  const std::uint64_t content = content_digest(Archive(p));
+  const std::string root_bytes = bytes_of(p);
+  // In a child of the test too: before the fix the crash killed the process that packed.
+  const pid_t test_child = ::fork();
+  ASSERT_GE(test_child, 0);
+  if (test_child == 0) {
+    int code = 0;
+    try {
+      finish_archive(p, info, [](const std::string& step) {
+        if (step == "pack: /generations") ::raise(SIGSEGV);
+      });
+      code = 1;
+    } catch (const ArchiveError& e) {
+      const std::string m = e.what();
+      if (m.find("not packed into one file") == std::string::npos ||
+          m.find("signal 11") == std::string::npos)
+        code = 2;
+    }
+    ::_exit(code);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(test_child, &status, 0), test_child);
+  ASSERT_FALSE(WIFSIGNALED(status)) << "the packing process died of signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "1: packed, 2: the error does not name the crash";
+  EXPECT_EQ(bytes_of(p), root_bytes);
+  const Archive a(p);
+  EXPECT_FALSE(a.self_contained());
+  EXPECT_EQ(content_digest(a), content);
+  for (const auto& e : fs::recursive_directory_iterator(d.path))
+    EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
+}
+
+// The same with a real disk: another process fills the tmpfs after the free-space check, while
+// the generations are being copied, leaving 0 to 64 kB free. Whatever libhdf5 does then (an
+// error, or a crash of the pack's process), the pack fails cleanly and the archive is kept.
+TEST(Archive, DiskFilledDuringThePackKeepsTheArchive) {
+  TmpDir d;
+  const std::string mnt = mount_small_tmpfs(d, "4m");
+  if (mnt.empty())
+    GTEST_SKIP() << "cannot mount a small tmpfs (" << std::strerror(errno) << "; needs root)";
+  const test::LazyUnmount unmount{mnt};
+  const std::string p = mnt + "/run.h5";
+  RunInfo info = sample_info();
+  write_run_with_checkpoint(p, info, 100'000);
+  const std::uint64_t content = content_digest(Archive(p));
+  for (const std::uint64_t leave : std::initializer_list<std::uint64_t>{0, 4096, 16384, 65536}) {
+    SCOPED_TRACE("disk filled to " + std::to_string(leave) + " bytes free during the pack");
+    const pid_t test_child = ::fork();
+    ASSERT_GE(test_child, 0);
+    if (test_child == 0) {
+      int code = 0;
+      try {
+        finish_archive(p, info, [&](const std::string& step) {
+          if (step == "pack: /generations") fill_disk(mnt, leave);
+        });
+        code = 1;
+      } catch (const ArchiveError& e) {
+        if (std::string(e.what()).find("not packed into one file") == std::string::npos) code = 2;
+      }
+      ::_exit(code);
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(test_child, &status, 0), test_child);
+    EXPECT_FALSE(WIFSIGNALED(status)) << "the packing process died of signal " << WTERMSIG(status);
+    EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 0)
+        << "1: packed on a full disk, 2: another error";
+    fs::remove(mnt + "/filler");
+    const Archive a(p);
+    EXPECT_FALSE(a.self_contained());
+    EXPECT_EQ(content_digest(a), content);
+    for (const auto& e : fs::recursive_directory_iterator(mnt))
+      EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
+  }
 }
 
 // An archive another process holds an flock on (libhdf5's file locking of a writer, e.g.
