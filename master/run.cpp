@@ -10,7 +10,6 @@
 #include <ctime>
 #include <exception>
 #include <filesystem>
-#include <fstream>
 
 #include "common/config_identity.hpp"
 #include "common/safe_write.hpp"
@@ -146,50 +145,6 @@ std::size_t open_descriptors() {
 
 }  // namespace
 
-namespace {
-
-// The first number of the file at `path` (bytes), nullopt if unreadable or "max".
-std::optional<std::uint64_t> read_bytes_file(const std::string& path) {
-  std::ifstream in(path);
-  unsigned long long v = 0;
-  if (!(in >> v)) return std::nullopt;
-  return static_cast<std::uint64_t>(v);
-}
-
-// The cgroup's memory limit minus its usage, for the memory controller's path in
-// /proc/self/cgroup (v2: "0::/p", v1: "N:memory:/p"); nullopt when there is no limit.
-std::optional<std::uint64_t> cgroup_memory_left() {
-  std::ifstream in("/proc/self/cgroup");
-  std::string line;
-  // Limits at or above this are "no limit" (cgroup v1 writes one near 2^63).
-  constexpr std::uint64_t kUnlimited = std::uint64_t{1} << 60;
-  while (std::getline(in, line)) {
-    const std::size_t a = line.find(':'), b = line.find(':', a + 1);
-    if (a == std::string::npos || b == std::string::npos) continue;
-    const std::string controllers = line.substr(a + 1, b - a - 1), path = line.substr(b + 1);
-    std::optional<std::uint64_t> limit, used;
-    if (controllers.empty()) {
-      limit = read_bytes_file("/sys/fs/cgroup" + path + "/memory.max");
-      used = read_bytes_file("/sys/fs/cgroup" + path + "/memory.current");
-    } else if (controllers == "memory") {
-      for (const std::string& dir :
-           {"/sys/fs/cgroup/memory" + path, std::string("/sys/fs/cgroup/memory")}) {
-        limit = read_bytes_file(dir + "/memory.limit_in_bytes");
-        used = read_bytes_file(dir + "/memory.usage_in_bytes");
-        if (limit) break;
-      }
-    }
-    if (limit && *limit < kUnlimited) return *limit - std::min(*limit, used.value_or(0));
-  }
-  return std::nullopt;
-}
-
-std::string mebibytes(std::uint64_t bytes) {
-  return std::to_string((bytes + (std::uint64_t{1} << 19)) >> 20) + " MiB";
-}
-
-}  // namespace
-
 std::uint64_t estimate_run_memory(const Config& config) {
   const auto members = static_cast<std::uint64_t>(std::max<std::int64_t>(config.neat.pop_size, 0));
   std::uint64_t per_member = kBytesPerMember;
@@ -197,20 +152,6 @@ std::uint64_t estimate_run_memory(const Config& config) {
     per_member += kBytesPerLearningCandidate *
                   static_cast<std::uint64_t>(std::max<std::int64_t>(config.learning.population, 0));
   return kRunBaseBytes + members * per_member;
-}
-
-std::optional<AvailableMemory> available_memory() {
-  std::optional<AvailableMemory> best;
-  std::ifstream in("/proc/meminfo");
-  std::string key;
-  unsigned long long kb = 0;
-  std::string unit;
-  while (in >> key >> kb >> unit)
-    if (key == "MemAvailable:")
-      best = AvailableMemory{kb * 1024ULL, "MemAvailable in /proc/meminfo"};
-  if (const std::optional<std::uint64_t> left = cgroup_memory_left())
-    if (!best || *left < best->bytes) best = AvailableMemory{*left, "the cgroup's memory limit"};
-  return best;
 }
 
 std::string check_run_memory(const std::vector<const Config*>& configs,

@@ -111,6 +111,13 @@ struct SceneOptions {
   bool legend = false;
 };
 
+// The memory render_poses takes for a width x height image at `supersample` (clamped to 1-4):
+// per sample its depth, fragment list head, the floor's and the resolved colours and about one
+// fragment of the robot's faces (an estimate: the fragments scale with the area the robot
+// covers), and the image. `softevo render` checks it against the available memory before it
+// allocates (issue 29: 8192 x 8192 at supersample 4 ended in std::bad_alloc).
+std::uint64_t render_buffer_bytes(int width, int height, int supersample);
+
 // Renders one or more poses of the same body into a single image (several poses = overlaid
 // time-lapse). Throws std::invalid_argument when a pose does not match the body.
 Image render_poses(const Body& body, const std::vector<Pose>& poses, const Camera& camera,

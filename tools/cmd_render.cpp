@@ -16,6 +16,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/available_memory.hpp"
 #include "common/config.hpp"
 #include "common/robot.hpp"
 #include "common/safe_write.hpp"
@@ -117,6 +118,31 @@ int write_frame_sequence(const RenderArgs& args, const render::Clip& clip, View 
   return kExitOk;
 }
 
+// Refuses a picture whose buffers cannot fit in the memory left, before anything is simulated
+// or allocated (issue 29: 8192 x 8192 at supersample 4, 60 GB, ended in a bare
+// std::bad_alloc). One frame is rendered at a time; a strip keeps its panels and joins them.
+void check_render_memory(const RenderArgs& args, bool gif, bool strip,
+                         const std::optional<AvailableMemory>& available) {
+  if (!available) return;
+  // The sizes 0 stands for (render/compose.hpp); the overlay's default is 960 x 720.
+  const int width = args.width > 0 ? args.width : (gif ? 640 : 960);
+  const int height = args.height > 0 ? args.height : (gif ? 360 : 720);
+  const int panels = strip ? args.timelapse : 1;
+  const std::uint64_t image_bytes =
+      static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height) * 3;
+  const std::uint64_t needed =
+      render::render_buffer_bytes(width, height, args.supersample) +
+      (panels > 1 ? 2 * image_bytes * static_cast<std::uint64_t>(panels) : 0);
+  if (needed <= available->bytes) return;
+  throw std::invalid_argument(
+      "render: a " + std::to_string(width) + "x" + std::to_string(height) + " image" +
+      (panels > 1 ? " per panel (" + std::to_string(panels) + " panels)" : std::string()) +
+      " at --supersample " + std::to_string(args.supersample) + " needs about " +
+      mebibytes(needed) + " of memory, but " + mebibytes(available->bytes) + " are available (" +
+      available->where + "): lower --width and --height, or --supersample (memory grows with " +
+      "its square)" + (panels > 1 ? ", or --timelapse" : ""));
+}
+
 int run_render(const RenderArgs& args) {
   const View view = render::parse_view(args.view);
   const std::string ext = lower(fs::path(args.output).extension().string());
@@ -144,6 +170,9 @@ int run_render(const RenderArgs& args) {
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("render: --") + e.what());
   }
+
+  check_render_memory(args, gif, args.timelapse > 0 && timelapse.layout == render::Layout::strip,
+                      available_memory());
 
   // How much simulated time the picture needs; none = the rest pose is enough.
   MotionRequest request;
@@ -295,7 +324,8 @@ void register_render(CLI::App& app, int& exit_code) {
                   "target direction [deg, counter-clockwise]: directed task simulated towards "
                   "it, red target line in top/iso views")
       ->check(finite_in(-180.0, 180.0));
-  // Images are held in memory: 8192 x 8192 at supersample 4 is 2.4 GB of pixels.
+  // Images are held in memory: 8192 x 8192 at supersample 4 takes about 60 GB, checked
+  // against the available memory before anything is allocated (check_render_memory).
   // Below 32 pixels nothing is recognisable.
   cmd->add_option("--width", args->width,
                   "image width [pixel] (32-8192; strip: per panel; default 960, GIF 640)")

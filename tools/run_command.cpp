@@ -187,7 +187,7 @@ namespace {
 // The memory estimate of a job before any run is prepared (issue 29: a population of 10^6
 // filled gigabytes before generation 0): refused beyond the machine's memory, warned near it.
 void check_job_memory(const std::vector<const Config*>& configs) {
-  const std::string warning = master::check_run_memory(configs, master::available_memory());
+  const std::string warning = master::check_run_memory(configs, available_memory());
   if (!warning.empty()) std::fprintf(stderr, "warning: %s\n", warning.c_str());
 }
 

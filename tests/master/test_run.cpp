@@ -629,6 +629,31 @@ TEST(RunMemory, EstimateRefusesBeyondAndWarnsNearTheAvailableMemory) {
   EXPECT_THROW(check_run_memory(ten, AvailableMemory{million * 5, "test"}), StartupError);
 }
 
+// The learning term of the estimate covers what learning runs take (issue 29: it was 2 KiB per
+// candidate, unmeasured). Peak RSS of `softevo evolve -j 1` with 100 members, one generation
+// and one learning iteration (master/run.hpp), at 4, 16 and 64 candidates: the estimate is
+// above every measured peak, and grows per candidate at least as fast as they did.
+TEST(RunMemory, LearningTermCoversTheMeasuredPeaks) {
+  Config c = small_config();
+  c.neat.pop_size = 100;
+  c.learning.method = LearningMethod::es;
+  struct Measured {
+    std::int64_t candidates;
+    std::uint64_t peak_kib;
+  };
+  for (const Measured m : {Measured{4, 28824}, Measured{16, 36684}, Measured{64, 66192},
+                           Measured{4, 29968}, Measured{16, 39184}}) {
+    c.learning.population = m.candidates;
+    EXPECT_GE(estimate_run_memory(c), m.peak_kib * 1024) << m.candidates << " candidates";
+  }
+  // gait-closed-learn, 4 -> 16 candidates: 7.7 KiB more per candidate per member.
+  const std::uint64_t closed_slope = (39184 - 29968) * 1024 / (100 * 12);
+  c.learning.population = 4;
+  const std::uint64_t at4 = estimate_run_memory(c);
+  c.learning.population = 16;
+  EXPECT_GE((estimate_run_memory(c) - at4) / (100 * 12), closed_slope);
+}
+
 // --resume of a complete archive on read-only storage reports it complete (exit 0) without
 // writing or locking anything; one that would need a write fails naming the reason (issue 29:
 // it exited 2 where docs/archive.md says 0). A real read-only tmpfs: root only, skipped

@@ -268,6 +268,31 @@ TEST_F(CmdRender, NumberOptionsOutOfRangeAreRefusedBeforeAnything) {
   }
 }
 
+// Issue 29: a picture whose buffers exceed the memory left ended in a bare std::bad_alloc. It is
+// refused before anything is simulated or allocated, naming the options to lower: under an
+// address-space limit of 2 GB, 8192 x 8192 at supersample 4 (about 60 GB), 4096 x 4096 at 2
+// (3.8 GB), and a strip of 64 panels of 2048 x 2048 at 2 (2.5 GB); 1024 x 1024 fits.
+TEST_F(CmdRender, PictureBeyondTheAvailableMemoryIsRefusedBeforeAnything) {
+  const std::string robot = write_robot();
+  const std::string out = (dir_ / "big.png").string();
+  const std::string render =
+      "ulimit -v 2000000 && " + softevo_binary() + " render " + robot + " -o " + out + " --static ";
+  for (const char* big :
+       {"--width 8192 --height 8192 --supersample 4", "--width 4096 --height 4096 --supersample 2",
+        "--width 2048 --height 2048 --supersample 2 --timelapse 64"}) {
+    const auto r = test::run_command("sh -c '" + render + big + "'");
+    EXPECT_EQ(r.code, 2) << big << ": " << r.output;
+    for (const char* named : {"needs about", "ulimit -v", "--width", "--supersample"})
+      EXPECT_NE(r.output.find(named), std::string::npos) << big << ": " << named << r.output;
+    EXPECT_EQ(r.output.find("bad_alloc"), std::string::npos) << big << ": " << r.output;
+    EXPECT_FALSE(fs::exists(out)) << big;
+  }
+  const auto fits =
+      test::run_command("sh -c '" + render + "--width 1024 --height 1024 --supersample 2'");
+  EXPECT_EQ(fits.code, 0) << fits.output;
+  EXPECT_TRUE(fs::exists(out));
+}
+
 // Issue 22: choices and ranges are CLI11 validators (or, for what needs the motion, checks
 // right after it is known); each names the option, nothing is written.
 TEST_F(CmdRender, OutOfRangeChoicesAndMotionTimesAreRefused) {
