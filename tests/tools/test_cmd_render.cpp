@@ -15,6 +15,7 @@
 #include "render/render.hpp"
 
 #include "tests/build_tree.hpp"
+#include "tests/sanitizers.hpp"
 
 namespace softevo {
 namespace {
@@ -273,6 +274,9 @@ TEST_F(CmdRender, NumberOptionsOutOfRangeAreRefusedBeforeAnything) {
 // address-space limit of 2 GB, 8192 x 8192 at supersample 4 (about 60 GB), 4096 x 4096 at 2
 // (3.8 GB), and a strip of 64 panels of 2048 x 2048 at 2 (2.5 GB); 1024 x 1024 fits.
 TEST_F(CmdRender, PictureBeyondTheAvailableMemoryIsRefusedBeforeAnything) {
+  if (SOFTEVO_TEST_ASAN)
+    GTEST_SKIP() << "an AddressSanitizer binary cannot start under ulimit -v (its shadow memory "
+                    "needs an unlimited address space)";
   const std::string robot = write_robot();
   const std::string out = (dir_ / "big.png").string();
   const std::string render =
