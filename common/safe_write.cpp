@@ -40,17 +40,21 @@ std::string temporary_prefix(const std::string& path) {
 // Both write(2) loops and fsync report ENOSPC and EIO with their real cause, which the user needs
 // to see ("No space left on device", not a generic "write failed").
 void write_all(int fd, std::string_view bytes, const std::string& temp) {
-  while (!bytes.empty()) {
-    const ssize_t n = ::write(fd, bytes.data(), bytes.size());
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      fail(temp, "write failed: " + errno_text(errno));
-    }
-    bytes.remove_prefix(static_cast<std::size_t>(n));
-  }
+  if (const int error = write_fully(fd, bytes)) fail(temp, "write failed: " + errno_text(error));
 }
 
 }  // namespace
+
+int write_fully(int fd, std::string_view bytes) {
+  while (!bytes.empty()) {
+    const ssize_t n = ::write(fd, bytes.data(), bytes.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) return errno;
+    if (n == 0) return ENOSPC;
+    bytes.remove_prefix(static_cast<std::size_t>(n));
+  }
+  return 0;
+}
 
 std::string directory_of(const std::string& path) {
   const std::filesystem::path parent = std::filesystem::path(path).parent_path();

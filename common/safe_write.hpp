@@ -35,6 +35,11 @@ void check_output_target(const std::string& path, Overwrite overwrite);
 // The directory of `path` ("." when it has none).
 std::string directory_of(const std::string& path);
 
+// Writes all of `bytes` to `fd` from its current offset (write(2) again after EINTR and after a
+// short write). Returns 0, or the errno of the write that failed (ENOSPC for a write that took
+// nothing), so each caller reports it in its own words.
+int write_fully(int fd, std::string_view bytes);
+
 // Fault injection for tests (may be empty): called with "fsync", "rename" and "fsync directory"
 // before those steps of commit(); a hook that throws makes that step fail.
 using CommitStepHook = std::function<void(const std::string& step)>;

@@ -350,14 +350,8 @@ void write_root_into_reserve(const std::string& path, const RootContent& c,
   step("write");
   const int fd = ::open(reserve.c_str(), O_WRONLY | O_NOFOLLOW | O_CLOEXEC);
   if (fd < 0) throw ArchiveError(reserve + ": cannot open: " + std::strerror(errno));
-  int error = 0;
-  for (std::size_t done = 0; done < image.size() && error == 0;) {
-    const ssize_t put =
-        ::pwrite(fd, image.data() + done, image.size() - done, static_cast<off_t>(done));
-    if (put < 0 && errno != EINTR) error = errno;
-    if (put == 0) error = ENOSPC;
-    if (put > 0) done += static_cast<std::size_t>(put);
-  }
+  int error = write_fully(
+      fd, {reinterpret_cast<const char*>(image.data()), image.size()});  // from offset 0
   if (error == 0 && ::ftruncate(fd, static_cast<off_t>(image.size())) != 0) error = errno;
   ::close(fd);
   if (error != 0)
@@ -412,12 +406,9 @@ void copy_file_contents(const std::string& from, const std::string& to) {
     if (got < 0 && errno == EINTR) continue;
     if (got < 0) fail("read");
     if (got == 0) break;
-    for (ssize_t done = 0; done < got;) {
-      const ssize_t put =
-          ::write(out.fd, buffer.data() + done, static_cast<std::size_t>(got - done));
-      if (put < 0 && errno == EINTR) continue;
-      if (put < 0) fail("write");
-      done += put;
+    if (const int error = write_fully(out.fd, {buffer.data(), static_cast<std::size_t>(got)})) {
+      errno = error;
+      fail("write");
     }
   }
   if (::close(std::exchange(out.fd, -1)) != 0) fail("close");

@@ -12,6 +12,8 @@
 #include <exception>
 #include <string>
 
+#include "common/safe_write.hpp"
+
 namespace softevo::io {
 
 void restore_default_crash_handlers() {
@@ -56,12 +58,7 @@ std::string run_in_child(const std::string& what, const std::function<void()>& b
       error = "unknown error";
     }
     if (error.empty()) error = "failed";
-    for (std::size_t done = 0; done < error.size();) {
-      const ssize_t put = ::write(message_pipe[1], error.data() + done, error.size() - done);
-      if (put < 0 && errno == EINTR) continue;
-      if (put <= 0) break;
-      done += static_cast<std::size_t>(put);
-    }
+    write_fully(message_pipe[1], error);  // a lost message: the parent reports the exit status
     ::_exit(1);
   }
   ::close(message_pipe[1]);
