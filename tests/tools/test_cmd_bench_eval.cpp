@@ -113,6 +113,19 @@ TEST_F(CmdBenchEval, BaselineComparesTwoBuildsRobotByRobotAndRecordsCsvRows) {
   EXPECT_EQ(rows, 2);
 }
 
+// --only narrows the gait robots; a file named by --with is taken whatever --only says.
+TEST_F(CmdBenchEval, WithAddsItsRobotsBesideOnly) {
+  const auto r = run_command(binary("softevo") + " bench eval '" + dir_.string() +
+                             "' --only no-such-robot --with b-directed --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output.substr(r.output.find('{')));
+  ASSERT_EQ(j["per_robot"].size(), 1u) << r.output;
+  EXPECT_EQ(j["per_robot"][0]["name"], "b-directed");
+  const auto none =
+      run_command(binary("softevo") + " bench eval '" + dir_.string() + "' --only no-such-robot");
+  EXPECT_NE(none.code, 0) << "nothing selected: " << none.output;
+}
+
 TEST_F(CmdBenchEval, MissingBaselineIsAnError) {
   const auto r = run_command(binary("softevo") + " bench eval '" + dir_.string() +
                              "' --baseline '" + (dir_ / "no-such-softevo").string() + "'");
