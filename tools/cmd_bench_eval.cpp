@@ -32,6 +32,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -156,7 +157,8 @@ int run_bench_ab(const BenchEvalArgs& a, const std::vector<ChampionRow>& rows) {
                a.baseline.c_str(), base_commit.c_str(), kGitCommit, rows.size(), a.runs);
   struct Row {
     std::string name;
-    ProcessEval base, ours;  // fastest run of each build
+    ProcessEval base, ours;                     // fastest run of each build
+    double base_slowest = 0, ours_slowest = 0;  // CPU seconds of each build's slowest run
   };
   std::vector<Row> out;
   for (const ChampionRow& r : rows) {
@@ -175,6 +177,8 @@ int run_bench_ab(const BenchEvalArgs& a, const std::vector<ChampionRow>& rows) {
                                    std::to_string(first.fitness) + " (not the same bits)");
       if (run == 0 || e[0].cpu_seconds < row.base.cpu_seconds) row.base = e[0];
       if (run == 0 || e[1].cpu_seconds < row.ours.cpu_seconds) row.ours = e[1];
+      row.base_slowest = std::max(row.base_slowest, e[0].cpu_seconds);
+      row.ours_slowest = std::max(row.ours_slowest, e[1].cpu_seconds);
     }
     std::fprintf(stderr, "  %-16s baseline %.2f s, this build %.2f s CPU (%.2fx)\n",
                  row.name.c_str(), row.base.cpu_seconds, row.ours.cpu_seconds,
@@ -188,6 +192,17 @@ int run_bench_ab(const BenchEvalArgs& a, const std::vector<ChampionRow>& rows) {
     if (ratio[i] < ratio[worst]) worst = i;
   }
   const double med = validation::median(ratio);
+  // With several runs, how much one build's runs of one robot differ (slowest / fastest - 1):
+  // on a shared machine the same binary varies by up to 20% (docs/scaling.md), and a speed-up
+  // within this spread says nothing.
+  std::vector<double> spread;
+  if (a.runs > 1)
+    for (const Row& r : out)
+      for (const auto& [fastest, slowest] : {std::pair{r.base.cpu_seconds, r.base_slowest},
+                                             std::pair{r.ours.cpu_seconds, r.ours_slowest}})
+        if (fastest > 0) spread.push_back(slowest / fastest - 1.0);
+  const double spread_median = spread.empty() ? 0.0 : validation::median(spread);
+  const double spread_max = spread.empty() ? 0.0 : *std::max_element(spread.begin(), spread.end());
   const std::string cpu = cpu_description();
   if (!a.csv.empty()) {
     const bool fresh = !std::filesystem::exists(a.csv) || std::filesystem::file_size(a.csv) == 0;
@@ -235,6 +250,10 @@ int run_bench_ab(const BenchEvalArgs& a, const std::vector<ChampionRow>& rows) {
     j["median_speedup"] = med;
     j["worst_robot"] = out[worst].name;
     j["worst_speedup"] = ratio[worst];
+    if (!spread.empty()) {
+      j["run_spread_median"] = spread_median;
+      j["run_spread_max"] = spread_max;
+    }
     std::printf("%s\n", j.dump(1).c_str());
     return kExitOk;
   }
@@ -249,6 +268,11 @@ int run_bench_ab(const BenchEvalArgs& a, const std::vector<ChampionRow>& rows) {
   std::printf(
       "\nmedian speed-up %.2fx; worst robot %s %.2fx (CPU seconds, baseline / this build)\n", med,
       out[worst].name.c_str(), ratio[worst]);
+  if (!spread.empty())
+    std::printf(
+        "run-to-run spread of one build on one robot (slowest / fastest run - 1): median %.1f%%, "
+        "largest %.1f%%; a speed-up within it is noise\n",
+        100.0 * spread_median, 100.0 * spread_max);
   return kExitOk;
 }
 

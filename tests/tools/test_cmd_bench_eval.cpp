@@ -98,6 +98,11 @@ TEST_F(CmdBenchEval, BaselineComparesTwoBuildsRobotByRobotAndRecordsCsvRows) {
     EXPECT_EQ(row["status"], "ok");
   }
   EXPECT_EQ(j["baseline_commit"], j["commit"]);
+  // two runs per build: how much each build's own runs differ, the noise to judge a speed-up by
+  const double spread_median = j["run_spread_median"].get<double>();
+  const double spread_max = j["run_spread_max"].get<double>();
+  EXPECT_GE(spread_median, 0.0);
+  EXPECT_GE(spread_max, spread_median);
   EXPECT_FALSE(j["cpu"].get<std::string>().empty());
   const std::string worst = j["worst_robot"];
   EXPECT_TRUE(worst == "a-gait" || worst == "b-directed") << worst;
