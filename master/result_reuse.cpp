@@ -52,9 +52,21 @@ const ReusableResult* ResultMemory::find(std::span<const std::uint8_t> genome) c
   return it == by_genome_.end() ? nullptr : &it->second;
 }
 
+ReuseScope reuse_scope(TerrainResample resample) {
+  switch (resample) {
+    case TerrainResample::per_run:
+      return {true, true};
+    case TerrainResample::per_generation:
+      return {false, true};
+    case TerrainResample::per_evaluation:
+      return {false, false};
+  }
+  return {false, false};
+}
+
 ReusePlan plan_reuse(const std::vector<std::int64_t>& ids,
                      const std::vector<std::vector<std::uint8_t>>& genomes,
-                     const ResultMemory* memory) {
+                     const ResultMemory* memory, ReuseScope scope) {
   if (ids.size() != genomes.size())
     throw std::invalid_argument("plan_reuse: " + std::to_string(ids.size()) + " ids for " +
                                 std::to_string(genomes.size()) + " genomes");
@@ -73,12 +85,14 @@ ReusePlan plan_reuse(const std::vector<std::int64_t>& ids,
   std::unordered_map<std::string, std::size_t> first_of;  // genome bytes -> evaluated member
   for (std::size_t m : by_id) {
     ResultSource& s = plan.source[m];
-    if (const ReusableResult* earlier = memory->find(genomes[m])) {
+    const ReusableResult* earlier = scope.earlier_generations ? memory->find(genomes[m]) : nullptr;
+    if (earlier != nullptr) {
       s.kind = ResultSource::Kind::earlier_generation;
       s.earlier = earlier;
       s.origin_id = earlier->origin_id;
       continue;
     }
+    if (!scope.same_generation) continue;
     const auto [it, fresh] = first_of.emplace(key_of(genomes[m]), m);
     if (!fresh) {
       s.kind = ResultSource::Kind::same_generation;

@@ -19,6 +19,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "common/config.hpp"
 #include "common/eval_types.hpp"
 #include "io/archive.hpp"
 
@@ -71,11 +72,22 @@ struct ReusePlan {
   std::size_t reused() const { return source.size() - evaluate.size(); }
 };
 
+// Which equal genomes may share a result. An evaluation is a function of the genome bytes only
+// where its ground is: a ground resampled per generation (docs/model.md §2.8a "Seeds and
+// resampling") differs from the previous generation's, so an elite is evaluated again on the
+// new one; a ground per evaluation differs between any two genome ids, so no two members share
+// a result.
+struct ReuseScope {
+  bool earlier_generations = true;  // a genome of the remembered generation
+  bool same_generation = true;      // an equal genome with a lower id in this generation
+};
+ReuseScope reuse_scope(TerrainResample resample);
+
 // The plan of one generation: `ids` and `genomes` (encoded) in member order. Of several members
 // with equal bytes that `memory` does not know, the one with the lowest id is evaluated and the
-// others reuse it. `memory` = nullptr: every member is evaluated.
+// others reuse it. `memory` = nullptr: every member is evaluated. `scope` limits both kinds.
 ReusePlan plan_reuse(const std::vector<std::int64_t>& ids,
                      const std::vector<std::vector<std::uint8_t>>& genomes,
-                     const ResultMemory* memory);
+                     const ResultMemory* memory, ReuseScope scope = {});
 
 }  // namespace softevo::master

@@ -444,8 +444,12 @@ GenerationScheduler& RunLoop::begin_generation() {
     // A learned result is not a function of the genome alone when it is learned again (a
     // Lamarckian elite would learn on from its learned controller): with learning, results are
     // always reused (docs/model.md §8.11).
-    const bool reuse = run_.options.reuse_results || config.learning.method != LearningMethod::none;
-    plan_ = plan_reuse(ids, encoded_, reuse ? &run_.memory : nullptr);
+    // Without learning, results are reused only as far as the ground allows (reuse_scope); a
+    // learning run keeps its elites' learned results whatever the ground (docs/model.md §8.11).
+    const bool learns = config.learning.method != LearningMethod::none;
+    const bool reuse = run_.options.reuse_results || learns;
+    plan_ = plan_reuse(ids, encoded_, reuse ? &run_.memory : nullptr,
+                       learns ? ReuseScope{} : reuse_scope(config.terrain.resample));
     std::vector<std::int64_t> evaluated_ids;
     costs_.clear();
     for (std::size_t m : plan_.evaluate) {

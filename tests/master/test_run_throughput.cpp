@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <string>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 #include "io/archive.hpp"
@@ -106,6 +107,48 @@ TEST(RunThroughput, ReusedRowsAreMarkedAndTheDigestsStayAsTheyWere) {
   // The archive without reuse marks nothing.
   for (const std::vector<std::int64_t>& column : reused_columns(all))
     for (std::int64_t f : column) EXPECT_EQ(f, io::kNotReused);
+}
+
+// With a ground drawn per generation an evaluation depends on the generation too (docs/model.md
+// §2.8a "Seeds and resampling"): the stand-in evaluator here adds the generation to the fitness.
+// A carried-over elite is evaluated again on the new ground, so the run with reuse gives the
+// digests of the run that evaluates everything, and no row reuses an earlier generation's.
+struct PerGenerationGroundEvaluator {
+  EvalResult operator()(const EvalRequest& request) const {
+    EvalResult r = fake_evaluation(request);
+    r.fitness += static_cast<double>(request.generation);
+    for (UnitFitness& u : r.components) {
+      u.fitness = r.fitness;
+      std::fill(u.values.begin(), u.values.end(), r.fitness);
+    }
+    return r;
+  }
+};
+
+TEST(RunThroughput, AGroundDrawnPerGenerationIsNeverReusedAcrossGenerations) {
+  const test::TmpDir dir;
+  Config config = throughput_config();
+  config.terrain.kind = GroundKind::heightfield;
+  config.terrain.resample = TerrainResample::per_generation;
+  const std::string all = dir.file("all.h5"), reused = dir.file("reused.h5");
+  for (const auto& [out, reuse] : {std::pair{all, false}, std::pair{reused, true}}) {
+    PreparedRun run = prepare_run(config, options_for(out, reuse, true), 1);
+    LocalExecutor executor(PerGenerationGroundEvaluator{});
+    ProgressReporter progress = ProgressReporter::silent();
+    ASSERT_EQ(execute_run(run, executor, progress), RunOutcome::complete);
+  }
+  EXPECT_EQ(fitness_digest_of(reused), fitness_digest_of(all));
+  EXPECT_EQ(content_digest_of(reused), content_digest_of(all));
+  const Archive a(reused);
+  for (std::int64_t g : a.generations()) {
+    const GenerationRecord r = a.generation(g);
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      if (r.reused_from[i] == io::kNotReused) continue;
+      EXPECT_NE(std::find(r.id.begin(), r.id.end(), r.reused_from[i]), r.id.end())
+          << "generation " << g << " id " << r.id[i] << " reuses " << r.reused_from[i]
+          << ", a row of an earlier generation and its ground";
+    }
+  }
 }
 
 TEST(RunThroughput, TheHandOutOrderChangesNoBit) {
