@@ -52,8 +52,9 @@ const ReusableResult* ResultMemory::find(std::span<const std::uint8_t> genome) c
   return it == by_genome_.end() ? nullptr : &it->second;
 }
 
-ReuseScope reuse_scope(TerrainResample resample) {
-  switch (resample) {
+ReuseScope reuse_scope(const TerrainConfig& terrain) {
+  if (terrain.kind == GroundKind::flat) return {true, true};
+  switch (terrain.resample) {
     case TerrainResample::per_run:
       return {true, true};
     case TerrainResample::per_generation:

@@ -76,12 +76,12 @@ struct ReusePlan {
 // where its ground is: a ground resampled per generation (docs/model.md §2.8a "Seeds and
 // resampling") differs from the previous generation's, so an elite is evaluated again on the
 // new one; a ground per evaluation differs between any two genome ids, so no two members share
-// a result.
+// a result. On flat ground nothing is drawn, whatever `resample` says.
 struct ReuseScope {
   bool earlier_generations = true;  // a genome of the remembered generation
   bool same_generation = true;      // an equal genome with a lower id in this generation
 };
-ReuseScope reuse_scope(TerrainResample resample);
+ReuseScope reuse_scope(const TerrainConfig& terrain);
 
 // The plan of one generation: `ids` and `genomes` (encoded) in member order. Of several members
 // with equal bytes that `memory` does not know, the one with the lowest id is evaluated and the

@@ -449,7 +449,7 @@ GenerationScheduler& RunLoop::begin_generation() {
     const bool learns = config.learning.method != LearningMethod::none;
     const bool reuse = run_.options.reuse_results || learns;
     plan_ = plan_reuse(ids, encoded_, reuse ? &run_.memory : nullptr,
-                       learns ? ReuseScope{} : reuse_scope(config.terrain.resample));
+                       learns ? ReuseScope{} : reuse_scope(config.terrain));
     std::vector<std::int64_t> evaluated_ids;
     costs_.clear();
     for (std::size_t m : plan_.evaluate) {

@@ -96,20 +96,29 @@ TEST(ResultReuse, TheGroundLimitsWhatIsShared) {
   memory.remember(generation({EvalStatus::ok, EvalStatus::ok, EvalStatus::ok}));
   const std::vector<std::int64_t> ids = {20, 22, 21};
   const std::vector<Bytes> genomes = {Bytes{1, 2}, Bytes{9}, Bytes{9}};
-  const ReusePlan per_run =
-      plan_reuse(ids, genomes, &memory, reuse_scope(TerrainResample::per_run));
+  TerrainConfig ground;
+  ground.kind = GroundKind::heightfield;
+  auto scope = [&](TerrainResample resample) {
+    ground.resample = resample;
+    return reuse_scope(ground);
+  };
+  const ReusePlan per_run = plan_reuse(ids, genomes, &memory, scope(TerrainResample::per_run));
   EXPECT_EQ(per_run.evaluate, (std::vector<std::size_t>{2}));
   const ReusePlan per_generation =
-      plan_reuse(ids, genomes, &memory, reuse_scope(TerrainResample::per_generation));
+      plan_reuse(ids, genomes, &memory, scope(TerrainResample::per_generation));
   EXPECT_EQ(per_generation.evaluate, (std::vector<std::size_t>{0, 2}));
   EXPECT_EQ(per_generation.source[0].kind, ResultSource::Kind::evaluated);
   EXPECT_EQ(per_generation.source[0].origin_id, io::kNotReused);
   EXPECT_EQ(per_generation.source[1].kind, ResultSource::Kind::same_generation);
   EXPECT_EQ(per_generation.source[1].origin_id, 21);
   const ReusePlan per_evaluation =
-      plan_reuse(ids, genomes, &memory, reuse_scope(TerrainResample::per_evaluation));
+      plan_reuse(ids, genomes, &memory, scope(TerrainResample::per_evaluation));
   EXPECT_EQ(per_evaluation.evaluate, (std::vector<std::size_t>{0, 1, 2}));
   EXPECT_EQ(per_evaluation.reused(), 0u);
+  // Flat ground draws nothing: all is shared whatever resample says.
+  ground.kind = GroundKind::flat;
+  EXPECT_EQ(plan_reuse(ids, genomes, &memory, scope(TerrainResample::per_evaluation)).evaluate,
+            (std::vector<std::size_t>{2}));
 }
 
 }  // namespace
