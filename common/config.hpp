@@ -160,6 +160,18 @@ struct TerrainConfig {
   // How often the ground is drawn anew: once per run, per generation (every genome of a
   // generation on the same ground), or per evaluation (genome and direction too).
   TerrainResample resample = TerrainResample::per_run;
+
+  // The ids an evaluation's ground is drawn from (docs/model.md §2.8a "Seeds and resampling"):
+  // none on flat ground; the generation unless resample = per_run; the genome id and work unit
+  // too with per_evaluation. The worker seeds the ground by these (worker::terrain_params) and
+  // the master shares a result only between evaluations they do not tell apart
+  // (master::reuse_scope).
+  bool ground_varies_with_generation() const {
+    return kind != GroundKind::flat && resample != TerrainResample::per_run;
+  }
+  bool ground_varies_with_evaluation() const {
+    return kind != GroundKind::flat && resample == TerrainResample::per_evaluation;
+  }
 };
 
 // Median rest volume of the 57 chambers of the 40 thesis champions [m^3] (about 133 cm^3;

@@ -53,16 +53,8 @@ const ReusableResult* ResultMemory::find(std::span<const std::uint8_t> genome) c
 }
 
 ReuseScope reuse_scope(const TerrainConfig& terrain) {
-  if (terrain.kind == GroundKind::flat) return {true, true};
-  switch (terrain.resample) {
-    case TerrainResample::per_run:
-      return {true, true};
-    case TerrainResample::per_generation:
-      return {false, true};
-    case TerrainResample::per_evaluation:
-      return {false, false};
-  }
-  return {false, false};
+  return {.earlier_generations = !terrain.ground_varies_with_generation(),
+          .same_generation = !terrain.ground_varies_with_evaluation()};
 }
 
 ReusePlan plan_reuse(const std::vector<std::int64_t>& ids,

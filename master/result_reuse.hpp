@@ -73,10 +73,9 @@ struct ReusePlan {
 };
 
 // Which equal genomes may share a result. An evaluation is a function of the genome bytes only
-// where its ground is: a ground resampled per generation (docs/model.md §2.8a "Seeds and
-// resampling") differs from the previous generation's, so an elite is evaluated again on the
-// new one; a ground per evaluation differs between any two genome ids, so no two members share
-// a result. On flat ground nothing is drawn, whatever `resample` says.
+// where its ground is (TerrainConfig::ground_varies_with_*): a ground resampled per generation
+// differs from the previous generation's, so an elite is evaluated again on the new one; a
+// ground per evaluation differs between any two genome ids, so no two members share a result.
 struct ReuseScope {
   bool earlier_generations = true;  // a genome of the remembered generation
   bool same_generation = true;      // an equal genome with a lower id in this generation

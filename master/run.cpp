@@ -441,11 +441,10 @@ GenerationScheduler& RunLoop::begin_generation() {
       encoded_[i] = evo::encode_genome(members[i].genome);
       ids[i] = members[i].id;
     }
-    // A learned result is not a function of the genome alone when it is learned again (a
-    // Lamarckian elite would learn on from its learned controller): with learning, results are
-    // always reused (docs/model.md §8.11).
-    // Without learning, results are reused only as far as the ground allows (reuse_scope); a
-    // learning run keeps its elites' learned results whatever the ground (docs/model.md §8.11).
+    // Results are reused only as far as the ground allows (reuse_scope). A learned result is not
+    // a function of the genome alone when it is learned again (a Lamarckian elite would learn on
+    // from its learned controller): with learning, results are always reused, whatever the
+    // ground (docs/model.md §8.11).
     const bool learns = config.learning.method != LearningMethod::none;
     const bool reuse = run_.options.reuse_results || learns;
     plan_ = plan_reuse(ids, encoded_, reuse ? &run_.memory : nullptr,

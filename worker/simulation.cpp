@@ -51,8 +51,8 @@ physics::TerrainParams terrain_params(const Config& config, const EvaluationIds&
   if (p.kind == physics::TerrainKind::flat) return p;
   p.shape = tc.shape;
   // -1 = "not part of this ground's identity" (derive_seed's convention for a missing id).
-  const bool per_generation = tc.resample != TerrainResample::per_run;
-  const bool per_evaluation = tc.resample == TerrainResample::per_evaluation;
+  const bool per_generation = tc.ground_varies_with_generation();
+  const bool per_evaluation = tc.ground_varies_with_evaluation();
   std::uint64_t base = static_cast<std::uint64_t>(tc.seed);
   base = splitmix64(base) ^ static_cast<std::uint64_t>(config.run.seed);
   p.seed = derive_seed(base, per_generation ? ids.generation : -1,
