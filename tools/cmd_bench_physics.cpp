@@ -2,9 +2,15 @@
 // speed (issue 3). Named scenes of 1 cm voxels, E = 100 kPa, the thesis material settings, floor,
 // gravity and self-collision on (the scenes the thesis system's raw-physics speed was measured on),
 // for both integrators. Each figure is the best of R runs of N steps from the initial state, in CPU
-// seconds of this thread (the machine is shared; wall time is printed alongside).
+// seconds of this thread (the machine is shared; wall time is printed alongside). With --cycles
+// the core's clock is measured (bench_common.hpp) before and after the scenes, and each figure
+// is also given in cycles per voxel-step at the mean of the two readings, the unit in which
+// docs/scaling.md compares the step with the core's arithmetic bound.
+#include <algorithm>
+#include <cstdio>
 #include <ctime>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,7 +35,26 @@ struct BenchRow {
   std::string scene, integrator, simd;
   int voxels = 0, links = 0, steps = 0, failed_steps = 0;
   double cpu_seconds = 0.0, wall_seconds = 0.0;
+  double us_per_voxel_step() const {
+    return cpu_seconds * 1e6 / (static_cast<double>(steps) * voxels);
+  }
 };
+
+void print_header(bool with_cycles) {
+  std::printf("%-14s %-10s %-6s %6s %6s %12s %14s %10s %8s", "scene", "integrator", "simd",
+              "voxels", "links", "us/vox-step", "steps/second", "wall/cpu", "failed");
+  std::printf(with_cycles ? " %12s\n" : "\n", "cycles/v-s");
+}
+
+// One table row, with cycles per voxel-step at clock_hz when given.
+void print_row(const BenchRow& r, std::optional<double> clock_hz) {
+  std::printf("%-14s %-10s %-6s %6d %6d %12.4f %14.1f %10.2f %8d", r.scene.c_str(),
+              r.integrator.c_str(), r.simd.c_str(), r.voxels, r.links, r.us_per_voxel_step(),
+              r.steps / r.cpu_seconds, r.wall_seconds / r.cpu_seconds, r.failed_steps);
+  if (clock_hz) std::printf(" %12.1f", r.us_per_voxel_step() * 1e-6 * *clock_hz);
+  std::printf("\n");
+  std::fflush(stdout);
+}
 
 BenchRow bench_one(const Scene& scene, Integrator integrator, physics::Simd simd, int steps,
                    int runs) {
@@ -69,7 +94,11 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
   auto steps = std::make_shared<int>(3000);
   auto runs = std::make_shared<int>(3);
   auto only = std::make_shared<std::string>();
+  auto cycles = std::make_shared<bool>(false);
   cmd->add_flag("--json", *json, "print a JSON list of result objects");
+  cmd->add_flag("--cycles", *cycles,
+                "measure the core's clock (a chain of dependent additions) and add cycles per "
+                "voxel-step");
   cmd->add_option("--steps", *steps, "steps per run (default 3000)")->check(at_least(1));
   cmd->add_option("--runs", *runs, "runs per figure, best is kept (default 3)")->check(at_least(1));
   cmd->add_option("--scene", *only, "only scenes whose name contains this");
@@ -80,7 +109,7 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
   for (const std::string& name : simd_choices) simd_help += " " + name;
   simd_help += " (default best; results are bit-identical, only the speed differs)";
   cmd->add_option("--simd", *simd_name, simd_help)->check(CLI::IsMember(simd_choices));
-  cmd->callback([&exit_code, json, steps, runs, only, simd_name] {
+  cmd->callback([&exit_code, json, steps, runs, only, simd_name, cycles] {
     std::vector<physics::Simd> widths;
     if (*simd_name == "all") {
       for (physics::Simd s : physics::simd_widths())
@@ -98,40 +127,69 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
         return;
       }
     }
+    std::optional<double> clock_hz;
+    if (*cycles) {
+      clock_hz = measure_core_clock_hz();
+      if (!clock_hz) {
+        std::fprintf(stderr,
+                     "softevo bench physics: --cycles measures the clock on x86-64 and AArch64 "
+                     "only\n");
+        exit_code = kExitUsage;
+        return;
+      }
+    }
     const std::vector<Scene> scenes = {
         {"block10x10x10", 10, 10, 10}, {"block4x4x4", 4, 4, 4}, {"beam10x2x2", 10, 2, 2}};
-    nlohmann::json out = nlohmann::json::array();
-    if (!*json)
-      std::printf("%-14s %-10s %-6s %6s %6s %12s %14s %10s %8s\n", "scene", "integrator", "simd",
-                  "voxels", "links", "us/vox-step", "steps/second", "wall/cpu", "failed");
-    int failed = 0;
+    // Without --cycles each row is printed as it is measured; with it, once the clock is known.
+    if (!*json && !*cycles) print_header(false);
+    std::vector<BenchRow> rows;
     for (const Scene& scene : scenes) {
       if (!only->empty() && std::string(scene.name).find(*only) == std::string::npos) continue;
       for (Integrator integrator : {Integrator::pneuvox, Integrator::symplectic})
         for (physics::Simd simd : widths) {
-          const BenchRow r = bench_one(scene, integrator, simd, *steps, *runs);
-          const double us = r.cpu_seconds * 1e6 / (static_cast<double>(r.steps) * r.voxels);
-          const double sps = r.steps / r.cpu_seconds;
-          failed += r.failed_steps;
-          if (*json) {
-            out.push_back({{"scene", r.scene},
-                           {"integrator", r.integrator},
-                           {"simd", r.simd},
-                           {"voxels", r.voxels},
-                           {"links", r.links},
-                           {"steps", r.steps},
-                           {"runs", *runs},
-                           {"us_per_voxel_step", us},
-                           {"steps_per_second", sps},
-                           {"cpu_seconds", r.cpu_seconds},
-                           {"wall_seconds", r.wall_seconds},
-                           {"failed_steps", r.failed_steps}});
-          } else {
-            std::printf("%-14s %-10s %-6s %6d %6d %12.4f %14.1f %10.2f %8d\n", r.scene.c_str(),
-                        r.integrator.c_str(), r.simd.c_str(), r.voxels, r.links, us, sps,
-                        r.wall_seconds / r.cpu_seconds, r.failed_steps);
-          }
+          rows.push_back(bench_one(scene, integrator, simd, *steps, *runs));
+          if (!*json && !*cycles) print_row(rows.back(), std::nullopt);
         }
+    }
+    // The clock may have moved during the scenes: the cycles are those of the mean of the two
+    // readings, and both are printed.
+    std::optional<double> clock_before = clock_hz, clock_after;
+    if (clock_hz) {
+      clock_after = measure_core_clock_hz();
+      clock_hz = 0.5 * (*clock_before + clock_after.value());
+      if (!*json) {
+        print_header(true);
+        for (const BenchRow& r : rows) print_row(r, clock_hz);
+        std::printf("core clock %.3f GHz: dependent additions, %.3f before and %.3f after\n",
+                    *clock_hz * 1e-9, *clock_before * 1e-9, *clock_after * 1e-9);
+      }
+    }
+    nlohmann::json out = nlohmann::json::array();
+    int failed = 0;
+    for (const BenchRow& r : rows) {
+      const double us = r.us_per_voxel_step();
+      const double sps = r.steps / r.cpu_seconds;
+      failed += r.failed_steps;
+      if (*json) {
+        out.push_back({{"scene", r.scene},
+                       {"integrator", r.integrator},
+                       {"simd", r.simd},
+                       {"voxels", r.voxels},
+                       {"links", r.links},
+                       {"steps", r.steps},
+                       {"runs", *runs},
+                       {"us_per_voxel_step", us},
+                       {"steps_per_second", sps},
+                       {"cpu_seconds", r.cpu_seconds},
+                       {"wall_seconds", r.wall_seconds},
+                       {"failed_steps", r.failed_steps}});
+        if (clock_hz) {
+          out.back()["clock_ghz"] = *clock_hz * 1e-9;
+          out.back()["clock_ghz_before"] = *clock_before * 1e-9;
+          out.back()["clock_ghz_after"] = *clock_after * 1e-9;
+          out.back()["cycles_per_voxel_step"] = us * 1e-6 * *clock_hz;
+        }
+      }
     }
     if (*json) std::printf("%s\n", out.dump(2).c_str());
     exit_code = failed == 0 ? kExitOk : kExitMismatch;

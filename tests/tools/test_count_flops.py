@@ -68,3 +68,42 @@ def test_a_binary_given_by_relative_path_matches_the_absolute_object_of_the_dump
     dump = [f"ob={tmp_path}/bin/prog", "fn=f(double)", "0x100 0 4"]
     c = flops.count(dump, "bin/prog", {0x100: ("mulsd", "%xmm1,%xmm0")})
     assert c.outside == 0 and c.ops["mul"] == 4
+
+
+@pytest.mark.parametrize("mnemonic, operands, expected", [
+    ("vmulpd", "%ymm1,%ymm2,%ymm3", ("fp arithmetic", 0, 0)),
+    ("vaddpd", "0x20(%rax),%ymm2,%ymm3", ("fp arithmetic", 1, 0)),  # the load is micro-fused
+    ("vcvtpd2psy", "%ymm0,%xmm0", ("fp convert", 0, 0)),
+    ("vcvtps2pd", "%xmm0,%ymm0", ("fp convert", 0, 0)),
+    ("vunpcklpd", "%ymm1,%ymm0,%ymm2", ("fp shuffle", 0, 0)),
+    ("vperm2f128", "$0x20,%ymm2,%ymm0,%ymm1", ("fp shuffle", 0, 0)),
+    ("vbroadcastsd", "%xmm0,%ymm0", ("fp shuffle", 0, 0)),
+    ("vbroadcastsd", "0x8(%rdi),%ymm0", ("load", 1, 0)),  # done by the load unit
+    ("vblendpd", "$0xc,%ymm1,%ymm0,%ymm2", ("fp blend/logic/compare", 0, 0)),
+    ("vxorpd", "%ymm1,%ymm0,%ymm2", ("fp blend/logic/compare", 0, 0)),
+    ("vcmpltpd", "%ymm1,%ymm0,%ymm2", ("fp blend/logic/compare", 0, 0)),
+    ("vmovmskpd", "%ymm0,%eax", ("fp blend/logic/compare", 0, 0)),
+    ("vmovapd", "%ymm0,%ymm1", ("fp move", 0, 0)),
+    ("vmovupd", "(%rax,%rdx,8),%ymm0", ("load", 1, 0)),
+    ("vmovupd", "%ymm0,0x40(%rsp)", ("store", 0, 1)),
+    ("vmaskmovpd", "%ymm0,%ymm1,(%rax)", ("store", 0, 1)),
+    ("movslq", "0x4(%rax),%rdx", ("load", 1, 0)),
+    ("mov", "%rax,0x8(%rsp)", ("store", 0, 1)),
+    ("lea", "0x8(%rax,%rdx,8),%rcx", ("integer and branch", 0, 0)),  # an address, not a load
+    ("add", "$0x4,%rax", ("integer and branch", 0, 0)),
+    ("cmp", "%eax,0x10(%rsp)", ("integer and branch", 1, 0)),
+    ("jne", "1234 <f+0x40>", ("integer and branch", 0, 0)),
+])
+def test_instructions_are_sorted_by_the_unit_that_executes_them(mnemonic, operands, expected):
+    assert flops.instruction_class(mnemonic, operands) == expected
+
+
+def test_classes_add_up_to_the_instructions_of_the_binary():
+    code = {0x100: ("vmulpd", "(%rax),%ymm2,%ymm3"), 0x104: ("vunpcklpd", "%ymm1,%ymm0,%ymm2"),
+            0x108: ("vmovupd", "%ymm0,(%rdx)"), 0x10c: ("add", "$0x1,%rax")}
+    dump = ["ob=/bin/prog", "fn=f(double)", "0x100 0 4", "0x104 0 2", "0x108 0 3", "0x10c 0 5",
+            "ob=/lib/libm.so.6", "fn=sin", "0x300 0 7"]
+    c = flops.count(dump, "/bin/prog", code)
+    assert c.classes == {"fp arithmetic": 4, "fp shuffle": 2, "store": 3, "integer and branch": 5}
+    assert sum(c.classes.values()) == c.instructions - c.outside
+    assert c.memory == {"loads": 4, "stores": 3}

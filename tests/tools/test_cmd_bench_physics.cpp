@@ -1,0 +1,72 @@
+// `softevo bench physics` end to end on its smallest scene: the JSON rows carry microseconds per
+// voxel-step, and with --cycles the measured clock (before, after and their mean) and the same
+// figure in cycles per voxel-step at that clock; the table then has the cycles column and names
+// the clock.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "tests/build_tree.hpp"
+
+namespace softevo {
+namespace {
+
+using test::binary;
+using test::run_command;
+
+const std::string kSmallRun = " bench physics --scene block4x4x4 --steps 20 --runs 1 --simd scalar";
+
+class CmdBenchPhysics : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!std::filesystem::exists(binary("softevo")))
+      GTEST_SKIP() << "softevo not built: " << binary("softevo");
+  }
+};
+
+TEST_F(CmdBenchPhysics, RowsGiveMicrosecondsPerVoxelStepWithoutAClockUnlessAsked) {
+  const auto r = run_command(binary("softevo") + kSmallRun + " --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json rows = nlohmann::json::parse(r.output.substr(r.output.find('[')));
+  ASSERT_EQ(rows.size(), 2u) << "one row per integrator";
+  for (const nlohmann::json& row : rows) {
+    EXPECT_EQ(row["voxels"], 64);
+    EXPECT_EQ(row["steps"], 20);
+    const double cpu = row["cpu_seconds"].get<double>();
+    ASSERT_GT(cpu, 0.0);
+    EXPECT_DOUBLE_EQ(row["us_per_voxel_step"].get<double>(), cpu * 1e6 / (20.0 * 64));
+    EXPECT_FALSE(row.contains("cycles_per_voxel_step"));
+  }
+}
+
+#if defined(__x86_64__) || defined(__aarch64__)
+TEST_F(CmdBenchPhysics, CyclesAreTheTimeAtTheMeanOfTheClockMeasuredBeforeAndAfter) {
+  const auto r = run_command(binary("softevo") + kSmallRun + " --cycles --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json rows = nlohmann::json::parse(r.output.substr(r.output.find('[')));
+  ASSERT_EQ(rows.size(), 2u);
+  for (const nlohmann::json& row : rows) {
+    const double before = row["clock_ghz_before"].get<double>();
+    const double after = row["clock_ghz_after"].get<double>();
+    const double clock = row["clock_ghz"].get<double>();
+    EXPECT_GT(before, 0.2) << "no core of either architecture runs below 200 MHz";
+    EXPECT_LT(before, 10.0);
+    EXPECT_GT(after, 0.2);
+    EXPECT_LT(after, 10.0);
+    EXPECT_DOUBLE_EQ(clock, 0.5 * (before + after));
+    EXPECT_NEAR(row["cycles_per_voxel_step"].get<double>(),
+                row["us_per_voxel_step"].get<double>() * 1e3 * clock,
+                1e-9 * row["cycles_per_voxel_step"].get<double>());
+  }
+  const auto table = run_command(binary("softevo") + kSmallRun + " --cycles");
+  ASSERT_EQ(table.code, 0) << table.output;
+  EXPECT_NE(table.output.find("cycles/v-s"), std::string::npos) << table.output;
+  EXPECT_NE(table.output.find("core clock"), std::string::npos) << table.output;
+  EXPECT_NE(table.output.find("block4x4x4"), std::string::npos) << table.output;
+}
+#endif
+
+}  // namespace
+}  // namespace softevo
