@@ -1,17 +1,21 @@
 // `softevo bench physics [--json] [--steps N] [--runs R] [--scene NAME] [--simd W]`: raw physics
 // speed (issue 3). Named scenes of 1 cm voxels, E = 100 kPa, the thesis material settings, floor,
 // gravity and self-collision on (the scenes the thesis system's raw-physics speed was measured on),
-// for both integrators. Each figure is the best of R runs of N steps from the initial state, in CPU
-// seconds of this thread (the machine is shared; wall time is printed alongside). With --cycles
+// for both integrators; `--scene blockXxYxZ` measures a solid block of any size. Each figure is
+// the best of R runs of N steps from the initial state, in CPU seconds of this thread (the machine
+// is shared; wall time is printed alongside). With --cycles
 // the core's clock is measured (bench_common.hpp) before and after the scenes, and each figure
 // is also given in cycles per voxel-step at the mean of the two readings, the unit in which
 // docs/scaling.md compares the step with the core's arithmetic bound.
 #include <algorithm>
+#include <charconv>
 #include <cstdio>
 #include <ctime>
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <system_error>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -27,9 +31,40 @@ namespace softevo::cli {
 namespace {
 
 struct Scene {
-  const char* name;
+  std::string name;
   int x, y, z;
 };
+
+// The largest block of --scene blockXxYxZ: a block of 10^5 voxels takes about 170 MB and
+// 15 ms per step.
+constexpr long long kMaxBlockVoxels = 100000;
+
+// --scene blockXxYxZ (X, Y, Z decimal digits): that solid block, for measuring how the step's
+// cost per voxel depends on the body's size (docs/scaling.md); nothing if the text has another
+// form. A side of 0 or beyond the block limit is left to the caller's range check.
+std::optional<Scene> parse_block_scene(const std::string& text) {
+  constexpr std::string_view kPrefix = "block";
+  if (text.rfind(kPrefix, 0) != 0) return std::nullopt;
+  long long side[3] = {0, 0, 0};
+  const char* p = text.data() + kPrefix.size();
+  const char* const end = text.data() + text.size();
+  for (int k = 0; k < 3; ++k) {
+    if (k > 0) {
+      if (p == end || *p != 'x') return std::nullopt;
+      ++p;
+    }
+    if (p == end || *p < '0' || *p > '9') return std::nullopt;  // no sign, no space
+    const auto [next, error] = std::from_chars(p, end, side[k]);
+    if (error == std::errc::result_out_of_range)
+      side[k] = kMaxBlockVoxels + 1;
+    else if (error != std::errc())
+      return std::nullopt;
+    p = next;
+  }
+  if (p != end) return std::nullopt;
+  const auto clamp = [](long long v) { return static_cast<int>(std::min(v, kMaxBlockVoxels + 1)); };
+  return Scene{text, clamp(side[0]), clamp(side[1]), clamp(side[2])};
+}
 
 struct BenchRow {
   std::string scene, integrator, simd;
@@ -101,7 +136,9 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
                 "voxel-step");
   cmd->add_option("--steps", *steps, "steps per run (default 3000)")->check(at_least(1));
   cmd->add_option("--runs", *runs, "runs per figure, best is kept (default 3)")->check(at_least(1));
-  cmd->add_option("--scene", *only, "only scenes whose name contains this");
+  cmd->add_option("--scene", *only,
+                  "only scenes whose name contains this; or a solid block of any size, "
+                  "blockXxYxZ (e.g. block6x6x6)");
   auto simd_name = std::make_shared<std::string>("best");
   std::vector<std::string> simd_choices = physics::simd_names();
   simd_choices.emplace_back("all");
@@ -138,13 +175,35 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
         return;
       }
     }
-    const std::vector<Scene> scenes = {
-        {"block10x10x10", 10, 10, 10}, {"block4x4x4", 4, 4, 4}, {"beam10x2x2", 10, 2, 2}};
+    std::vector<Scene> scenes;
+    for (const Scene& named : {Scene{"block10x10x10", 10, 10, 10}, Scene{"block4x4x4", 4, 4, 4},
+                               Scene{"beam10x2x2", 10, 2, 2}})
+      if (only->empty() || named.name.find(*only) != std::string::npos) scenes.push_back(named);
+    if (scenes.empty()) {
+      const std::optional<Scene> block = parse_block_scene(*only);
+      if (!block) {
+        std::fprintf(stderr,
+                     "softevo bench physics: --scene %s matches no scene (block10x10x10, "
+                     "block4x4x4, beam10x2x2) and is not a block of the form blockXxYxZ\n",
+                     only->c_str());
+        exit_code = kExitUsage;
+        return;
+      }
+      const long long voxels = 1LL * block->x * block->y * block->z;
+      if (block->x < 1 || block->y < 1 || block->z < 1 || voxels > kMaxBlockVoxels) {
+        std::fprintf(stderr,
+                     "softevo bench physics: --scene %s: each side must be at least 1 and the "
+                     "block at most %lld voxels\n",
+                     only->c_str(), kMaxBlockVoxels);
+        exit_code = kExitUsage;
+        return;
+      }
+      scenes.push_back(*block);
+    }
     // Without --cycles each row is printed as it is measured; with it, once the clock is known.
     if (!*json && !*cycles) print_header(false);
     std::vector<BenchRow> rows;
     for (const Scene& scene : scenes) {
-      if (!only->empty() && std::string(scene.name).find(*only) == std::string::npos) continue;
       for (Integrator integrator : {Integrator::pneuvox, Integrator::symplectic})
         for (physics::Simd simd : widths) {
           rows.push_back(bench_one(scene, integrator, simd, *steps, *runs));

@@ -41,6 +41,36 @@ TEST_F(CmdBenchPhysics, RowsGiveMicrosecondsPerVoxelStepWithoutAClockUnlessAsked
   }
 }
 
+TEST_F(CmdBenchPhysics, ABlockOfAnySizeIsAScene) {
+  const auto r = run_command(binary("softevo") +
+                             " bench physics --scene block3x2x5 --steps 10 --runs 1 --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json rows = nlohmann::json::parse(r.output.substr(r.output.find('[')));
+  ASSERT_EQ(rows.size(), 2u) << "one row per integrator";
+  for (const nlohmann::json& row : rows) {
+    EXPECT_EQ(row["scene"], "block3x2x5");
+    EXPECT_EQ(row["voxels"], 30);
+    // links between face neighbours: (X-1)YZ + X(Y-1)Z + XY(Z-1)
+    EXPECT_EQ(row["links"], 2 * 2 * 5 + 3 * 1 * 5 + 3 * 2 * 4);
+    EXPECT_EQ(row["failed_steps"], 0);
+  }
+}
+
+TEST_F(CmdBenchPhysics, AnUnknownSceneOrABlockOutOfRangeIsAUsageError) {
+  for (const char* scene : {"block3x3", "block-3x3x3", "block3x3x3x", "torus"}) {
+    const auto r = run_command(binary("softevo") + " bench physics --steps 1 --runs 1 --scene '" +
+                               scene + "'");
+    EXPECT_EQ(r.code, 2) << scene << ": " << r.output;
+    EXPECT_NE(r.output.find("matches no scene"), std::string::npos) << r.output;
+  }
+  for (const char* scene : {"block0x3x3", "block47x47x47", "block99999999999999999999999x1x1"}) {
+    const auto r = run_command(binary("softevo") + " bench physics --steps 1 --runs 1 --scene '" +
+                               scene + "'");
+    EXPECT_EQ(r.code, 2) << scene << ": " << r.output;
+    EXPECT_NE(r.output.find("at most 100000 voxels"), std::string::npos) << r.output;
+  }
+}
+
 #if defined(__x86_64__) || defined(__aarch64__)
 TEST_F(CmdBenchPhysics, CyclesAreTheTimeAtTheMeanOfTheClockMeasuredBeforeAndAfter) {
   const auto r = run_command(binary("softevo") + kSmallRun + " --cycles --json");
