@@ -35,6 +35,10 @@ struct Scene {
   int x, y, z;
 };
 
+// The scenes run by default (and selected by a part of their name with --scene).
+const Scene kNamedScenes[] = {
+    {"block10x10x10", 10, 10, 10}, {"block4x4x4", 4, 4, 4}, {"beam10x2x2", 10, 2, 2}};
+
 // The largest block of --scene blockXxYxZ: a block of 10^5 voxels takes about 170 MB and
 // 15 ms per step.
 constexpr long long kMaxBlockVoxels = 100000;
@@ -73,6 +77,16 @@ struct BenchRow {
   double us_per_voxel_step() const {
     return cpu_seconds * 1e6 / (static_cast<double>(steps) * voxels);
   }
+  double cycles_per_voxel_step(double clock_hz) const {
+    return us_per_voxel_step() * 1e-6 * clock_hz;
+  }
+};
+
+// The core's clock [Hz] read before and after the scenes (--cycles); the clock may move while
+// they run, so the cycles are given at the mean of the two readings and both are printed.
+struct CoreClock {
+  double before_hz = 0.0, after_hz = 0.0;
+  double mean_hz() const { return 0.5 * (before_hz + after_hz); }
 };
 
 void print_header(bool with_cycles) {
@@ -86,7 +100,7 @@ void print_row(const BenchRow& r, std::optional<double> clock_hz) {
   std::printf("%-14s %-10s %-6s %6d %6d %12.4f %14.1f %10.2f %8d", r.scene.c_str(),
               r.integrator.c_str(), r.simd.c_str(), r.voxels, r.links, r.us_per_voxel_step(),
               r.steps / r.cpu_seconds, r.wall_seconds / r.cpu_seconds, r.failed_steps);
-  if (clock_hz) std::printf(" %12.1f", r.us_per_voxel_step() * 1e-6 * *clock_hz);
+  if (clock_hz) std::printf(" %12.1f", r.cycles_per_voxel_step(*clock_hz));
   std::printf("\n");
   std::fflush(stdout);
 }
@@ -164,28 +178,30 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
         return;
       }
     }
-    std::optional<double> clock_hz;
+    std::optional<CoreClock> clock;
     if (*cycles) {
-      clock_hz = measure_core_clock_hz();
-      if (!clock_hz) {
+      const std::optional<double> before = measure_core_clock_hz();
+      if (!before) {
         std::fprintf(stderr,
                      "softevo bench physics: --cycles measures the clock on x86-64 and AArch64 "
                      "only\n");
         exit_code = kExitUsage;
         return;
       }
+      clock = CoreClock{*before, 0.0};
     }
     std::vector<Scene> scenes;
-    for (const Scene& named : {Scene{"block10x10x10", 10, 10, 10}, Scene{"block4x4x4", 4, 4, 4},
-                               Scene{"beam10x2x2", 10, 2, 2}})
+    for (const Scene& named : kNamedScenes)
       if (only->empty() || named.name.find(*only) != std::string::npos) scenes.push_back(named);
     if (scenes.empty()) {
       const std::optional<Scene> block = parse_block_scene(*only);
       if (!block) {
+        std::string names;
+        for (const Scene& named : kNamedScenes) names += (names.empty() ? "" : ", ") + named.name;
         std::fprintf(stderr,
-                     "softevo bench physics: --scene %s matches no scene (block10x10x10, "
-                     "block4x4x4, beam10x2x2) and is not a block of the form blockXxYxZ\n",
-                     only->c_str());
+                     "softevo bench physics: --scene %s matches no scene (%s) and is not a block "
+                     "of the form blockXxYxZ\n",
+                     only->c_str(), names.c_str());
         exit_code = kExitUsage;
         return;
       }
@@ -210,17 +226,13 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
           if (!*json && !*cycles) print_row(rows.back(), std::nullopt);
         }
     }
-    // The clock may have moved during the scenes: the cycles are those of the mean of the two
-    // readings, and both are printed.
-    std::optional<double> clock_before = clock_hz, clock_after;
-    if (clock_hz) {
-      clock_after = measure_core_clock_hz();
-      clock_hz = 0.5 * (*clock_before + clock_after.value());
+    if (clock) {
+      clock->after_hz = measure_core_clock_hz().value();
       if (!*json) {
         print_header(true);
-        for (const BenchRow& r : rows) print_row(r, clock_hz);
+        for (const BenchRow& r : rows) print_row(r, clock->mean_hz());
         std::printf("core clock %.3f GHz: dependent additions, %.3f before and %.3f after\n",
-                    *clock_hz * 1e-9, *clock_before * 1e-9, *clock_after * 1e-9);
+                    clock->mean_hz() * 1e-9, clock->before_hz * 1e-9, clock->after_hz * 1e-9);
       }
     }
     nlohmann::json out = nlohmann::json::array();
@@ -242,11 +254,11 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
                        {"cpu_seconds", r.cpu_seconds},
                        {"wall_seconds", r.wall_seconds},
                        {"failed_steps", r.failed_steps}});
-        if (clock_hz) {
-          out.back()["clock_ghz"] = *clock_hz * 1e-9;
-          out.back()["clock_ghz_before"] = *clock_before * 1e-9;
-          out.back()["clock_ghz_after"] = *clock_after * 1e-9;
-          out.back()["cycles_per_voxel_step"] = us * 1e-6 * *clock_hz;
+        if (clock) {
+          out.back()["clock_ghz"] = clock->mean_hz() * 1e-9;
+          out.back()["clock_ghz_before"] = clock->before_hz * 1e-9;
+          out.back()["clock_ghz_after"] = clock->after_hz * 1e-9;
+          out.back()["cycles_per_voxel_step"] = r.cycles_per_voxel_step(clock->mean_hz());
         }
       }
     }

@@ -1,7 +1,8 @@
 // `softevo bench physics` end to end on its smallest scene: the JSON rows carry microseconds per
 // voxel-step, and with --cycles the measured clock (before, after and their mean) and the same
 // figure in cycles per voxel-step at that clock; the table then has the cycles column and names
-// the clock.
+// the clock. --scene blockXxYxZ runs a solid block of that size; a scene that is neither named nor
+// such a block, or a block out of range, is a usage error that says why.
 #include <gtest/gtest.h>
 
 #include <string>

@@ -89,22 +89,21 @@ def instruction_class(mnemonic: str, operands: str) -> tuple[str, int, int]:
     dest_is_memory = memory and ops.rstrip().endswith(")") and not reads_only
     loads = int(memory and not dest_is_memory)
     stores = int(dest_is_memory)
-    base = mnemonic.lstrip("v") if mnemonic.startswith("v") else mnemonic
     is_vector = "%xmm" in ops or "%ymm" in ops or "%zmm" in ops or mnemonic.startswith("k")
-    if classify(mnemonic, operands) is not None:
-        kind = "fp convert" if classify(mnemonic, operands)[0] == "convert" else "fp arithmetic"
-        return kind, loads, stores
+    arithmetic = classify(mnemonic, operands)
+    if arithmetic is not None:
+        return ("fp convert" if arithmetic[0] == "convert" else "fp arithmetic"), loads, stores
     if re.match(r"v?cvt", mnemonic) and is_vector:
         return "fp convert", loads, stores
     if _VECTOR_MOVE.match(mnemonic) and is_vector:
         if memory:
             return ("store" if dest_is_memory else "load"), loads, stores
         return "fp move", 0, 0
-    if _SHUFFLE.match(mnemonic) or _SHUFFLE.match(base):
+    if _SHUFFLE.match(mnemonic):
         if memory and re.match(r"v?(p?broadcast|movddup)", mnemonic):
             return "load", 1, 0  # a broadcast from memory is done by the load unit
         return "fp shuffle", loads, stores
-    if (_BLEND_LOGIC.match(mnemonic) or _BLEND_LOGIC.match(base)) and is_vector:
+    if _BLEND_LOGIC.match(mnemonic) and is_vector:
         return "fp blend/logic/compare", loads, stores
     if is_vector and not memory:
         return "fp blend/logic/compare", 0, 0  # other vector integer operations
