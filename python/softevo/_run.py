@@ -170,6 +170,46 @@ class Run:
         return _table(c, ["generation", "best", "mean", "sd", "species_count",
                           "evaluations_per_second"])
 
+    @property
+    def strategy(self) -> str:
+        """The run's search strategy: 'neat', 'map_elites' or 'afpo' (docs/model.md §8.12)."""
+        return dict(self.config).get("search.strategy", "neat")
+
+    def map(self, generation: int | None = None):
+        """The MAP-Elites map after `generation` (default: the last) as a table, one row per
+        elite in ascending cell order: cell, one bin column per descriptor (bin_<name>, the
+        cell's coordinates), id, fitness, generation (in which the elite was evaluated) and the
+        descriptor values. `run.genome(id)` is the elite's robot. A DataFrame, or a numpy
+        structured array without pandas. ValueError for a run of another strategy."""
+        if self.strategy != "map_elites":
+            raise ValueError(f"{self.path}: a run of search strategy {self.strategy!r} has no "
+                             "map (search.strategy = 'map_elites' has one)")
+        m = self._archive.strategy_generation(generation)["map"]
+        config = dict(self.config)
+        names = list(config["map_elites.descriptors"])
+        bins = [int(b) for b in config["map_elites.bins"]]
+        cells = m["cell"].astype(np.int64)
+        coordinates = np.unravel_index(cells, bins) if len(cells) else [cells] * len(bins)
+        columns = {"cell": cells, "id": m["id"].astype(np.int64), "fitness": m["fitness"],
+                   "generation": m["generation"].astype(np.int64)}
+        order = ["cell"]
+        for name, coordinate in zip(names, coordinates):
+            columns[f"bin_{name}"] = np.asarray(coordinate, dtype=np.int64)
+            order.append(f"bin_{name}")
+        order += ["id", "fitness", "generation"]
+        for name in names:
+            columns[name] = m[name]
+            order.append(name)
+        return _table(columns, order)
+
+    def strategy_stats(self):
+        """Per-generation metrics of a strategy other than NEAT (docs/model.md §8.12):
+        MAP-Elites num_elites, coverage, qd_score (offset map_elites.qd_offset), max_fitness,
+        mean_fitness; AFPO max_fitness, mean_fitness, pareto_front, mean_age. A DataFrame, or a
+        numpy structured array without pandas; no rows for NEAT."""
+        c = self._archive.strategy_metric_columns()
+        return _table(c, list(c.keys()))
+
     def genome(self, id: int, generation: int | None = None) -> _softevo.Robot:
         """Individual `id` as a Robot: its archived genome (in a run with controller learning
         the learned one, whose fitness is archived) developed with the archived config, as the

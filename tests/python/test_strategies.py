@@ -1,0 +1,71 @@
+"""Search strategies from Python (docs/model.md §8.12): softevo.evolve(strategy=...) writes the
+archive of `softevo evolve` for MAP-Elites and AFPO, Run.map() is the elite map, and
+Run.strategy_stats() the per-generation metrics."""
+
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+import softevo
+from conftest import SOURCE_DIR, binary
+
+TINY = SOURCE_DIR / "tests" / "data" / "tiny-run.toml"
+MAP = {"map_elites.descriptors": ["voxels", "height"], "map_elites.min": [0, 0],
+       "map_elites.max": [125, 0.05], "map_elites.bins": [5, 5]}
+
+
+def fitness_digest(path):
+    out = subprocess.run([str(binary("softevo")), "info", str(path), "--json"], check=True,
+                         capture_output=True, text=True).stdout
+    return json.loads(out)["fitness_digest"], json.loads(out)["strategy"]
+
+
+@pytest.mark.parametrize("strategy", ["map_elites", "afpo"])
+def test_evolve_takes_a_strategy_and_writes_the_archive_of_the_command_line(strategy, tmp_path):
+    overrides = MAP if strategy == "map_elites" else {"afpo.age": "body"}
+    seen = []
+    run = softevo.evolve(TINY, workers=2, out=tmp_path / "py.h5", strategy=strategy,
+                         overrides=overrides, callback=seen.append)
+    assert run.strategy == strategy
+    sets = [f"--set={k}={json.dumps(v)}" for k, v in overrides.items()]
+    subprocess.run([str(binary("softevo")), "evolve", "--config", str(TINY), "--workers", "1",
+                    "--out", str(tmp_path / "cli.h5"), "-q", f"--set=search.strategy={strategy}",
+                    *sets], check=True)
+    assert fitness_digest(tmp_path / "py.h5") == fitness_digest(tmp_path / "cli.h5")
+    assert fitness_digest(tmp_path / "cli.h5")[1] == strategy
+    stats = run.strategy_stats()
+    assert list(stats["generation"]) == [0, 1, 2]
+    assert [g.strategy_metrics["max_fitness"] for g in seen] == list(stats["max_fitness"])
+
+
+def test_map_is_the_elite_table_of_the_last_generation(tmp_path):
+    run = softevo.evolve(TINY, workers=2, out=tmp_path / "m.h5", strategy="map_elites",
+                         overrides=MAP)
+    m = run.map()
+    stats = run.strategy_stats()
+    last = {k: np.asarray(stats[k])[-1] for k in ("num_elites", "coverage", "qd_score")}
+    assert len(m) == int(last["num_elites"])
+    assert float(last["coverage"]) == len(m) / 25
+    assert float(last["qd_score"]) == pytest.approx(float(np.sum(m["fitness"])), abs=1e-12)
+    cells = np.asarray(m["cell"])
+    assert list(cells) == sorted(set(cells))
+    assert list(cells) == list(np.asarray(m["bin_voxels"]) * 5 + np.asarray(m["bin_height"]))
+    # Each elite is an archived individual with its fitness (export --id works for it).
+    ind = run.individuals()
+    for row in range(len(m)):
+        i, f = int(m["id"][row]), float(m["fitness"][row])
+        assert f in set(ind["fitness"][ind["id"] == i])
+    first = run.map(0)
+    assert len(first) == int(np.asarray(stats["num_elites"])[0])
+
+
+def test_bad_strategies_are_refused(tmp_path):
+    with pytest.raises(ValueError, match="strategy must be one of"):
+        softevo.evolve(TINY, out=tmp_path / "x.h5", strategy="cma")
+    run = softevo.evolve(TINY, workers=1, out=tmp_path / "n.h5", generations=1)
+    assert run.strategy == "neat"
+    with pytest.raises(ValueError, match="has no map"):
+        run.map()
+    assert len(run.strategy_stats()) == 0
