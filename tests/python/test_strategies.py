@@ -69,3 +69,27 @@ def test_bad_strategies_are_refused(tmp_path):
     with pytest.raises(ValueError, match="has no map"):
         run.map()
     assert len(run.strategy_stats()) == 0
+
+
+def test_export_and_view_pick_an_elite_by_cell(tmp_path):
+    run = softevo.evolve(TINY, workers=2, out=tmp_path / "m.h5", strategy="map_elites",
+                         overrides=MAP)
+    m = run.map()
+    i, j = int(np.asarray(m["bin_voxels"])[0]), int(np.asarray(m["bin_height"])[0])
+    out = subprocess.run([str(binary("softevo")), "export", str(tmp_path / "m.h5"), "--cell",
+                          f"{i},{j}", "-o", str(tmp_path / "e.json"), "--json"],
+                         check=True, capture_output=True, text=True).stdout
+    exported = json.loads(out)
+    assert exported["id"] == int(np.asarray(m["id"])[0])
+    assert exported["generation"] == int(np.asarray(m["generation"])[0])
+    assert exported["fitness"] == float(np.asarray(m["fitness"])[0])
+    # The exported elite re-evaluates to its archived fitness.
+    assert softevo.evaluate(softevo.load_robot(tmp_path / "e.json")).fitness == exported["fitness"]
+    empty = next(c for c in range(25) if c not in set(np.asarray(m["cell"])))
+    for cell, needle in ((f"{empty // 5},{empty % 5}", "the cell is empty"),
+                         ("5,0", "give one bin per descriptor"), ("1", "give one bin")):
+        for command in ("export", "view"):
+            args = [str(binary("softevo")), command, str(tmp_path / "m.h5"), "--cell", cell]
+            args += ["-o", str(tmp_path / "x.json")] if command == "export" else ["--port", "0"]
+            p = subprocess.run(args, capture_output=True, text=True, timeout=60)
+            assert p.returncode == 2 and needle in p.stderr and "--cell" in p.stderr, p.stderr
