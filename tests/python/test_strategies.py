@@ -93,3 +93,27 @@ def test_export_and_view_pick_an_elite_by_cell(tmp_path):
             args += ["-o", str(tmp_path / "x.json")] if command == "export" else ["--port", "0"]
             p = subprocess.run(args, capture_output=True, text=True, timeout=60)
             assert p.returncode == 2 and needle in p.stderr and "--cell" in p.stderr, p.stderr
+
+
+def test_analysis_places_every_run_in_the_map_of_a_map_elites_run(tmp_path):
+    """analysis/strategies.py: the grid filled afterwards from a MAP-Elites run's ok robots is
+    its archived map (same coverage and QD score); a NEAT run gets the same figures."""
+    import sys
+    me = softevo.evolve(TINY, workers=2, out=tmp_path / "me.h5", strategy="map_elites",
+                        overrides=MAP)
+    softevo.evolve(TINY, workers=2, out=tmp_path / "neat.h5")
+    done = subprocess.run([sys.executable, str(SOURCE_DIR / "analysis" / "strategies.py"),
+                           str(tmp_path / "me.h5"), str(tmp_path / "neat.h5"), "-o",
+                           str(tmp_path / "fig"), "--qd-offset", "0"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert "warning" not in done.stderr
+    import csv
+    rows = {r["strategy"]: r for r in csv.DictReader(open(tmp_path / "fig" / "strategies.csv"))}
+    stats = me.strategy_stats()
+    assert float(rows["map_elites"]["coverage"]) == float(np.asarray(stats["coverage"])[-1])
+    assert float(rows["map_elites"]["qd_score"]) == pytest.approx(
+        float(np.asarray(stats["qd_score"])[-1]), abs=1e-9)
+    assert set(rows) == {"map_elites", "neat"}
+    for name in ("qd_curves.png", "heatmap_me.png", "heatmap_neat.png"):
+        assert (tmp_path / "fig" / name).stat().st_size > 1000
