@@ -85,9 +85,26 @@ py::dict individual_columns(const io::Archive& archive) {
   std::vector<double> fitness_before;
   std::vector<std::int64_t> learn_evaluations, reused_from;
   std::vector<std::vector<double>> learning_curve;
+  // A search strategy other than NEAT (docs/model.md §8.12): its per-row columns in place of
+  // the species, when every generation has the same ones.
+  std::string strategy;
+  std::vector<std::string> strategy_names;
+  std::vector<std::vector<double>> strategy_values;
+  bool strategy_rows = true;
   for (const std::int64_t g : archive.generations()) {
     const io::GenerationRecord r = archive.generation(g);
     r.check();
+    if (generation.empty()) {
+      strategy = r.strategy.strategy;
+      strategy_names = r.strategy.rows.columns;
+      strategy_values.resize(strategy_names.size());
+    }
+    strategy_rows = strategy_rows && r.strategy.strategy == strategy &&
+                    r.strategy.rows.columns == strategy_names;
+    if (strategy_rows)
+      for (std::size_t row = 0; row < r.size(); ++row)
+        for (std::size_t c = 0; c < strategy_names.size(); ++c)
+          strategy_values[c].push_back(r.strategy.rows.values[row * strategy_names.size() + c]);
     if (components.empty()) {
       units = r.units;
       for (int u = 0; u < units; ++u)
@@ -135,7 +152,12 @@ py::dict individual_columns(const io::Archive& archive) {
   d["id"] = array_of(id);
   d["parent1"] = array_of(parent1);
   d["parent2"] = array_of(parent2);
-  d["species"] = array_of(species);
+  if (strategy.empty()) d["species"] = array_of(species);  // NEAT's own column
+  py::dict strategy_columns;
+  if (strategy_rows)
+    for (std::size_t c = 0; c < strategy_names.size(); ++c)
+      strategy_columns[py::str(strategy_names[c])] = array_of(strategy_values[c]);
+  d["strategy_columns"] = strategy_columns;
   d["status_code"] = array_of(status);
   d["fitness"] = array_of(fitness);
   d["voxels"] = array_of(voxels);

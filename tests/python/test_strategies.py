@@ -117,3 +117,21 @@ def test_analysis_places_every_run_in_the_map_of_a_map_elites_run(tmp_path):
     assert set(rows) == {"map_elites", "neat"}
     for name in ("qd_curves.png", "heatmap_me.png", "heatmap_neat.png"):
         assert (tmp_path / "fig" / name).stat().st_size > 1000
+
+
+def test_individuals_carry_the_strategys_columns_instead_of_species(tmp_path):
+    for strategy, overrides, names in (("map_elites", MAP, ["cell", "placed", "voxels", "height"]),
+                                       ("afpo", {}, ["age", "pareto_rank", "survived"])):
+        run = softevo.evolve(TINY, workers=2, out=tmp_path / f"{strategy}.h5", strategy=strategy,
+                             overrides=overrides)
+        ind = run.individuals()
+        assert "species" not in ind.columns
+        cols = list(ind.columns)
+        assert cols[4:4 + len(names)] == names, cols
+        assert run.lineage(int(ind["id"].iloc[-1]))[0]["id"] == int(ind["id"].iloc[-1])
+    m = softevo.open_run(tmp_path / "map_elites.h5")
+    ind = m.individuals()
+    last = ind[ind["generation"] == ind["generation"].max()]
+    placed = ind[ind["placed"] == 1]
+    assert set(m.map()["id"]) <= set(placed["id"])
+    assert (last["cell"] >= -1).all()
