@@ -29,7 +29,17 @@ std::uint64_t estimate_run_memory(const Config& config) {
   if (config.learning.method != LearningMethod::none)
     per_member += kBytesPerLearningCandidate *
                   static_cast<std::uint64_t>(std::max<std::int64_t>(config.learning.population, 0));
-  return kRunBaseBytes + members * per_member;
+  // MAP-Elites holds its map beside the batch: at most one elite (a member's genome) per
+  // cell, and no more elites than robots the run evaluates (docs/model.md §8.12.2); unmeasured,
+  // an elite taken as a member.
+  std::uint64_t elites = 0;
+  if (config.search.strategy == SearchKind::map_elites)
+    elites = std::min(
+        static_cast<std::uint64_t>(std::max<std::int64_t>(config.map_elites.max_cells, 0)),
+        members * static_cast<std::uint64_t>(std::max<std::int64_t>(config.run.generations, 1)));
+  // AFPO evaluates its survivors and as many new robots each generation: 2 pop_size members.
+  if (config.search.strategy == SearchKind::afpo) elites = members;
+  return kRunBaseBytes + members * per_member + elites * kBytesPerMember;
 }
 
 std::string check_run_memory(const std::vector<const Config*>& configs,

@@ -91,5 +91,20 @@ TEST(SearchRuns, ARunWhoseEveryRobotFailsEndsWithAnError) {
   }
 }
 
+TEST(SearchRuns, MemoryEstimateCountsTheMapAndAfposDoublePopulation) {
+  Config neat = small_config();
+  neat.neat.pop_size = 100;
+  neat.run.generations = 1000;
+  Config map = neat;
+  map.search.strategy = SearchKind::map_elites;
+  map.map_elites.max_cells = 400;  // fewer cells than robots: the map holds at most 400
+  Config afpo = neat;
+  afpo.search.strategy = SearchKind::afpo;
+  EXPECT_EQ(estimate_run_memory(map) - estimate_run_memory(neat), 400 * kBytesPerMember);
+  EXPECT_EQ(estimate_run_memory(afpo) - estimate_run_memory(neat), 100 * kBytesPerMember);
+  map.run.generations = 2;  // fewer robots than cells: at most 200 elites
+  EXPECT_EQ(estimate_run_memory(map) - estimate_run_memory(neat), 200 * kBytesPerMember);
+}
+
 }  // namespace
 }  // namespace softevo::master
