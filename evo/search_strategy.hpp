@@ -90,8 +90,8 @@ Individual mutated_offspring(const Individual& a, double fitness_a, const Indivi
 // The common head of a non-NEAT state (payload of a MessageKind::strategy_state frame):
 //   string strategy name, u32 layout version, i64 generation, 4 x u64 Rng state,
 //   i32 next node key, i64 next genome id, i64 next species id
-// then the strategy's own fields. The reader checks name and version (WireError naming
-// `what`) and restores the generator and the counters; returns the generation.
+// then the strategy's own fields. The reader checks name and version (WireError naming the
+// strategy) and restores the generator and the counters; returns the generation.
 void write_state_head(WireWriter& w, SearchKind kind, std::uint32_t version,
                       std::int64_t generation, const Rng& rng, const InnovationTracker& counters);
 std::int64_t read_state_head(WireReader& r, SearchKind kind, std::uint32_t version, Rng& rng,
