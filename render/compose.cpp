@@ -1,4 +1,5 @@
 #include "render/compose.hpp"
+#include "render/font.hpp"
 
 #include <unistd.h>
 

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "common/safe_write.hpp"
 #include "render/render.hpp"
 
 namespace softevo::render {

@@ -23,6 +23,7 @@
 #include "motion/robot_source.hpp"
 #include "render/compose.hpp"
 #include "render/gif.hpp"
+#include "render/png.hpp"
 #include "render/render.hpp"
 #include "tools/commands.hpp"
 

@@ -15,7 +15,7 @@
 
 #include "common/robot.hpp"
 #include "io/h5.hpp"
-#include "render/render.hpp"
+#include "render/png.hpp"
 
 #include "tests/build_tree.hpp"
 #include "tests/sanitizers.hpp"
