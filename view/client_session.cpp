@@ -2,11 +2,9 @@
 #include "view/client_session.hpp"
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
-#include <set>
 
 #include <nlohmann/json.hpp>
 
@@ -87,23 +85,13 @@ json ClientSession::hello_json(const TerrainGrid& ground) const {
     colours.push_back({c[0], c[1], c[2]});
   }
   j["voxel_colours"] = colours;
-  // The outer skin (a face towards an empty cell; chambers count as filled): the page draws
-  // only these voxels, as the still renderer does, so that the chambers show through.
-  std::set<std::array<int, 3>> filled;
-  for (const auto& c : body.voxel_cells) filled.insert({c.x(), c.y(), c.z()});
-  for (const auto& c : body.chamber_cells) filled.insert({c.x(), c.y(), c.z()});
-  json skin = json::array();
-  for (const auto& c : body.voxel_cells) {
-    bool outside = false;
-    for (int axis = 0; axis < 3 && !outside; ++axis)
-      for (int step : {-1, 1}) {
-        std::array<int, 3> n = {c.x(), c.y(), c.z()};
-        n[static_cast<std::size_t>(axis)] += step;
-        outside = outside || !filled.count(n);
-      }
-    skin.push_back(outside ? 1 : 0);
-  }
-  j["voxel_skin"] = skin;
+  // The lattice cells (i, j, k) of the voxels, then of the chamber cells, flat: the page draws
+  // the body deformed from them as the still renderer does (docs/rendering.md "Deformed
+  // voxels"): which faces are skin, which corners neighbours share.
+  json cells = json::array();
+  for (const auto* list : {&body.voxel_cells, &body.chamber_cells})
+    for (const auto& c : *list) cells.insert(cells.end(), {c.x(), c.y(), c.z()});
+  j["cells"] = cells;
   j["chamber_index"] = body.chamber_index;
   j["planned_records"] = session_->planned_records();
   j["control_rate"] = session_->control_rate();

@@ -49,6 +49,12 @@ TEST(ViewClientSession, StartsWithTheHelloAndTheFirstFrame) {
   EXPECT_EQ(hello["type"], "hello");
   EXPECT_EQ(hello["voxels"], in.body.voxel_cells.size());
   EXPECT_EQ(hello["chamber_cells"], in.body.chamber_cells.size());
+  // The lattice cells the page draws the deformed body from (issue 39): voxels, then chambers.
+  const auto& cells = hello["cells"];
+  ASSERT_EQ(cells.size(), 3 * (in.body.voxel_cells.size() + in.body.chamber_cells.size()));
+  EXPECT_EQ(cells[3], in.body.voxel_cells[1].x());
+  const std::size_t j = 3 * in.body.voxel_cells.size();
+  EXPECT_EQ(cells[j + 2], in.body.chamber_cells[0].z());
   EXPECT_EQ(hello["directed"], true);
   EXPECT_EQ(hello["planned_records"], 13);
   EXPECT_EQ(hello["component_names"].size(), 5u);
