@@ -27,7 +27,6 @@ struct TraceLimits {
   static constexpr std::int32_t lattice_cells = 64;   // voxel cell indices in [0, 64)
   static constexpr std::int32_t materials = 10;       // physics.material_count <= 10
   static constexpr double position_m = 1.0e4;         // |coordinate| of a voxel or of the ground
-  static constexpr double pressure_pa = 1.0e8;        // absolute chamber pressure, 1000 bar
   static constexpr double max_voxel_size_m = 10.0;    // physics.voxel_size <= 10 m
   static constexpr double max_frame_rate_hz = 1.0e4;  // task.control_rate <= 10 kHz
   static constexpr double max_dt_s = 1.0;
@@ -74,9 +73,10 @@ struct Trace {
   void check(const std::string& where) const;
   // Throws std::invalid_argument naming the first value a simulation cannot have recorded
   // (docs/trace.md "Limits"): a non-finite or out-of-range attribute (voxel_size, frame_rate,
-  // dt, direction, fitness, the terrain's numbers), a position, quaternion, pressure, valve
-  // opening or time that is not finite or is out of range, times that go back, a voxel cell
-  // or material out of range. A renderer or viewer may then rely on every value being sane.
+  // dt, direction, fitness, the terrain's numbers), a position, quaternion or time that is not
+  // finite or is out of range, times that go back, a voxel cell or material out of range. A
+  // renderer or viewer may then rely on the geometry being sane. Pressures and valve commands
+  // may be NaN (a chamber that encloses no volume) and are not checked.
   void check_values(const std::string& where) const;
 };
 

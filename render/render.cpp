@@ -705,7 +705,9 @@ Image render_poses(const Body& body, const std::vector<Pose>& poses, const Camer
       const int j = quad.item - v;
       double inflation = 0.0;
       const int q = body.chamber_index[j];
-      if (q >= 0 && static_cast<std::size_t>(q) < pose.chamber_pressure.size()) {
+      // (A chamber that encloses no volume has a NaN pressure: not inflated.)
+      if (q >= 0 && static_cast<std::size_t>(q) < pose.chamber_pressure.size() &&
+          std::isfinite(pose.chamber_pressure[q])) {
         inflation = std::clamp((pose.chamber_pressure[q] - 1.0e5) / 0.2e5, 0.0, 1.0);
       }
       const float g = static_cast<float>(0.26 - 0.16 * inflation);
