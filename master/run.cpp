@@ -332,16 +332,13 @@ void RunLoop::check_failed_generations(const GenerationRecord& rec,
   const bool all_failed =
       !rec.status.empty() && std::all_of(rec.status.begin(), rec.status.end(), failure);
   failed_generations_ = all_failed ? failed_generations_ + 1 : 0;
-  const std::int64_t limit = run_.config.run.stop_after_failed_generations;
-  if (limit == 0 || failed_generations_ < limit) return;
-  std::array<std::size_t, 7> counts{};
+  StatusCounts counts{};
   for (std::uint8_t s : rec.status)
     if (s < counts.size()) ++counts[s];
-  std::string statuses;
-  for (std::size_t s = 0; s < counts.size(); ++s)
-    if (counts[s] > 0)
-      statuses += (statuses.empty() ? "" : ", ") + std::to_string(counts[s]) + " " +
-                  to_string(static_cast<EvalStatus>(s));
+  for (std::size_t s = 0; s < counts.size(); ++s) run_.statuses_this_start[s] += counts[s];
+  const std::int64_t limit = run_.config.run.stop_after_failed_generations;
+  if (limit == 0 || failed_generations_ < limit) return;
+  const std::string statuses = status_counts_text(counts);
   std::string cause;
   for (const GenomeOutcome& o : evaluated)
     if (!o.message.empty()) {

@@ -24,7 +24,14 @@ std::size_t open_descriptors() {
 }  // namespace
 
 std::uint64_t estimate_run_memory(const Config& config) {
-  const auto members = static_cast<std::uint64_t>(std::max<std::int64_t>(config.neat.pop_size, 0));
+  const auto pop = static_cast<std::uint64_t>(std::max<std::int64_t>(config.neat.pop_size, 0));
+  // Every species keeps at least max(min_species_size, elitism) members (docs/model.md §8.5). The
+  // per-member figure was measured at the default 2, so only a larger minimum adds members: up
+  // to (minimum - 2) more for each of at most pop/2 species of 2 (issue 39: min_species_size
+  // grew a population of 4 by 300 MB/s and was not counted here).
+  const auto minimum = static_cast<std::uint64_t>(
+      std::max<std::int64_t>({config.neat.min_species_size, config.neat.elitism, 2}));
+  const std::uint64_t members = pop + pop / 2 * (minimum - 2);
   std::uint64_t per_member = kBytesPerMember;
   if (config.learning.method != LearningMethod::none)
     per_member += kBytesPerLearningCandidate *
@@ -38,7 +45,7 @@ std::uint64_t estimate_run_memory(const Config& config) {
         static_cast<std::uint64_t>(std::max<std::int64_t>(config.map_elites.max_cells, 0)),
         members * static_cast<std::uint64_t>(std::max<std::int64_t>(config.run.generations, 1)));
   // AFPO evaluates its survivors and as many new robots each generation: 2 pop_size members.
-  if (config.search.strategy == SearchKind::afpo) elites = members;
+  if (config.search.strategy == SearchKind::afpo) elites = pop;
   return kRunBaseBytes + members * per_member + elites * kBytesPerMember;
 }
 

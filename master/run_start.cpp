@@ -47,7 +47,7 @@ std::string repair_hint(const std::string& out, const ArchiveCheck& check) {
 // --resume with another search strategy than the archive's is refused naming both (the config
 // check that follows would name the key only).
 void check_same_strategy(const std::string& out, const std::string& archive_text,
-                         const Config& config) {
+                         const Config& config, const OptionNames& names) {
   std::string archived = "neat";  // texts of NEAT runs have no search.strategy
   for (const auto& [key, value] : canonical_entries(archive_text))
     if (key == "search.strategy") archived = value.substr(1, value.size() - 2);
@@ -55,8 +55,9 @@ void check_same_strategy(const std::string& out, const std::string& archive_text
   if (archived != wanted)
     throw StartupError(out + ": cannot resume: the archive was evolved by search strategy \"" +
                        archived + "\", this run asks for \"" + wanted +
-                       "\" (search.strategy); a run keeps its strategy: leave out --config and "
-                       "the overrides, or give the new strategy another --out");
+                       "\" (search.strategy); a run keeps its strategy: leave out " + names.config +
+                       " and " + names.overrides + ", or give the new strategy another " +
+                       names.out);
 }
 
 }  // namespace
@@ -78,9 +79,9 @@ std::string host_name() {
 
 PreparedRun prepare_run(const Config& config, const RunOptions& options, int ranks) {
   if (options.resume && options.overwrite)
-    throw StartupError(options.out_path +
-                       ": --resume (continue this archive) and --overwrite (replace it) "
-                       "contradict each other; give one of them");
+    throw StartupError(options.out_path + ": " + options.names.resume +
+                       " (continue this archive) and " + options.names.overwrite +
+                       " (replace it) contradict each other; give one of them");
   // Every evaluation of the run stays within the work limits: refused here, not as a run of
   // failed evaluations (or, before the limits, of days per evaluation).
   try {
@@ -102,6 +103,7 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
   info.physics_revision = physics::kPhysicsRevision;
   info.seed = config.run.seed;
   info.ranks = ranks;
+  info.program = options.program;
   info.host = options.host.empty() ? host_name() : options.host;
   info.start_time = iso8601_now();
   info.config_hash = hash;
@@ -150,7 +152,7 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
       // Everything but the run length must be the archive's (the experiment and the seed): the
       // generations evolve the same whatever the target, so only run.generations may grow.
       const std::string old_text = archive.config_text();
-      check_same_strategy(out, old_text, config);
+      check_same_strategy(out, old_text, config, options.names);
       std::string differing;
       int count = 0;
       for (const KeyDifference& d : config_differences(old_text, run.config_text)) {
@@ -163,9 +165,10 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
         throw StartupError(
             out + ": cannot resume: this run's config differs from the archive's in " +
             std::to_string(count) + (count == 1 ? " key" : " keys") + " (" + differing +
-            "); only run.generations (--generations) may change on resume: leave out --config "
-            "and the overrides to continue with the archive's config, or give the run "
-            "another --out");
+            "); only run.generations (" + options.names.generations +
+            ") may change on resume: leave out " + options.names.config + " and " +
+            options.names.overrides +
+            " to continue with the archive's config, or give the run another " + options.names.out);
       run.run_length_changed = old_text != run.config_text;
       if (old.physics_revision != physics::kPhysicsRevision)
         throw StartupError(
@@ -220,9 +223,9 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
       throw StartupError(out + ": cannot resume: bad checkpoint: " + e.what());
     }
   } else if (exists && !options.overwrite) {
-    throw StartupError(out +
-                       " exists: pass --resume to continue it, --overwrite to replace it, or "
-                       "choose another --out");
+    throw StartupError(out + " exists: pass " + options.names.resume + " to continue it, " +
+                       options.names.overwrite + " to replace it, or choose another " +
+                       options.names.out);
   }
   if (!run.population)
     run.population = evo::make_strategy(config, task_inputs(config),
