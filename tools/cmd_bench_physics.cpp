@@ -119,7 +119,7 @@ BenchRow bench_one(const Scene& scene, Integrator integrator, physics::Simd simd
   options.simd = simd;
   const physics::Model model =
       physics::build_model(physics::solid_block(scene.x, scene.y, scene.z, 1.0e5), cfg, options);
-  BenchRow row{scene.name,        to_string(integrator), physics::to_string(model.simd),
+  BenchRow row{scene.name,        to_string(integrator), softevo::to_string(model.simd),
                model.voxel_count, model.link_count,      steps};
   row.cpu_seconds = 1e300;
   for (int r = 0; r < runs; ++r) {
@@ -179,7 +179,7 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
       if (!physics::simd_supported(s)) {
         std::fprintf(stderr,
                      "softevo bench physics: --simd %s is not supported by this CPU or build\n",
-                     physics::to_string(s));
+                     softevo::to_string(s));
         exit_code = kExitUsage;
         return;
       }
