@@ -2,6 +2,7 @@
 #include "render/render.hpp"
 #include "common/safe_write.hpp"
 #include "render/font.hpp"
+#include "scene/cells.hpp"
 
 #ifdef SOFTEVO_HAVE_PNG
 #include <png.h>
@@ -47,39 +48,8 @@ struct Fragment {
   std::int32_t next;  // index of the next fragment of the same pixel, -1 = end
 };
 
-// Lattice lookup of a body: which item sits in a cell. Items 0..V-1 are structural voxels,
-// V..V+C-1 chamber cells; -1 = empty (or outside the lattice).
-class CellIndex {
- public:
-  explicit CellIndex(const Body& body) {
-    Eigen::Vector3i hi(0, 0, 0);
-    for (const auto& c : body.voxel_cells) hi = hi.cwiseMax(c);
-    for (const auto& c : body.chamber_cells) hi = hi.cwiseMax(c);
-    dims_ = hi + Eigen::Vector3i::Ones();
-    items_.assign(static_cast<std::size_t>(dims_.prod()), -1);
-    const int v = static_cast<int>(body.voxel_cells.size());
-    for (int i = 0; i < v; ++i) items_[index(body.voxel_cells[i])] = i;
-    for (int j = 0; j < static_cast<int>(body.chamber_cells.size()); ++j) {
-      items_[index(body.chamber_cells[j])] = v + j;
-    }
-  }
-  int at(const Eigen::Vector3i& c) const {
-    if ((c.array() < 0).any() || (c.array() >= dims_.array()).any()) return -1;
-    return items_[index(c)];
-  }
-
- private:
-  std::size_t index(const Eigen::Vector3i& c) const {
-    return (static_cast<std::size_t>(c.x()) * dims_.y() + c.y()) * dims_.z() + c.z();
-  }
-  Eigen::Vector3i dims_;
-  std::vector<int> items_;
-};
-
-// Face directions in the link order of docs/model.md §2.1: X+, X-, Y+, Y-, Z+, Z-.
-const std::array<Eigen::Vector3i, 6> kFaceSteps = {
-    Eigen::Vector3i(1, 0, 0),  Eigen::Vector3i(-1, 0, 0), Eigen::Vector3i(0, 1, 0),
-    Eigen::Vector3i(0, -1, 0), Eigen::Vector3i(0, 0, 1),  Eigen::Vector3i(0, 0, -1)};
+using scene::CellIndex;
+using scene::kFaceSteps;
 
 // Chamber cells have no voxel in the simulation: place each one where its face neighbours
 // (wall voxels, then already placed chamber cells, pass by pass) say it should be:
