@@ -23,6 +23,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "common/robot.hpp"
 #include "common/safe_write.hpp"
 #include "scene/scene.hpp"
 
@@ -179,6 +180,17 @@ int write_slices(const Fabrication& fabrication, const std::string& dir, Overwri
 // DIR/mold-lower.stl, mold-upper.stl, core-<q>.stl, core-voids.stl, mold.json; returns the paths.
 std::vector<std::string> write_mold(const Mold& mold, const std::string& dir, Overwrite overwrite);
 std::string stl_bytes(const Mesh& mesh);  // binary STL in mm
+// The paths those writers write, for checking every target before the first is written.
+std::vector<std::string> stl_paths(const Fabrication& fabrication, const std::string& out);
+std::vector<std::string> slice_paths(const Fabrication& fabrication, const std::string& dir);
+std::vector<std::string> mold_paths(const Mold& mold, const std::string& dir);
+// Slice images: pixels [count] and their pitch [m]. Throws FabricateError naming --dpi and
+// --layer-um beyond Options::max_pixels.
+struct SliceSize {
+  int width = 0, height = 0, layers = 0;
+  double pixel_x = 0, pixel_y = 0;  // [m]
+};
+SliceSize slice_size(const Fabrication& fabrication);
 
 // `softevo fabricate --check`: what a 3MF holds, read back with lib3mf.
 struct CheckedObject {
@@ -199,5 +211,33 @@ CheckReport check_3mf(const std::string& path);
 bool have_3mf();  // built with lib3mf
 
 std::string mm_text(double metres);  // "12.5 mm": lengths in messages
+
+// What `softevo fabricate` and Robot.fabricate ask for, in their own units and words.
+struct Request {
+  std::string output;  // OUT.3mf or OUT.stl ("" = none)
+  std::string format;  // "3mf", "stl" or "" (by OUT's extension)
+  std::string slices;  // directory ("" = none)
+  std::string mold;    // directory ("" = none)
+  Options options;
+  Overwrite overwrite = Overwrite::refuse;
+};
+// --dpi "X,Y" and --split "z=HEIGHT" [mm] into `options`; FabricateError naming the option.
+void parse_dpi(const std::string& text, Options& options);
+void parse_split(const std::string& text, Options& options);
+
+// The robot file's name, materials and `evaluation` block as 3MF metadata.
+Provenance provenance_of(const RobotFile& robot);
+
+struct Written {
+  Fabrication fabrication;
+  std::optional<Mold> mold;
+  std::vector<std::string> files;  // every file written, slices excepted
+  int slices = 0;                  // slice images written
+};
+// Checks the request, computes every geometry, then writes: nothing is written when any check
+// fails. Throws FabricateError (bad input or option), OutputFileError (a target that may not
+// be written).
+Written fabricate_robot(const RobotFile& robot, const Provenance& provenance,
+                        const Request& request);
 
 }  // namespace softevo::fabricate

@@ -53,6 +53,56 @@ void write_all(const std::vector<std::pair<std::string, std::string>>& files, Ov
 
 }  // namespace
 
+std::vector<std::string> stl_paths(const Fabrication& fab, const std::string& out) {
+  std::string stem = out;
+  if (stem.size() > 4 && stem.substr(stem.size() - 4) == ".stl") stem.resize(stem.size() - 4);
+  std::vector<std::string> paths;
+  for (const MaterialGroup& g : fab.groups) paths.push_back(stem + "-" + g.name() + ".stl");
+  return paths;
+}
+
+SliceSize slice_size(const Fabrication& fab) {
+  const Options& o = fab.options;
+  const Grid& g = fab.grid;
+  SliceSize size;
+  size.pixel_x = 0.0254 / o.dpi_x;
+  size.pixel_y = 0.0254 / o.dpi_y;
+  const double w = std::ceil(g.planes[0].back() / size.pixel_x),
+               h = std::ceil(g.planes[1].back() / size.pixel_y),
+               l = std::ceil(g.planes[2].back() / o.layer);
+  if (w * h * l > static_cast<double>(o.max_pixels) || w > 1e6 || h > 1e6)
+    throw FabricateError(
+        "fabricate: --slices at --dpi " + std::to_string(o.dpi_x) + "," + std::to_string(o.dpi_y) +
+        " and --layer-um " + std::to_string(o.layer * 1e6) + " would be " + std::to_string(w) +
+        " x " + std::to_string(h) + " x " + std::to_string(l) + " pixels, more than " +
+        std::to_string(o.max_pixels) + " (the stated limit): lower --dpi or raise --layer-um");
+  size.width = static_cast<int>(w);
+  size.height = static_cast<int>(h);
+  size.layers = static_cast<int>(l);
+  return size;
+}
+
+std::vector<std::string> slice_paths(const Fabrication& fab, const std::string& dir) {
+  std::vector<std::string> paths;
+  const int layers = slice_size(fab).layers;
+  for (int z = 0; z < layers; ++z) {
+    char name[32];
+    std::snprintf(name, sizeof name, "slice-%05d.png", z);
+    paths.push_back((fs::path(dir) / name).string());
+  }
+  paths.push_back((fs::path(dir) / "palette.json").string());
+  return paths;
+}
+
+std::vector<std::string> mold_paths(const Mold& mold, const std::string& dir) {
+  std::vector<std::string> paths;
+  for (const auto* list : {&mold.parts, &mold.cores}) {
+    for (const Mesh& m : *list) paths.push_back((fs::path(dir) / (m.name + ".stl")).string());
+  }
+  paths.push_back((fs::path(dir) / "mold.json").string());
+  return paths;
+}
+
 std::string stl_bytes(const Mesh& mesh) {
   std::string out;
   out.reserve(84 + 50 * mesh.triangles.size());
@@ -76,14 +126,10 @@ std::string stl_bytes(const Mesh& mesh) {
 
 std::vector<std::string> write_stls(const Fabrication& fab, const std::string& out,
                                     Overwrite overwrite) {
-  std::string stem = out;
-  if (stem.size() > 4 && stem.substr(stem.size() - 4) == ".stl") stem.resize(stem.size() - 4);
+  const std::vector<std::string> paths = stl_paths(fab, out);
   std::vector<std::pair<std::string, std::string>> files;
-  std::vector<std::string> paths;
-  for (const MaterialGroup& g : fab.groups) {
-    paths.push_back(stem + "-" + g.name() + ".stl");
-    files.emplace_back(paths.back(), stl_bytes(g.mesh));
-  }
+  for (std::size_t g = 0; g < paths.size(); ++g)
+    files.emplace_back(paths[g], stl_bytes(fab.groups[g].mesh));
   write_all(files, overwrite);
   return paths;
 }
@@ -92,18 +138,9 @@ int write_slices(const Fabrication& fab, const std::string& dir, Overwrite overw
   render::require_png_support(dir + "/slice-00000.png");
   const Options& o = fab.options;
   const Grid& g = fab.grid;
-  const double width = g.planes[0].back(), depth = g.planes[1].back(),
-               height = g.planes[2].back();  // [m]
-  const double px = 0.0254 / o.dpi_x, py = 0.0254 / o.dpi_y;
-  const double w = std::ceil(width / px), h = std::ceil(depth / py),
-               l = std::ceil(height / o.layer);
-  if (w * h * l > static_cast<double>(o.max_pixels) || w > 1e6 || h > 1e6)
-    throw FabricateError(
-        "fabricate: --slices at --dpi " + std::to_string(o.dpi_x) + "," + std::to_string(o.dpi_y) +
-        " and --layer-um " + std::to_string(o.layer * 1e6) + " would be " + std::to_string(w) +
-        " x " + std::to_string(h) + " x " + std::to_string(l) + " pixels, more than " +
-        std::to_string(o.max_pixels) + " (the stated limit): lower --dpi or raise --layer-um");
-  const int W = static_cast<int>(w), H = static_cast<int>(h), L = static_cast<int>(l);
+  const SliceSize size = slice_size(fab);
+  const int W = size.width, H = size.height, L = size.layers;
+  const double px = size.pixel_x, py = size.pixel_y;
   // Palette: pixel value = grid label (materials 1..10, cavities 100 + q, channels 200 + q, voids
   // 250), so a pixel names what is printed there.
   nlohmann::ordered_json palette;
@@ -134,16 +171,10 @@ int write_slices(const Fabrication& fab, const std::string& dir, Overwrite overw
   if (fab.void_cells > 0)
     values[std::to_string(label::kVoid)] = {{"kind", "void"}, {"fill", "support"}};
 
+  const std::vector<std::string> names = slice_paths(fab, dir);
   make_directory(dir, "--slices");
-  std::vector<std::string> names;
-  for (int z = 0; z < L; ++z) {
-    char name[32];
-    std::snprintf(name, sizeof name, "slice-%05d.png", z);
-    names.push_back((fs::path(dir) / name).string());
-    check_output_target(names.back(), overwrite);
-  }
-  const std::string palette_path = (fs::path(dir) / "palette.json").string();
-  check_output_target(palette_path, overwrite);
+  for (const auto& name : names) check_output_target(name, overwrite);
+  const std::string& palette_path = names.back();
   // The grid cell of every column and row once; a slice is then a table lookup per pixel.
   std::vector<int> cx(W), cy(H);
   for (int x = 0; x < W; ++x) cx[x] = g.axis_cell(0, (x + 0.5) * px);
@@ -166,15 +197,12 @@ int write_slices(const Fabrication& fab, const std::string& dir, Overwrite overw
 
 std::vector<std::string> write_mold(const Mold& mold, const std::string& dir, Overwrite overwrite) {
   make_directory(dir, "--mold");
+  const std::vector<std::string> paths = mold_paths(mold, dir);
   std::vector<std::pair<std::string, std::string>> files;
-  std::vector<std::string> paths;
+  std::size_t k = 0;
   for (const auto* list : {&mold.parts, &mold.cores}) {
-    for (const Mesh& m : *list) {
-      paths.push_back((fs::path(dir) / (m.name + ".stl")).string());
-      files.emplace_back(paths.back(), stl_bytes(m));
-    }
+    for (const Mesh& m : *list) files.emplace_back(paths[k++], stl_bytes(m));
   }
-  paths.push_back((fs::path(dir) / "mold.json").string());
   files.emplace_back(paths.back(), mold.json());
   write_all(files, overwrite);
   return paths;

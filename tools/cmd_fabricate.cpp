@@ -44,68 +44,28 @@ struct FabricateArgs {
   bool json = false;
 };
 
-std::string extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext.empty() ? ext : ext.substr(1);
-}
-
 // The robot and what the 3MF metadata says of it.
 std::pair<RobotFile, fabricate::Provenance> load_robot(const FabricateArgs& a) {
-  fabricate::Provenance pv;
-  RobotFile robot;
   if (io::is_run_archive(a.input)) {
     const motion::ArchivedIndividual ind =
         motion::archived_individual(a.input, a.generation, a.best ? std::nullopt : a.id);
-    robot = motion::robot_of(ind);
+    RobotFile robot = motion::robot_of(ind);
+    fabricate::Provenance pv = fabricate::provenance_of(robot);
     pv.genome_id = ind.id;
     pv.generation = ind.generation;
     pv.run = a.input;
     pv.config_hash = hash_hex(text_hash(ind.config_text));
     pv.fitness = ind.fitness;
-  } else {
-    if (a.generation || a.id || a.best)
-      throw std::invalid_argument(
-          "fabricate: --generation, --id and --best select from a run "
-          "archive; " +
-          a.input + " is a robot file");
-    robot = read_robot_file(a.input);
-    if (robot.evaluation) {
-      pv.genome_id = robot.evaluation->id;
-      pv.generation = robot.evaluation->generation;
-      pv.run = robot.evaluation->run;
-      pv.config_hash = robot.evaluation->config_hash;
-      pv.fitness = robot.evaluation->fitness;
-    }
+    return {robot, pv};
   }
-  pv.name = robot.name.empty() ? std::filesystem::path(a.input).stem().string() : robot.name;
-  for (const auto& m : robot.body.materials) pv.youngs_modulus.push_back(m.youngs_modulus);
-  return {robot, pv};
-}
-
-fabricate::Options options_of(const FabricateArgs& a) {
-  fabricate::Options o;
-  o.scale = a.scale;
-  o.channel_diameter = a.channel_mm * 1e-3;
-  o.wall = a.wall_mm * 1e-3;
-  o.layer = a.layer_um * 1e-6;
-  const auto comma = a.dpi.find(',');
-  char* end = nullptr;
-  o.dpi_x = std::strtod(a.dpi.c_str(), &end);
-  if (comma == std::string::npos || end != a.dpi.c_str() + comma)
-    throw fabricate::FabricateError("fabricate: --dpi " + a.dpi + " is not X,Y (e.g. 600,300)");
-  o.dpi_y = std::strtod(a.dpi.c_str() + comma + 1, &end);
-  if (*end != '\0')
-    throw fabricate::FabricateError("fabricate: --dpi " + a.dpi + " is not X,Y (e.g. 600,300)");
-  if (!a.split.empty()) {
-    double z = 0;
-    if (a.split.rfind("z=", 0) != 0 || (z = std::strtod(a.split.c_str() + 2, &end), *end != '\0') ||
-        end == a.split.c_str() + 2)
-      throw fabricate::FabricateError("fabricate: --split " + a.split +
-                                      " is not z=HEIGHT (mm above the body's bottom)");
-    o.split_z = z * 1e-3;
-  }
-  return o;
+  if (a.generation || a.id || a.best)
+    throw std::invalid_argument(
+        "fabricate: --generation, --id and --best select from a run "
+        "archive; " +
+        a.input + " is a robot file");
+  RobotFile robot = read_robot_file(a.input);
+  if (robot.name.empty()) robot.name = std::filesystem::path(a.input).stem().string();
+  return {robot, fabricate::provenance_of(robot)};
 }
 
 int run_check(const FabricateArgs& a) {
@@ -124,46 +84,28 @@ int run_check(const FabricateArgs& a) {
 
 int run_fabricate(const FabricateArgs& a) {
   if (a.input.empty()) throw std::invalid_argument("fabricate: ROBOT is required (or --check)");
-  if (a.output.empty() && a.slices.empty() && a.mold.empty())
-    throw std::invalid_argument(
-        "fabricate: nothing to write: give -o OUT (.3mf or .stl), "
-        "--slices DIR or --mold DIR");
-  std::string format = a.format.empty() ? extension(a.output) : a.format;
-  if (!a.output.empty() && format != "3mf" && format != "stl")
-    throw std::invalid_argument("fabricate: -o " + a.output +
-                                ": the format is .3mf or .stl (by the extension or --format)");
+  fabricate::Request request;
+  request.output = a.output;
+  request.format = a.format;
+  request.slices = a.slices;
+  request.mold = a.mold;
+  request.overwrite = a.force ? Overwrite::replace : Overwrite::refuse;
+  fabricate::Options& o = request.options;
+  o.scale = a.scale;
+  o.channel_diameter = a.channel_mm * 1e-3;
+  o.wall = a.wall_mm * 1e-3;
+  o.layer = a.layer_um * 1e-6;
+  fabricate::parse_dpi(a.dpi, o);
+  if (!a.split.empty()) fabricate::parse_split(a.split, o);
   const auto [robot, provenance] = load_robot(a);
-  const int chambers = robot.body.chamber_count();
-  bool any_voxel = false;
-  for (int c : robot.body.cells) any_voxel = any_voxel || BodyPlan::is_structural(c);
-  if (!any_voxel)
-    throw fabricate::FabricateError("fabricate: " + a.input + ": the robot has no voxels");
-  const scene::Body body = scene::body_from_plan(robot.body);
-  const fabricate::Options options = options_of(a);
-  const fabricate::Fabrication fab = fabricate::fabricate(body, provenance, options);
-  std::optional<fabricate::Mold> mold;
-  if (!a.mold.empty()) mold = fabricate::make_mold(fab);
-  const Overwrite overwrite = a.force ? Overwrite::replace : Overwrite::refuse;
-  std::vector<std::string> written;
-  if (!a.output.empty()) {
-    if (format == "3mf") {
-      fabricate::write_3mf(fab, a.output, overwrite);
-      written.push_back(a.output);
-    } else {
-      for (const auto& p : fabricate::write_stls(fab, a.output, overwrite)) written.push_back(p);
-    }
-  }
-  int slices = 0;
-  if (!a.slices.empty()) slices = fabricate::write_slices(fab, a.slices, overwrite);
-  if (mold) {
-    for (const auto& p : fabricate::write_mold(*mold, a.mold, overwrite)) written.push_back(p);
-  }
+  const fabricate::Written w = fabricate::fabricate_robot(robot, provenance, request);
+  const fabricate::Fabrication& fab = w.fabrication;
   if (a.json) {
     nlohmann::ordered_json j;
     j["input"] = a.input;
     j["robot"] = provenance.name;
     j["voxels"] = fab.voxel_count;
-    j["chambers"] = chambers;
+    j["chambers"] = fab.inlets.size();
     j["voxel_size_mm"] = fab.voxel_size * 1e3;
     j["groups"] = nlohmann::ordered_json::array();
     for (const auto& g : fab.groups) {
@@ -173,9 +115,9 @@ int run_fabricate(const FabricateArgs& a) {
                              {"volume_mm3", g.mesh.volume() * 1e9}});
     }
     j["channel_volume_mm3"] = fab.channel_volume * 1e9;
-    j["files"] = written;
-    if (!a.slices.empty()) j["slices"] = slices;
-    if (mold) j["split_z_mm"] = mold->split_z * 1e3;
+    j["files"] = w.files;
+    if (!a.slices.empty()) j["slices"] = w.slices;
+    if (w.mold) j["split_z_mm"] = w.mold->split_z * 1e3;
     std::printf("%s\n", j.dump().c_str());
   } else {
     std::printf("%s: %s\n", provenance.name.c_str(), fab.summary().c_str());
@@ -184,9 +126,9 @@ int run_fabricate(const FabricateArgs& a) {
                   in.chamber, in.wall_cells, in.mouth.x() * 1e3, in.mouth.y() * 1e3,
                   in.mouth.z() * 1e3);
     }
-    for (const auto& p : written) std::printf("wrote %s\n", p.c_str());
+    for (const auto& p : w.files) std::printf("wrote %s\n", p.c_str());
     if (!a.slices.empty())
-      std::printf("wrote %d slices and palette.json to %s\n", slices, a.slices.c_str());
+      std::printf("wrote %d slices and palette.json to %s\n", w.slices, a.slices.c_str());
   }
   return kExitOk;
 }
