@@ -17,9 +17,18 @@ bool overlap(const Eigen::AlignedBox3d& a, const Eigen::AlignedBox3d& b) {
   return (a.min().array() < b.max().array()).all() && (b.min().array() < a.max().array()).all();
 }
 
+// Millimetres to the nanometre: 50 mm rather than 49.99999999999999 from 5 x 0.01 m.
+double mm_rounded(double metres) {
+  return std::round(metres * 1e9) / 1e6;
+}
+
 nlohmann::ordered_json box_json(const Eigen::AlignedBox3d& b) {
-  return {{"min_mm", {b.min().x() * 1e3, b.min().y() * 1e3, b.min().z() * 1e3}},
-          {"max_mm", {b.max().x() * 1e3, b.max().y() * 1e3, b.max().z() * 1e3}}};
+  nlohmann::ordered_json lo = nlohmann::ordered_json::array(), hi = lo;
+  for (int a = 0; a < 3; ++a) {
+    lo.push_back(mm_rounded(b.min()[a]));
+    hi.push_back(mm_rounded(b.max()[a]));
+  }
+  return {{"min_mm", lo}, {"max_mm", hi}};
 }
 
 }  // namespace
@@ -211,7 +220,7 @@ std::string Mold::json() const {
   j["format"] = "softevo.mold/1";
   j["units"] = "mm";
   j["box"] = box_json(box);
-  j["split_z_mm"] = split_z * 1e3;
+  j["split_z_mm"] = mm_rounded(split_z);
   j["pour_hole"] = box_json(pour);
   j["vents"] = nlohmann::ordered_json::array();
   for (const auto& v : vents) j["vents"].push_back(box_json(v));
@@ -219,12 +228,14 @@ std::string Mold::json() const {
   for (const auto& k : keys) j["keys"].push_back(box_json(k));
   j["files"] = nlohmann::ordered_json::array();
   for (const Mesh& m : parts) {
-    j["files"].push_back(
-        {{"file", m.name + ".stl"}, {"kind", "mold part"}, {"volume_mm3", m.volume() * 1e9}});
+    j["files"].push_back({{"file", m.name + ".stl"},
+                          {"kind", "mold part"},
+                          {"volume_mm3", std::round(m.volume() * 1e15) / 1e6}});
   }
   for (const Mesh& m : cores) {
-    j["files"].push_back(
-        {{"file", m.name + ".stl"}, {"kind", "core"}, {"volume_mm3", m.volume() * 1e9}});
+    j["files"].push_back({{"file", m.name + ".stl"},
+                          {"kind", "core"},
+                          {"volume_mm3", std::round(m.volume() * 1e15) / 1e6}});
   }
   return j.dump(2) + "\n";
 }

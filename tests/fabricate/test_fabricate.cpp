@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -607,6 +608,8 @@ TEST(Fabricate, RandomDevelopedBodiesExportToValidMeshes) {
       ++refused;
     }
   }
+  std::printf("%d random bodies exported with their molds, %d refused (no straight inlet)\n",
+              exported, refused);
   EXPECT_GT(exported, 10) << refused << " refused";
 }
 
