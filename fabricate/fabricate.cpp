@@ -255,12 +255,6 @@ Mesh extract_mesh(const Grid& grid, const std::function<bool(int label)>& inside
   return mesh;
 }
 
-std::string MaterialGroup::name() const {
-  char text[48];
-  std::snprintf(text, sizeof text, "E%.0fPa", youngs_modulus);
-  return text;
-}
-
 std::string Fabrication::summary() const {
   char text[256];
   double volume = 0;
@@ -456,8 +450,15 @@ Fabrication fabricate(const scene::Body& body, const Provenance& provenance,
                            : 1.0e4 * m;  // the robot file's default (docs/model.md §10)
     g.colour = render::material_colour(m, body.material_count);
     g.voxels = count[m];
+    char name[64];
+    std::snprintf(name, sizeof name, "E%.0fPa", g.youngs_modulus);
+    g.name = name;
+    if (std::any_of(fab.groups.begin(), fab.groups.end(), [&](const MaterialGroup& other) {
+          return other.youngs_modulus == g.youngs_modulus;
+        }))
+      g.name += "-m" + std::to_string(m);
     g.mesh = extract_mesh(
-        fab.grid, [m](int l) { return l == m; }, g.name(), triangles_left);
+        fab.grid, [m](int l) { return l == m; }, g.name, triangles_left);
     triangles_left -= g.mesh.triangles.size();
     fab.groups.push_back(std::move(g));
   }

@@ -129,7 +129,8 @@ struct MaterialGroup {
   std::array<std::uint8_t, 3> colour{};  // as softevo render colours it
   std::size_t voxels = 0;
   Mesh mesh;
-  std::string name() const;  // "E<modulus>Pa", e.g. E30000Pa
+  // "E<modulus>Pa" (E30000Pa); "E<modulus>Pa-m<material>" when two groups share a modulus.
+  std::string name;
 };
 
 // The body as printable geometry.

@@ -57,7 +57,7 @@ std::vector<std::string> stl_paths(const Fabrication& fab, const std::string& ou
   std::string stem = out;
   if (stem.size() > 4 && stem.substr(stem.size() - 4) == ".stl") stem.resize(stem.size() - 4);
   std::vector<std::string> paths;
-  for (const MaterialGroup& g : fab.groups) paths.push_back(stem + "-" + g.name() + ".stl");
+  for (const MaterialGroup& g : fab.groups) paths.push_back(stem + "-" + g.name + ".stl");
   return paths;
 }
 
@@ -158,7 +158,7 @@ int write_slices(const Fabrication& fab, const std::string& dir, Overwrite overw
     std::snprintf(colour, sizeof colour, "#%02x%02x%02x", grp.colour[0], grp.colour[1],
                   grp.colour[2]);
     values[std::to_string(grp.material)] = {{"kind", "material"},
-                                            {"group", grp.name()},
+                                            {"group", grp.name},
                                             {"youngs_modulus_pa", grp.youngs_modulus},
                                             {"colour", colour}};
   }

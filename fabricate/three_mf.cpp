@@ -120,13 +120,13 @@ void write_3mf(const Fabrication& fab, const std::string& path, Overwrite overwr
   check(NMR::lib3mf_resource_getresourceid(materials.p, &materials_id), materials.p, what);
   for (const MaterialGroup& g : fab.groups) {
     DWORD index = 0;
-    check(NMR::lib3mf_basematerial_addmaterialutf8(materials.p, g.name().c_str(), g.colour[0],
+    check(NMR::lib3mf_basematerial_addmaterialutf8(materials.p, g.name.c_str(), g.colour[0],
                                                    g.colour[1], g.colour[2], &index),
           materials.p, what);
     Handle object;
     check(NMR::lib3mf_model_addmeshobject(model.p, &object.p), model.p, what);
-    check(NMR::lib3mf_object_setnameutf8(object.p, g.name().c_str()), object.p, what);
-    const std::string part = "material " + std::to_string(g.material) + ", " + g.name();
+    check(NMR::lib3mf_object_setnameutf8(object.p, g.name.c_str()), object.p, what);
+    const std::string part = "material " + std::to_string(g.material) + ", " + g.name;
     check(NMR::lib3mf_object_setpartnumberutf8(object.p, part.c_str()), object.p, what);
     std::vector<NMR::MODELMESHVERTEX> vertices(g.mesh.vertices.size());
     for (std::size_t i = 0; i < vertices.size(); ++i) {
@@ -140,7 +140,7 @@ void write_3mf(const Fabrication& fab, const std::string& path, Overwrite overwr
     check(NMR::lib3mf_meshobject_setgeometry(object.p, vertices.data(),
                                              static_cast<DWORD>(vertices.size()), triangles.data(),
                                              static_cast<DWORD>(triangles.size())),
-          object.p, what + ": " + g.name());
+          object.p, what + ": " + g.name);
     Handle property;
     check(NMR::lib3mf_object_createdefaultpropertyhandler(object.p, &property.p), object.p, what);
     check(NMR::lib3mf_defaultpropertyhandler_setbasematerial(property.p, materials_id, index),

@@ -109,7 +109,7 @@ int run_fabricate(const FabricateArgs& a) {
     j["voxel_size_mm"] = fab.voxel_size * 1e3;
     j["groups"] = nlohmann::ordered_json::array();
     for (const auto& g : fab.groups) {
-      j["groups"].push_back({{"name", g.name()},
+      j["groups"].push_back({{"name", g.name},
                              {"voxels", g.voxels},
                              {"triangles", g.mesh.triangles.size()},
                              {"volume_mm3", g.mesh.volume() * 1e9}});

@@ -132,7 +132,7 @@ py::dict fabricate_robot(const RobotFile& robot, const std::string& output,
   d["chambers"] = w.fabrication.inlets.size();
   py::list groups;
   for (const auto& g : w.fabrication.groups) {
-    groups.append(py::dict("name"_a = g.name(), "voxels"_a = g.voxels,
+    groups.append(py::dict("name"_a = g.name, "voxels"_a = g.voxels,
                            "triangles"_a = g.mesh.triangles.size(),
                            "volume_mm3"_a = g.mesh.volume() * 1e9));
   }

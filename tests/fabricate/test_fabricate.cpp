@@ -515,6 +515,19 @@ TEST(Fabricate, SlicesGiveBackTheVoxelsAndCavities) {
   fs::remove_all(dir);
 }
 
+TEST(Fabricate, GroupsOfOneModulusGetDistinctNames) {
+  const fs::path p = shipped_and_champions().front();  // dir-open-steerable: 5 groups
+  const RobotFile robot = read_robot_file(p.string());
+  Provenance pv = provenance_of(robot);
+  pv.youngs_modulus.assign(10, 5.0e4);
+  const Fabrication fab = fabricate(scene::body_from_plan(robot.body), pv, {});
+  std::set<std::string> names;
+  for (const auto& g : fab.groups) names.insert(g.name);
+  EXPECT_GT(fab.groups.size(), 2U);
+  EXPECT_EQ(names.size(), fab.groups.size());
+  EXPECT_EQ(fab.groups.front().name, "E50000Pa");
+}
+
 // Bad input: each gets its clear error, naming the option, and no file is left.
 TEST(Fabricate, BadInputIsAClearErrorAndWritesNothing) {
   const RobotFile robot = read_robot_file(shipped_and_champions().front().string());
@@ -594,7 +607,7 @@ TEST(Fabricate, RandomDevelopedBodiesExportToValidMeshes) {
       const Fabrication fab = fabricate(body, pv, {});
       double volume = 0;
       for (const auto& g : fab.groups) {
-        expect_closed(Soup{g.name(), g.mesh.vertices, g.mesh.triangles}, true);
+        expect_closed(Soup{g.name, g.mesh.vertices, g.mesh.triangles}, true);
         volume += g.mesh.volume();
       }
       const double s3 = std::pow(fab.voxel_size, 3);
