@@ -119,3 +119,32 @@ def test_cli_writes_3mf_that_check_reads_back_and_leaves_nothing_on_error(tmp_pa
     assert bad.returncode == 2 and "--split" in bad.stderr
     assert not (tmp_path / "x.3mf").exists() and not (tmp_path / "mold").exists()
     assert sorted(os.listdir(tmp_path)) == ["w.3mf"]
+
+
+@pytest.mark.skipif(not SOFTEVO.exists(), reason="the softevo CLI is not built")
+def test_cli_takes_an_archived_individual_and_records_where_it_came_from(tiny_run, tmp_path):
+    best = subprocess.run([SOFTEVO, "fabricate", tiny_run, "--best", "-o", tmp_path / "b.stl",
+                           "--json"], capture_output=True, text=True)
+    assert best.returncode == 0, best.stderr
+    written = json.loads(best.stdout)
+    for f in written["files"]:
+        stl_volume_closed(f)
+    out = tmp_path / "b.3mf"
+    run = subprocess.run([SOFTEVO, "fabricate", tiny_run, "--best", "-o", out],
+                         capture_output=True, text=True)
+    if "without lib3mf" in run.stderr:
+        pytest.skip("built without lib3mf")
+    assert run.returncode == 0, run.stderr
+    check = subprocess.run([SOFTEVO, "fabricate", "--check", out, "--json"], capture_output=True,
+                           text=True)
+    description = json.loads(check.stdout)["metadata"]["Description"]
+    table = softevo.open_run(tiny_run).individuals()
+    fitness = np.asarray(table["fitness"])
+    best_id = int(np.asarray(table["id"])[np.argmax(fitness)])
+    assert f"genome_id: {best_id}" in description
+    assert f"run: {tiny_run}" in description
+    assert re.search(r"config_hash: [0-9a-f]{16}", description)
+    # --id of a robot file is a usage error naming the options.
+    bad = subprocess.run([SOFTEVO, "fabricate", ROBOT, "--id", "3", "-o", tmp_path / "x.stl"],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "--id" in bad.stderr
