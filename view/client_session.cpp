@@ -10,6 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "fabricate/fabricate.hpp"
+#include "scene/cells.hpp"
 #include "view/bytes.hpp"
 #include "view/export_html.hpp"
 
@@ -66,6 +68,38 @@ json terrain_json(const TerrainGrid& g) {
           {"nx", g.nx},     {"ny", g.ny}, {"z", base64(bytes)}};
 }
 
+// The fabrication geometry the page's "fabrication" box shows (docs/fabrication.md): each
+// chamber's inlet channel as one box per wall voxel it passes through, in that voxel's frame
+// (centre relative to the voxel's centre, size [m]), so that it moves with the voxel. A body
+// fabricate refuses gets {"error": message} instead.
+json fabrication_json(const scene::Body& body) {
+  json j;
+  try {
+    const fabricate::Fabrication fab = fabricate::fabricate(body, {}, {});
+    const scene::CellIndex cells(body);
+    const double s = fab.voxel_size;
+    json channels = json::array();
+    for (const fabricate::Inlet& in : fab.inlets) {
+      for (int w = 1; w <= in.wall_cells; ++w) {
+        const Eigen::Vector3i c = in.cell + w * scene::kFaceSteps[in.face];
+        const Eigen::Vector3d lo = c.cast<double>() * s, hi = lo + Eigen::Vector3d::Constant(s);
+        const Eigen::AlignedBox3d part = in.box.intersection(Eigen::AlignedBox3d(lo, hi));
+        // The voxel's centre is at s * (i, j, k) in the simulation (§2.1), its cube around it.
+        const Eigen::Vector3d centre = part.center() - (lo + hi) / 2;
+        channels.push_back({{"chamber", in.chamber},
+                            {"voxel", cells.at(c)},
+                            {"centre", {centre.x(), centre.y(), centre.z()}},
+                            {"size", {part.sizes().x(), part.sizes().y(), part.sizes().z()}}});
+      }
+    }
+    j["channels"] = channels;
+    j["channel_diameter"] = fab.options.channel_diameter;
+  } catch (const fabricate::FabricateError& e) {
+    j["error"] = e.what();
+  }
+  return j;
+}
+
 }  // namespace
 
 ClientSession::ClientSession(const ViewInput& input, ClientOptions options)
@@ -111,6 +145,7 @@ json ClientSession::hello_json(const TerrainGrid& ground) const {
   }
   j["voxel_skin"] = skin;
   j["chamber_index"] = body.chamber_index;
+  j["fabrication"] = fabrication_json(body);
   j["planned_records"] = session_->planned_records();
   j["control_rate"] = session_->control_rate();
   j["component_names"] = session_->component_names();

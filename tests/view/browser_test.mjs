@@ -141,6 +141,31 @@ async function chamberPixels(page) {
   });
 }
 
+// Pixels of the inlet channels (0xffc21a, seen through the faded body) with the page's
+// "fabrication" box ticked, then unticked again.
+async function channelPixels(page) {
+  return page.evaluate(async () => {
+    const box = document.getElementById('fabrication');
+    const redrawn = async () => {
+      const r0 = window.softevo.renders;
+      box.click();
+      while (window.softevo.renders === r0) await new Promise((r) => requestAnimationFrame(r));
+    };
+    await redrawn();
+    const src = document.querySelector('#scene canvas');
+    const c = document.createElement('canvas');
+    c.width = src.width; c.height = src.height;
+    const g = c.getContext('2d');
+    g.drawImage(src, 0, 0);
+    const d = g.getImageData(0, 0, c.width, c.height).data;
+    let yellow = 0;
+    for (let i = 0; i < d.length; i += 4) yellow += d[i] > 170 && d[i + 1] > 120 && d[i + 2] < 110 && d[i] - d[i + 2] > 100 ? 1 : 0;
+    const shown = { ...window.softevo.fabrication };
+    await redrawn();
+    return { yellow, shown, after: window.softevo.fabrication.shown };
+  });
+}
+
 const browser = await puppeteer.launch({
   executablePath: chromium,
   headless: true,
@@ -193,6 +218,15 @@ try {
   check(px.coloured > 2000 && px.blue + px.red > 1500, 'the robot is drawn in stiffness colours');
   const darkened = await chamberPixels(page);
   check(darkened > 1000, `dark chambers show through (${darkened} pixels darker than without them)`);
+  const fab = await channelPixels(page);
+  check(fab.shown.shown && fab.shown.channels > 0 && !fab.after,
+    `the fabrication box shows ${fab.shown.channels} channel segments and hides them again`);
+  check(fab.yellow > 20, `the inlet channels are drawn (${fab.yellow} channel-coloured pixels)`);
+  if (shots) {
+    await page.click('#fabrication');
+    await page.screenshot({ path: path.join(shots, 'gait-fabrication.png') });
+    await page.click('#fabrication');
+  }
   if (shots) await page.screenshot({ path: path.join(shots, 'gait-side.png') });
   await send(page, { type: 'play' });
   // WebM recording of the canvas (MediaRecorder): a second of video.

@@ -35,7 +35,7 @@ sun.position.set(-1, -2, 3);
 scene.add(sun);
 
 let hello = null;
-let voxelMesh = null, chamberMesh = null, floorGroup = null, targetLine = null, pathLine = null;
+let voxelMesh = null, chamberMesh = null, channelMesh = null, floorGroup = null, targetLine = null, pathLine = null;
 let start = new THREE.Vector3();  // centroid of the first frame [m]
 let floorZ = -0.005;
 let lastCentroid = null;
@@ -248,6 +248,19 @@ function setup(h) {
     chamberMesh.visible = $('chambers').checked;
     scene.add(chamberMesh);
   }
+  // The fabrication view (docs/fabrication.md): the inlet channels softevo fabricate cuts, one
+  // box per wall voxel they pass through, in that voxel's frame; the body fades to show them.
+  if (channelMesh) scene.remove(channelMesh);
+  channelMesh = null;
+  const segments = (h.fabrication && h.fabrication.channels) || [];
+  if (segments.length > 0) {
+    channelMesh = new THREE.InstancedMesh(new THREE.BoxGeometry(1, 1, 1),
+      new THREE.MeshBasicMaterial({ color: 0xffc21a }), segments.length);
+    channelMesh.renderOrder = 0;
+    channelMesh.frustumCulled = false;
+    scene.add(channelMesh);
+  }
+  showFabrication();
   const n = h.planned_records;
   pathLine && scene.remove(pathLine);
   const pathGeo = new THREE.BufferGeometry();
@@ -295,6 +308,17 @@ function setView(name) {
   camera.position.set(c.x + o[0], c.y + o[1], c.z + o[2]);
   controls.update();
 }
+// The fabrication box: channels shown, the body see-through, the chambers shown as cavities.
+function showFabrication() {
+  const on = $('fabrication').checked;
+  if (channelMesh) channelMesh.visible = on;
+  if (voxelMesh) voxelMesh.material.opacity = on ? 0.12 : 0.35;
+  if (on && chamberMesh) chamberMesh.visible = true;
+  if (!on && chamberMesh) chamberMesh.visible = $('chambers').checked;
+  probe.fabrication = { shown: on, channels: channelMesh ? channelMesh.count : 0,
+    error: hello && hello.fabrication ? hello.fabrication.error || null : null };
+}
+$('fabrication').addEventListener('change', () => { showFabrication(); changed(); });
 // The chambers can be hidden to see the body alone (and shown again).
 $('chambers').addEventListener('change', () => { if (chamberMesh) chamberMesh.visible = $('chambers').checked; changed(); });
 document.querySelectorAll('[data-view]').forEach((b) => b.addEventListener('click', () => setView(b.dataset.view)));
@@ -322,6 +346,17 @@ function showFrame(f) {
     else if (chamberMesh) chamberMesh.setMatrixAt(i - v, matrix);
   }
   voxelMesh.instanceMatrix.needsUpdate = true;
+  if (channelMesh) {
+    hello.fabrication.channels.forEach((seg, k) => {
+      const i = seg.voxel;
+      pos.set(f.positions[3 * i], f.positions[3 * i + 1], f.positions[3 * i + 2]);
+      quat.set(f.quats[4 * i + 1], f.quats[4 * i + 2], f.quats[4 * i + 3], f.quats[4 * i]).normalize();
+      const offset = new THREE.Vector3(...seg.centre).applyQuaternion(quat);
+      matrix.compose(pos.add(offset), quat, new THREE.Vector3(...seg.size));
+      channelMesh.setMatrixAt(k, matrix);
+    });
+    channelMesh.instanceMatrix.needsUpdate = true;
+  }
   if (chamberMesh) {
     // Darker the more inflated (1.0 -> 1.2 bar), as the still renderer does.
     for (let j = 0; j < hello.chamber_cells; j++) {
