@@ -67,9 +67,11 @@ SliceSize slice_size(const Fabrication& fab) {
   SliceSize size;
   size.pixel_x = 0.0254 / o.dpi_x;
   size.pixel_y = 0.0254 / o.dpi_y;
-  const double w = std::ceil(g.planes[0].back() / size.pixel_x),
-               h = std::ceil(g.planes[1].back() / size.pixel_y),
-               l = std::ceil(g.planes[2].back() / o.layer);
+  // Pixels to cover the body; a quotient a rounding error above a whole number (0.07 m / 2.5 mm
+  // = 28.000000000000004) is that number, not one more.
+  const auto count = [](double length, double pitch) { return std::ceil(length / pitch - 1e-9); };
+  const double w = count(g.planes[0].back(), size.pixel_x),
+               h = count(g.planes[1].back(), size.pixel_y), l = count(g.planes[2].back(), o.layer);
   if (w * h * l > static_cast<double>(o.max_pixels) || w > 1e6 || h > 1e6)
     throw FabricateError(
         "fabricate: --slices at --dpi " + std::to_string(o.dpi_x) + "," + std::to_string(o.dpi_y) +

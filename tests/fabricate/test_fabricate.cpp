@@ -314,6 +314,33 @@ Provenance provenance_of(const RobotFile& robot) {
   return pv;
 }
 
+// Slices of 2.5 mm pixels (4 per voxel) and one layer per voxel: the pixel 1 of each cell
+// (3.75 mm in, off every channel's axis) holds the cell's material, or 100 + q for chamber q's
+// cavity: the slices give back even the chamber index.
+void check_slices(const RobotFile& robot, const fs::path& dir) {
+  const scene::Body body = scene::body_from_plan(robot.body);
+  Options o;
+  o.dpi_x = o.dpi_y = 0.0254 / 2.5e-3;
+  o.layer = body.voxel_size;
+  const Fabrication fab = fabricate(body, provenance_of(robot), o);
+  const int layers = write_slices(fab, dir.string(), Overwrite::replace);
+  EXPECT_EQ(layers, fab.lattice.z());
+  const std::vector<int> want = expected_cells(robot.body);
+  const auto& d = robot.body.lattice;
+  for (int z = 0; z < d[2]; ++z) {
+    char name[32];
+    std::snprintf(name, sizeof name, "slice-%05d.png", z);
+    const render::Image im = render::read_png((dir / name).string());
+    ASSERT_EQ(im.width, d[0] * 4);
+    ASSERT_EQ(im.height, d[1] * 4);
+    for (int x = 0; x < d[0]; ++x)
+      for (int y = 0; y < d[1]; ++y)
+        ASSERT_EQ(im.pixel(x * 4 + 1, y * 4 + 1)[0], want[robot.body.cell_index(x, y, z)])
+            << "slice " << name << " cell " << x << " " << y;
+  }
+  EXPECT_TRUE(fs::exists(dir / "palette.json"));
+}
+
 // The whole check of one robot: 3MF (lib3mf) and STL, volumes, manifoldness, round trip.
 void check_robot(const RobotFile& robot, const fs::path& dir, bool with_mold) {
   SCOPED_TRACE(robot.name);
@@ -362,6 +389,7 @@ void check_robot(const RobotFile& robot, const fs::path& dir, bool with_mold) {
   want.resize(static_cast<std::size_t>(d[0]) * d[1] * d[2]);  // a plan trimmed to the body
   EXPECT_EQ(merge_enclosed(revoxelize(e3, d, s_mm)), merge_enclosed(want)) << "3MF";
   EXPECT_EQ(merge_enclosed(revoxelize(es, d, s_mm)), merge_enclosed(want)) << "STL";
+  check_slices(robot, dir / "slices");
   // Each chamber's inlet opens its own cavity: the mouth lies on the body's outer face, and
   // a point just inside the cavity behind it is enclosed in no group.
   for (const Inlet& in : fab.inlets) {
@@ -467,14 +495,14 @@ std::vector<fs::path> shipped_and_champions() {
   return out;
 }
 
-TEST(Fabricate, ShippedRobotsRoundTripThroughEveryFormatAndTheirMoldsFillTheBox) {
+TEST(Fabricate, ShippedRobotsRoundTripThroughEveryFormatAndSlicesAndTheirMoldsFillTheBox) {
   const fs::path dir = temp_dir("shipped");
   for (const fs::path& p : shipped_and_champions())
     check_robot(read_robot_file(p.string()), dir, true);
   fs::remove_all(dir);
 }
 
-TEST(Fabricate, TheFortyThesisChampionsRoundTrip) {
+TEST(Fabricate, TheFortyThesisChampionsRoundTripThroughEveryFormatAndSlices) {
   const fs::path bots = test::reference_bestbots();
   if (!fs::is_directory(bots)) GTEST_SKIP() << bots << " is absent";
   const fs::path dir = temp_dir("champions");
@@ -485,33 +513,6 @@ TEST(Fabricate, TheFortyThesisChampionsRoundTrip) {
     check_robot(read_robot_file(e.path().string()), dir, n++ % 5 == 0);
   }
   EXPECT_EQ(n, 40);
-  fs::remove_all(dir);
-}
-
-TEST(Fabricate, SlicesGiveBackTheVoxelsAndCavities) {
-  const fs::path dir = temp_dir("slices");
-  const RobotFile robot = read_robot_file(shipped_and_champions().front().string());
-  const scene::Body body = scene::body_from_plan(robot.body);
-  Options o;
-  o.dpi_x = o.dpi_y = 0.0254 / 1e-3;  // 1 mm pixels
-  o.layer = 1e-3;
-  const Fabrication fab = fabricate(body, provenance_of(robot), o);
-  const int layers = write_slices(fab, dir.string(), Overwrite::replace);
-  EXPECT_EQ(layers, fab.lattice.z() * 10);
-  const std::vector<int> want = expected_cells(robot.body);
-  const auto& d = robot.body.lattice;
-  // The pixel 2 mm into each cell (off the channel axis) of the layer 2 mm up.
-  for (int z = 0; z < d[2]; ++z) {
-    char name[32];
-    std::snprintf(name, sizeof name, "slice-%05d.png", z * 10 + 2);
-    const render::Image im = render::read_png((dir / name).string());
-    ASSERT_EQ(im.width, d[0] * 10);
-    for (int x = 0; x < d[0]; ++x)
-      for (int y = 0; y < d[1]; ++y)
-        EXPECT_EQ(im.pixel(x * 10 + 2, y * 10 + 2)[0], want[robot.body.cell_index(x, y, z)]);
-  }
-  std::ifstream palette(dir / "palette.json");
-  EXPECT_TRUE(palette.good());
   fs::remove_all(dir);
 }
 

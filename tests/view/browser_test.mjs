@@ -74,7 +74,7 @@ async function robotPixels(page) {
     const g = c.getContext('2d');
     g.drawImage(src, 0, 0);
     const d = g.getImageData(0, 0, c.width, c.height).data;
-    let blue = 0, red = 0, dark = 0, coloured = 0;
+    let blue = 0, red = 0, dark = 0, coloured = 0, yellow = 0;
     for (let i = 0; i < d.length; i += 4) {
       const r = d[i], gg = d[i + 1], b = d[i + 2];
       const sat = Math.max(r, gg, b) - Math.min(r, gg, b);
@@ -82,8 +82,9 @@ async function robotPixels(page) {
       if (b > r + 40) blue++;
       if (r > b + 40 && r > gg + 20) red++;
       if (r + gg + b < 200) dark++;
+      if (r > 170 && gg > 120 && b < 110 && r - b > 100) yellow++;  // inlet channels, 0xffc21a
     }
-    return { blue, red, dark, coloured, total: d.length / 4 };
+    return { blue, red, dark, coloured, yellow, total: d.length / 4 };
   });
 }
 
@@ -141,29 +142,14 @@ async function chamberPixels(page) {
   });
 }
 
-// Pixels of the inlet channels (0xffc21a, seen through the faded body) with the page's
-// "fabrication" box ticked, then unticked again.
-async function channelPixels(page) {
-  return page.evaluate(async () => {
-    const box = document.getElementById('fabrication');
-    const redrawn = async () => {
-      const r0 = window.softevo.renders;
-      box.click();
-      while (window.softevo.renders === r0) await new Promise((r) => requestAnimationFrame(r));
-    };
-    await redrawn();
-    const src = document.querySelector('#scene canvas');
-    const c = document.createElement('canvas');
-    c.width = src.width; c.height = src.height;
-    const g = c.getContext('2d');
-    g.drawImage(src, 0, 0);
-    const d = g.getImageData(0, 0, c.width, c.height).data;
-    let yellow = 0;
-    for (let i = 0; i < d.length; i += 4) yellow += d[i] > 170 && d[i + 1] > 120 && d[i + 2] < 110 && d[i] - d[i + 2] > 100 ? 1 : 0;
-    const shown = { ...window.softevo.fabrication };
-    await redrawn();
-    return { yellow, shown, after: window.softevo.fabrication.shown };
+// The page's "fabrication" box ticked (or unticked) and the scene drawn again.
+async function toggleFabrication(page) {
+  await page.evaluate(async () => {
+    const r0 = window.softevo.renders;
+    document.getElementById('fabrication').click();
+    while (window.softevo.renders === r0) await new Promise((r) => requestAnimationFrame(r));
   });
+  return page.evaluate(() => ({ ...window.softevo.fabrication }));
 }
 
 const browser = await puppeteer.launch({
@@ -218,15 +204,13 @@ try {
   check(px.coloured > 2000 && px.blue + px.red > 1500, 'the robot is drawn in stiffness colours');
   const darkened = await chamberPixels(page);
   check(darkened > 1000, `dark chambers show through (${darkened} pixels darker than without them)`);
-  const fab = await channelPixels(page);
-  check(fab.shown.shown && fab.shown.channels > 0 && !fab.after,
-    `the fabrication box shows ${fab.shown.channels} channel segments and hides them again`);
-  check(fab.yellow > 20, `the inlet channels are drawn (${fab.yellow} channel-coloured pixels)`);
-  if (shots) {
-    await page.click('#fabrication');
-    await page.screenshot({ path: path.join(shots, 'gait-fabrication.png') });
-    await page.click('#fabrication');
-  }
+  const fabOn = await toggleFabrication(page);
+  const channelPx = (await robotPixels(page)).yellow;
+  if (shots) await page.screenshot({ path: path.join(shots, 'gait-fabrication.png') });
+  const fabOff = await toggleFabrication(page);
+  check(fabOn.shown && fabOn.channels > 0 && !fabOff.shown,
+    `the fabrication box shows ${fabOn.channels} channel segments and hides them again`);
+  check(channelPx > 20 + px.yellow, `the inlet channels are drawn (${channelPx} channel-coloured pixels, ${px.yellow} without)`);
   if (shots) await page.screenshot({ path: path.join(shots, 'gait-side.png') });
   await send(page, { type: 'play' });
   // WebM recording of the canvas (MediaRecorder): a second of video.
