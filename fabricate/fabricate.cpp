@@ -465,4 +465,21 @@ Fabrication fabricate(const scene::Body& body, const Provenance& provenance,
   return fab;
 }
 
+std::vector<ChannelPiece> channel_pieces(const Fabrication& fab, const scene::Body& body) {
+  const scene::CellIndex cells(body);
+  const double s = fab.voxel_size;
+  std::vector<ChannelPiece> pieces;
+  for (const Inlet& in : fab.inlets) {
+    for (int w = 1; w <= in.wall_cells; ++w) {
+      const Eigen::Vector3i c = in.cell + w * scene::kFaceSteps[in.face];
+      const Eigen::Vector3d lo = c.cast<double>() * s, hi = lo + Eigen::Vector3d::Constant(s);
+      const Eigen::AlignedBox3d part = in.box.intersection(Eigen::AlignedBox3d(lo, hi));
+      // The voxel's centre is at s * (i, j, k) in the simulation (docs/model.md §2.1), its
+      // cube around it; here the cube is [lo, hi].
+      pieces.push_back({in.chamber, cells.at(c), part.center() - (lo + hi) / 2, part.sizes()});
+    }
+  }
+  return pieces;
+}
+
 }  // namespace softevo::fabricate

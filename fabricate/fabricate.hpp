@@ -156,6 +156,16 @@ struct Fabrication {
 Fabrication fabricate(const scene::Body& body, const Provenance& provenance,
                       const Options& options);
 
+// An inlet channel cut into voxel-sized pieces, each in the frame of the wall voxel it passes
+// through, for drawing it with a moving body (softevo view's fabrication box, render
+// --cutaway): the box's centre relative to the voxel's centre and its size [m].
+struct ChannelPiece {
+  int chamber = 0;
+  int voxel = 0;  // index into body.voxel_cells
+  Eigen::Vector3d centre, size;
+};
+std::vector<ChannelPiece> channel_pieces(const Fabrication& fabrication, const scene::Body& body);
+
 // The two-part casting mold and the cores (docs/fabrication.md "Mold").
 struct Mold {
   Grid grid;                 // the mold box, every cell one of: body material, cavity,

@@ -11,7 +11,6 @@
 #include <nlohmann/json.hpp>
 
 #include "fabricate/fabricate.hpp"
-#include "scene/cells.hpp"
 #include "view/bytes.hpp"
 #include "view/export_html.hpp"
 
@@ -76,21 +75,12 @@ json fabrication_json(const scene::Body& body) {
   json j;
   try {
     const fabricate::Fabrication fab = fabricate::fabricate(body, {}, {});
-    const scene::CellIndex cells(body);
-    const double s = fab.voxel_size;
     json channels = json::array();
-    for (const fabricate::Inlet& in : fab.inlets) {
-      for (int w = 1; w <= in.wall_cells; ++w) {
-        const Eigen::Vector3i c = in.cell + w * scene::kFaceSteps[in.face];
-        const Eigen::Vector3d lo = c.cast<double>() * s, hi = lo + Eigen::Vector3d::Constant(s);
-        const Eigen::AlignedBox3d part = in.box.intersection(Eigen::AlignedBox3d(lo, hi));
-        // The voxel's centre is at s * (i, j, k) in the simulation (§2.1), its cube around it.
-        const Eigen::Vector3d centre = part.center() - (lo + hi) / 2;
-        channels.push_back({{"chamber", in.chamber},
-                            {"voxel", cells.at(c)},
-                            {"centre", {centre.x(), centre.y(), centre.z()}},
-                            {"size", {part.sizes().x(), part.sizes().y(), part.sizes().z()}}});
-      }
+    for (const fabricate::ChannelPiece& p : fabricate::channel_pieces(fab, body)) {
+      channels.push_back({{"chamber", p.chamber},
+                          {"voxel", p.voxel},
+                          {"centre", {p.centre.x(), p.centre.y(), p.centre.z()}},
+                          {"size", {p.size.x(), p.size.y(), p.size.z()}}});
     }
     j["channels"] = channels;
     j["channel_diameter"] = fab.options.channel_diameter;
