@@ -482,4 +482,64 @@ std::vector<ChannelPiece> channel_pieces(const Fabrication& fab, const scene::Bo
   return pieces;
 }
 
+Cutaway cut_away(const scene::Body& body, const std::vector<scene::Pose>& poses,
+                 std::optional<int> cut_y) {
+  const scene::CellIndex cells(body);
+  const int rows = cells.dims().y();
+  Cutaway cut;
+  if (cut_y) {
+    if (*cut_y < 0 || *cut_y >= rows)
+      throw FabricateError("render: --cutaway y=" + std::to_string(*cut_y) +
+                           " is outside the lattice (rows 0 to " + std::to_string(rows - 1) + ")");
+    cut.cut_y = *cut_y;
+  } else {
+    std::vector<int> per_row(static_cast<std::size_t>(rows), 0);
+    for (const auto& c : body.chamber_cells) ++per_row[static_cast<std::size_t>(c.y())];
+    cut.cut_y =
+        static_cast<int>(std::max_element(per_row.begin(), per_row.end()) - per_row.begin());
+  }
+  cut.body = body;
+  cut.body.voxel_cells.clear();
+  cut.body.voxel_material.clear();
+  cut.body.chamber_cells.clear();
+  cut.body.chamber_index.clear();
+  std::vector<int> new_index(body.voxel_cells.size(), -1);
+  for (std::size_t i = 0; i < body.voxel_cells.size(); ++i) {
+    if (body.voxel_cells[i].y() < cut.cut_y) continue;
+    new_index[i] = static_cast<int>(cut.body.voxel_cells.size());
+    cut.body.voxel_cells.push_back(body.voxel_cells[i]);
+    cut.body.voxel_material.push_back(body.voxel_material[i]);
+  }
+  if (cut.body.voxel_cells.empty())
+    throw FabricateError("render: --cutaway y=" + std::to_string(cut.cut_y) + " leaves no voxel");
+  for (std::size_t j = 0; j < body.chamber_cells.size(); ++j) {
+    if (body.chamber_cells[j].y() < cut.cut_y) continue;
+    cut.body.chamber_cells.push_back(body.chamber_cells[j]);
+    cut.body.chamber_index.push_back(body.chamber_index[j]);
+  }
+  for (const scene::Pose& pose : poses) {
+    scene::Pose kept = pose;
+    kept.position.clear();
+    kept.orientation.clear();
+    for (std::size_t i = 0; i < body.voxel_cells.size(); ++i) {
+      if (new_index[i] < 0) continue;
+      kept.position.push_back(pose.position[i]);
+      kept.orientation.push_back(pose.orientation[i]);
+    }
+    cut.poses.push_back(std::move(kept));
+  }
+  // The channels of the whole body (they are routed on it), where their voxels remain.
+  try {
+    const Fabrication fab = fabricate(body, {}, {});
+    for (ChannelPiece p : channel_pieces(fab, body)) {
+      if (new_index[static_cast<std::size_t>(p.voxel)] < 0) continue;
+      p.voxel = new_index[static_cast<std::size_t>(p.voxel)];
+      cut.channels.push_back(p);
+    }
+  } catch (const FabricateError&) {
+    // A body fabricate refuses (a chamber with no way out) is cut all the same, without channels.
+  }
+  return cut;
+}
+
 }  // namespace softevo::fabricate

@@ -166,6 +166,20 @@ struct ChannelPiece {
 };
 std::vector<ChannelPiece> channel_pieces(const Fabrication& fabrication, const scene::Body& body);
 
+// `softevo render --cutaway`: the body and its poses without the cells in front of the section
+// plane (cells with y < cut_y, the side view's camera being on the -y side), and the channel
+// pieces that remain, re-indexed to the cut body. Default cut_y: the lattice row y holding the
+// most chamber cells (the lowest on ties), so the section runs through the chambers. Throws
+// FabricateError when the cut leaves no voxel or `cut_y` is outside the lattice.
+struct Cutaway {
+  scene::Body body;
+  std::vector<scene::Pose> poses;
+  std::vector<ChannelPiece> channels;
+  int cut_y = 0;
+};
+Cutaway cut_away(const scene::Body& body, const std::vector<scene::Pose>& poses,
+                 std::optional<int> cut_y);
+
 // The two-part casting mold and the cores (docs/fabrication.md "Mold").
 struct Mold {
   Grid grid;                 // the mold box, every cell one of: body material, cavity,

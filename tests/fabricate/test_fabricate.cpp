@@ -529,6 +529,36 @@ TEST(Fabricate, GroupsOfOneModulusGetDistinctNames) {
   EXPECT_EQ(fab.groups.front().name, "E50000Pa");
 }
 
+TEST(Fabricate, CutawayKeepsTheCellsBehindTheSectionAndTheirChannelPieces) {
+  for (const fs::path& p : shipped_and_champions()) {
+    SCOPED_TRACE(p.string());
+    const scene::Body body = scene::body_from_plan(read_robot_file(p.string()).body);
+    const std::vector<scene::Pose> poses{scene::rest_pose(body)};
+    const Cutaway cut = cut_away(body, poses, std::nullopt);
+    // The default section runs through a row of chamber cells.
+    EXPECT_TRUE(std::any_of(body.chamber_cells.begin(), body.chamber_cells.end(),
+                            [&](const Eigen::Vector3i& c) { return c.y() == cut.cut_y; }));
+    std::size_t behind = 0;
+    for (const auto& c : body.voxel_cells) behind += c.y() >= cut.cut_y;
+    EXPECT_EQ(cut.body.voxel_cells.size(), behind);
+    for (const auto& c : cut.body.voxel_cells) EXPECT_GE(c.y(), cut.cut_y);
+    for (const auto& c : cut.body.chamber_cells) EXPECT_GE(c.y(), cut.cut_y);
+    ASSERT_EQ(cut.poses.size(), 1U);
+    ASSERT_EQ(cut.poses[0].position.size(), behind);
+    for (std::size_t i = 0; i < behind; ++i)
+      EXPECT_EQ(cut.poses[0].position[i], cut.body.voxel_cells[i].cast<double>() * body.voxel_size);
+    // Every channel piece left is in a kept voxel; all of them when nothing of theirs was cut.
+    const Fabrication fab = fabricate(body, {}, {});
+    std::size_t expected = 0;
+    for (const ChannelPiece& piece : channel_pieces(fab, body))
+      expected += body.voxel_cells[piece.voxel].y() >= cut.cut_y;
+    EXPECT_EQ(cut.channels.size(), expected);
+    for (const ChannelPiece& piece : cut.channels)
+      EXPECT_LT(piece.voxel, static_cast<int>(cut.body.voxel_cells.size()));
+    EXPECT_THROW(cut_away(body, poses, 1000), FabricateError);
+  }
+}
+
 // Bad input: each gets its clear error, naming the option, and no file is left.
 TEST(Fabricate, BadInputIsAClearErrorAndWritesNothing) {
   const RobotFile robot = read_robot_file(shipped_and_champions().front().string());
