@@ -486,6 +486,13 @@ Cutaway cut_away(const scene::Body& body, const std::vector<scene::Pose>& poses,
                  std::optional<int> cut_y) {
   const scene::CellIndex cells(body);
   const int rows = cells.dims().y();
+  // The channels of the whole body (they are routed on it); a body fabricate refuses (a chamber
+  // with no way out) is cut all the same, without channels.
+  std::vector<ChannelPiece> pieces;
+  try {
+    pieces = channel_pieces(fabricate(body, {}, {}), body);
+  } catch (const FabricateError&) {
+  }
   Cutaway cut;
   if (cut_y) {
     if (*cut_y < 0 || *cut_y >= rows)
@@ -493,10 +500,15 @@ Cutaway cut_away(const scene::Body& body, const std::vector<scene::Pose>& poses,
                            " is outside the lattice (rows 0 to " + std::to_string(rows - 1) + ")");
     cut.cut_y = *cut_y;
   } else {
+    // Every channel kept whole (rows up to the first row a channel passes), and among those
+    // rows the one cutting through the most chamber cells (the deepest on ties).
+    int last = rows - 1;
+    for (const ChannelPiece& p : pieces) last = std::min(last, body.voxel_cells[p.voxel].y());
     std::vector<int> per_row(static_cast<std::size_t>(rows), 0);
     for (const auto& c : body.chamber_cells) ++per_row[static_cast<std::size_t>(c.y())];
-    cut.cut_y =
-        static_cast<int>(std::max_element(per_row.begin(), per_row.end()) - per_row.begin());
+    for (int y = 0; y <= last; ++y) {
+      if (per_row[y] >= per_row[cut.cut_y]) cut.cut_y = y;
+    }
   }
   cut.body = body;
   cut.body.voxel_cells.clear();
@@ -528,16 +540,10 @@ Cutaway cut_away(const scene::Body& body, const std::vector<scene::Pose>& poses,
     }
     cut.poses.push_back(std::move(kept));
   }
-  // The channels of the whole body (they are routed on it), where their voxels remain.
-  try {
-    const Fabrication fab = fabricate(body, {}, {});
-    for (ChannelPiece p : channel_pieces(fab, body)) {
-      if (new_index[static_cast<std::size_t>(p.voxel)] < 0) continue;
-      p.voxel = new_index[static_cast<std::size_t>(p.voxel)];
-      cut.channels.push_back(p);
-    }
-  } catch (const FabricateError&) {
-    // A body fabricate refuses (a chamber with no way out) is cut all the same, without channels.
+  for (ChannelPiece p : pieces) {
+    if (new_index[static_cast<std::size_t>(p.voxel)] < 0) continue;
+    p.voxel = new_index[static_cast<std::size_t>(p.voxel)];
+    cut.channels.push_back(p);
   }
   return cut;
 }

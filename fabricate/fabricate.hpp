@@ -168,8 +168,9 @@ std::vector<ChannelPiece> channel_pieces(const Fabrication& fabrication, const s
 
 // `softevo render --cutaway`: the body and its poses without the cells in front of the section
 // plane (cells with y < cut_y, the side view's camera being on the -y side), and the channel
-// pieces that remain, re-indexed to the cut body. Default cut_y: the lattice row y holding the
-// most chamber cells (the lowest on ties), so the section runs through the chambers. Throws
+// pieces that remain, re-indexed to the cut body. Default cut_y: every channel kept whole, and
+// among the rows that allow it, the one holding the most chamber cells (the deepest on ties), so
+// the section opens chambers and every inlet shows. Throws
 // FabricateError when the cut leaves no voxel or `cut_y` is outside the lattice.
 struct Cutaway {
   scene::Body body;

@@ -137,13 +137,13 @@ constexpr double kDiffuse = 0.5;
 // Rasterises one cube face: a parallelogram under orthographic projection. Pixel centre p
 // lies in it iff p = O + a A + b B with a, b in [0, 1]; depth is affine in (a, b) as well.
 void raster_face(Raster& r, const Eigen::Vector3d& centre, const Eigen::Matrix3d& rot, int face,
-                 double half, Colour base, float alpha) {
+                 const Eigen::Vector3d& half, Colour base, float alpha) {
   const int axis = face / 2;
   const double sign = (face % 2 == 0) ? 1.0 : -1.0;
   const Eigen::Vector3d normal = sign * rot.col(axis);
-  const Eigen::Vector3d edge_a = rot.col((axis + 1) % 3) * (2.0 * half);
-  const Eigen::Vector3d edge_b = rot.col((axis + 2) % 3) * (2.0 * half);
-  const Eigen::Vector3d origin = centre + normal * half - 0.5 * edge_a - 0.5 * edge_b;
+  const Eigen::Vector3d edge_a = rot.col((axis + 1) % 3) * (2.0 * half[(axis + 1) % 3]);
+  const Eigen::Vector3d edge_b = rot.col((axis + 2) % 3) * (2.0 * half[(axis + 2) % 3]);
+  const Eigen::Vector3d origin = centre + normal * half[axis] - 0.5 * edge_a - 0.5 * edge_b;
   const Eigen::Vector3d o = r.project(origin);
   const Eigen::Vector3d a = r.project_vector(edge_a);
   const Eigen::Vector3d b = r.project_vector(edge_b);
@@ -610,9 +610,15 @@ Image render_poses(const Body& body, const std::vector<Pose>& poses, const Camer
       const Colour colour = to_colour(material_colour(body.voxel_material[i], body.material_count));
       for (int f = 0; f < 6; ++f) {
         if (cells.at(body.voxel_cells[i] + kFaceSteps[f]) >= 0) continue;
-        raster_face(r, pose.position[i], rot, f, half, colour,
+        raster_face(r, pose.position[i], rot, f, Eigen::Vector3d::Constant(half), colour,
                     static_cast<float>(options.body_alpha) * fade);
       }
+    }
+    for (const SceneOptions::Inset& inset : options.insets) {
+      const Eigen::Matrix3d rot = pose.orientation[inset.voxel].normalized().toRotationMatrix();
+      const Eigen::Vector3d centre = pose.position[inset.voxel] + rot * inset.centre;
+      for (int f = 0; f < 6; ++f)
+        raster_face(r, centre, rot, f, 0.5 * inset.size, to_colour(inset.colour), fade);
     }
     if (body.chamber_cells.empty()) continue;
     place_chambers(body, cells, pose, chamber_pos, chamber_rot);
@@ -630,7 +636,7 @@ Image render_poses(const Body& body, const std::vector<Pose>& poses, const Camer
       for (int f = 0; f < 6; ++f) {
         if (cells.at(body.chamber_cells[j] + kFaceSteps[f]) >= v) continue;  // same blob
         // Slightly smaller than a cell so it sits inside the walls' faces, not on them.
-        raster_face(r, chamber_pos[j], rot, f, 0.97 * half, colour,
+        raster_face(r, chamber_pos[j], rot, f, Eigen::Vector3d::Constant(0.97 * half), colour,
                     static_cast<float>(options.chamber_alpha) * fade);
       }
     }

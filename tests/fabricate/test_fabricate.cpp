@@ -535,9 +535,9 @@ TEST(Fabricate, CutawayKeepsTheCellsBehindTheSectionAndTheirChannelPieces) {
     const scene::Body body = scene::body_from_plan(read_robot_file(p.string()).body);
     const std::vector<scene::Pose> poses{scene::rest_pose(body)};
     const Cutaway cut = cut_away(body, poses, std::nullopt);
-    // The default section runs through a row of chamber cells.
-    EXPECT_TRUE(std::any_of(body.chamber_cells.begin(), body.chamber_cells.end(),
-                            [&](const Eigen::Vector3i& c) { return c.y() == cut.cut_y; }));
+    // The default section keeps every channel whole.
+    const Fabrication whole = fabricate(body, {}, {});
+    EXPECT_EQ(cut.channels.size(), channel_pieces(whole, body).size());
     std::size_t behind = 0;
     for (const auto& c : body.voxel_cells) behind += c.y() >= cut.cut_y;
     EXPECT_EQ(cut.body.voxel_cells.size(), behind);
