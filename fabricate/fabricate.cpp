@@ -438,6 +438,7 @@ Fabrication fabricate(const scene::Body& body, const Provenance& provenance,
     return labels[lattice_index(lattice, c)];
   });
 
+  if (!options.meshes) return fab;
   std::vector<std::size_t> count(11, 0);
   for (int m : body.voxel_material) ++count[static_cast<std::size_t>(std::clamp(m, 0, 10))];
   std::uint64_t triangles_left = options.max_triangles;
@@ -490,7 +491,9 @@ Cutaway cut_away(const scene::Body& body, const std::vector<scene::Pose>& poses,
   // with no way out) is cut all the same, without channels.
   std::vector<ChannelPiece> pieces;
   try {
-    pieces = channel_pieces(fabricate(body, {}, {}), body);
+    Options inlets_only;
+    inlets_only.meshes = false;
+    pieces = channel_pieces(fabricate(body, {}, inlets_only), body);
   } catch (const FabricateError&) {
   }
   Cutaway cut;

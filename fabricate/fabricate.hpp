@@ -48,6 +48,8 @@ struct Options {
   // refused before anything is computed or written.
   std::uint64_t max_triangles = 20'000'000;   // per export (all meshes together)
   std::uint64_t max_pixels = 20'000'000'000;  // slices: width x height x layers
+  // false: the grid and the inlets only, no meshes (what the viewer and render --cutaway need).
+  bool meshes = true;
 };
 
 // What the 3MF metadata records about the robot (all optional but the materials).

@@ -1,4 +1,5 @@
 // STL, slice and mold files of a fabrication (fabricate.hpp, docs/fabrication.md).
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -55,7 +56,9 @@ void write_all(const std::vector<std::pair<std::string, std::string>>& files, Ov
 
 std::vector<std::string> stl_paths(const Fabrication& fab, const std::string& out) {
   std::string stem = out;
-  if (stem.size() > 4 && stem.substr(stem.size() - 4) == ".stl") stem.resize(stem.size() - 4);
+  std::string ext = stem.size() > 4 ? stem.substr(stem.size() - 4) : "";
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".stl") stem.resize(stem.size() - 4);
   std::vector<std::string> paths;
   for (const MaterialGroup& g : fab.groups) paths.push_back(stem + "-" + g.name + ".stl");
   return paths;

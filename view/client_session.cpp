@@ -74,7 +74,9 @@ json terrain_json(const TerrainGrid& g) {
 json fabrication_json(const scene::Body& body) {
   json j;
   try {
-    const fabricate::Fabrication fab = fabricate::fabricate(body, {}, {});
+    fabricate::Options inlets_only;
+    inlets_only.meshes = false;
+    const fabricate::Fabrication fab = fabricate::fabricate(body, {}, inlets_only);
     json channels = json::array();
     for (const fabricate::ChannelPiece& p : fabricate::channel_pieces(fab, body)) {
       channels.push_back({{"chamber", p.chamber},

@@ -92,6 +92,10 @@ def test_options_in_the_cli_units_and_bad_input_names_the_option(tmp_path):
     with pytest.raises(softevo.OutputFileError):
         robot.fabricate(tmp_path / "a.stl")
     robot.fabricate(tmp_path / "a.stl", force=True)
+    # The extension in capitals is the same format, and the group's name replaces it.
+    upper = robot.fabricate(tmp_path / "B.STL")
+    assert [os.path.basename(f) for f in upper["files"]] == [
+        f"B-{g['name']}.stl" for g in upper["groups"]]
 
 
 @pytest.mark.skipif(not SOFTEVO.exists(), reason="the softevo CLI is not built")
