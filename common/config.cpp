@@ -8,6 +8,7 @@
 #include "common/input_file.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -17,9 +18,10 @@
 #include <fstream>
 #include <limits>
 #include <map>
-#include <regex>
+#include <optional>
 #include <sstream>
 #include <string_view>
+#include <utility>
 #include <variant>
 
 #define TOML_EXCEPTIONS 1
@@ -90,8 +92,7 @@ std::string allowed_text(const KeyDef& def) {
         if constexpr (std::is_same_v<T, double>) return range_text(def, false);
         if constexpr (std::is_same_v<T, std::int64_t>) return range_text(def, true);
         if constexpr (std::is_same_v<T, bool>) return "true or false";
-        if constexpr (std::is_same_v<T, std::string> || std::is_same_v<T, TaskKind> ||
-                      ConfigChoice<T>) {
+        if constexpr (std::is_same_v<T, std::string> || ConfigChoice<T>) {
           std::vector<std::string> q;
           for (const auto& a : allowed_strings(def)) q.push_back(quote(a));
           return "one of " + join(q);
@@ -238,8 +239,6 @@ void assign(const KeyDef& def, const toml::node& node, const Location& at) {
           *target = node.as_boolean()->get();
         } else if constexpr (std::is_same_v<T, std::string>) {
           *target = string_of(node, def, at, name);
-        } else if constexpr (std::is_same_v<T, TaskKind>) {
-          *target = *task_kind_from_string(string_of(node, def, at, name));  // allowed: checked
         } else if constexpr (ConfigChoice<T>) {
           *target = *choice_from_string<T>(string_of(node, def, at, name));  // allowed: checked
         } else {
@@ -359,6 +358,17 @@ void check_consistency(const Config& c, const std::string& source) {
          "task.control = " +
              quote(to_string(c.task.control)));
   }
+  // A species is kept at max(min_species_size, elitism) members or more (docs/model.md §8.5), so
+  // either above the population makes every generation larger than it (a population of 4 with
+  // min_species_size = 100 evaluated 159 robots); a tournament larger than the population
+  // draws the same members again at a cost in proportion to its size (issue 39).
+  // (elitism has its own check below.)
+  for (const auto& [key, value] : {std::pair{"min_species_size", c.neat.min_species_size},
+                                   std::pair{"tournament_size", c.neat.tournament_size}}) {
+    if (value > c.neat.pop_size)
+      fail(at, "neat." + std::string(key) + " = " + std::to_string(value) +
+                   " must be <= neat.pop_size = " + std::to_string(c.neat.pop_size));
+  }
   if (learning_on(c) && c.learning.evaluations < 1 + c.learning.population) {
     fail(at,
          "learning.evaluations = " + std::to_string(c.learning.evaluations) +
@@ -432,8 +442,86 @@ void apply_table(Config& config, const toml::table& root, const std::string& sou
   }
 }
 
-void apply_override(Config& config, const std::string& text, SetKeys& set_keys) {
-  const Location at{"--set " + text, 0};
+// The limits of config.hpp (kMaxConfigLineBytes, kMaxConfigNesting) over `text`, in one pass
+// that follows TOML's strings and comments (a bracket inside "..." or after # does not nest).
+// Iterative on purpose: the text may be hostile.
+void check_text_shape(const std::string& text, const Location& where) {
+  enum class In { code, comment, basic, literal, multiline_basic, multiline_literal };
+  In in = In::code;
+  int depth = 0;
+  std::int64_t line = where.line;  // 0: a --set value, whose message names no line
+  std::size_t line_start = 0;
+  const auto here = [&] { return Location{where.source, line}; };
+  const auto at = [&](std::size_t i, const char* three) { return text.compare(i, 3, three) == 0; };
+  for (std::size_t i = 0; i <= text.size(); ++i) {
+    if (i == text.size() || text[i] == '\n') {
+      if (i - line_start > kMaxConfigLineBytes)
+        fail(here(), std::string(line > 0 ? "this line is " : "the value is ") +
+                         std::to_string(i - line_start) + " bytes; a config line may be at most " +
+                         std::to_string(kMaxConfigLineBytes) + " bytes");
+      if (in != In::multiline_basic && in != In::multiline_literal) in = In::code;
+      if (line > 0) ++line;
+      line_start = i + 1;
+      continue;
+    }
+    const char c = text[i];
+    switch (in) {
+      case In::code:
+        if (c == '#') {
+          in = In::comment;
+        } else if (at(i, "\"\"\"")) {
+          in = In::multiline_basic;
+          i += 2;
+        } else if (at(i, "'''")) {
+          in = In::multiline_literal;
+          i += 2;
+        } else if (c == '"') {
+          in = In::basic;
+        } else if (c == '\'') {
+          in = In::literal;
+        } else if (c == '[' || c == '{') {
+          if (++depth > kMaxConfigNesting)
+            fail(here(), "arrays and inline tables nested more than " +
+                             std::to_string(kMaxConfigNesting) +
+                             " deep; a config nests them at most that deep");
+        } else if ((c == ']' || c == '}') && depth > 0) {
+          --depth;
+        }
+        break;
+      case In::basic:
+      case In::multiline_basic:
+        if (c == '\\' && i + 1 < text.size() && text[i + 1] != '\n') {
+          ++i;  // an escaped character, a quote among them
+        } else if (in == In::basic && c == '"') {
+          in = In::code;
+        } else if (in == In::multiline_basic && at(i, "\"\"\"")) {
+          in = In::code;
+          i += 2;
+        }
+        break;
+      case In::literal:
+        if (c == '\'') in = In::code;
+        break;
+      case In::multiline_literal:
+        if (at(i, "'''")) {
+          in = In::code;
+          i += 2;
+        }
+        break;
+      case In::comment:
+        break;
+    }
+  }
+}
+
+void apply_override(Config& config, const std::string& text, SetKeys& set_keys,
+                    OverrideOrigin origin) {
+  const auto eq_at = text.find('=');
+  const Location at{origin == OverrideOrigin::command_line
+                        ? "--set " + text
+                        : "overrides[\"" + text.substr(0, eq_at) + "\"]" +
+                              (eq_at == std::string::npos ? "" : " = " + text.substr(eq_at + 1)),
+                    0};
   const auto eq = text.find('=');
   const auto dot = text.find('.');
   if (eq == std::string::npos || dot == std::string::npos || dot > eq) {
@@ -442,6 +530,10 @@ void apply_override(Config& config, const std::string& text, SetKeys& set_keys) 
   const std::string section = text.substr(0, dot);
   const std::string key = text.substr(dot + 1, eq - dot - 1);
   const std::string value = text.substr(eq + 1);
+  check_text_shape(
+      value, {origin == OverrideOrigin::command_line ? "--set " + text.substr(0, eq)
+                                                     : "overrides[\"" + text.substr(0, eq) + "\"]",
+              0});
   check_known_section(section, at);
   auto defs = schema(config);
   const KeyDef& def = known_key(defs, section, key, at);
@@ -477,21 +569,67 @@ void check_task_keys(Config& config, const SetKeys& set_keys) {
   }
 }
 
+bool is_key_char(char c) {
+  return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '-';
+}
+bool is_blank(char c) {
+  return c == ' ' || c == '\t';
+}
+
+// A bare key at `i` of `line` (after blanks), or empty; `i` moves past it and the blanks after.
+std::string_view scan_key(std::string_view line, std::size_t& i) {
+  while (i < line.size() && is_blank(line[i])) ++i;
+  const std::size_t start = i;
+  while (i < line.size() && is_key_char(line[i])) ++i;
+  const std::string_view key = line.substr(start, i - start);
+  while (i < line.size() && is_blank(line[i])) ++i;
+  return key;
+}
+
+// `[section]` (blanks allowed, a comment after it) gives the section's name, else empty.
+std::string_view table_header(std::string_view line) {
+  std::size_t i = 0;
+  while (i < line.size() && is_blank(line[i])) ++i;
+  if (i == line.size() || line[i] != '[') return {};
+  ++i;
+  const std::string_view name = scan_key(line, i);
+  if (name.empty() || i == line.size() || line[i] != ']') return {};
+  ++i;
+  while (i < line.size() && is_blank(line[i])) ++i;
+  return i == line.size() || line[i] == '#' ? name : std::string_view{};
+}
+
+// `key = value` gives the key and the value's first word (up to a blank, #, comma or ]).
+std::optional<std::pair<std::string_view, std::string_view>> key_and_value(std::string_view line) {
+  std::size_t i = 0;
+  const std::string_view key = scan_key(line, i);
+  if (key.empty() || i == line.size() || line[i] != '=') return std::nullopt;
+  ++i;
+  while (i < line.size() && is_blank(line[i])) ++i;
+  const std::size_t start = i;
+  while (i < line.size() && !std::isspace(static_cast<unsigned char>(line[i])) && line[i] != '#' &&
+         line[i] != ',' && line[i] != ']')
+    ++i;
+  if (i == start) return std::nullopt;
+  return std::make_pair(key, line.substr(start, i - start));
+}
+
 // A TOML syntax error on `at.line` that is a number out of range ("eval_seconds = 1e999" under
 // [task]) is reported as such, naming the key; any other syntax error is left to the caller.
 void fail_if_unrepresentable_on_line(Config& config, const std::string& toml_text,
                                      const Location& at) {
-  static const std::regex header(R"(^\s*\[\s*([A-Za-z0-9_-]+)\s*\]\s*(#.*)?$)");
-  static const std::regex assignment(R"(^\s*([A-Za-z0-9_-]+)\s*=\s*([^\s#,\]]+))");
   std::istringstream lines(toml_text);
   std::string text, section;
   for (std::int64_t number = 1; std::getline(lines, text) && number <= at.line; ++number) {
-    std::smatch m;
-    if (std::regex_search(text, m, header)) section = m[1].str();
-    if (number < at.line || !std::regex_search(text, m, assignment)) continue;
+    const std::string_view header = table_header(text);
+    if (!header.empty()) section = header;
+    if (number < at.line) continue;
+    const auto assignment = key_and_value(text);
+    if (!assignment) continue;
     const auto defs = schema(config);
-    const KeyDef* def = find_def(defs, section, m[1].str());
-    if (def && is_unrepresentable_number(m[2].str())) fail_unrepresentable(*def, at, m[2].str());
+    const KeyDef* def = find_def(defs, section, std::string(assignment->first));
+    const std::string value(assignment->second);
+    if (def && is_unrepresentable_number(value)) fail_unrepresentable(*def, at, value);
   }
 }
 
@@ -503,7 +641,6 @@ std::string value_text(const KeyDef& def) {
         if constexpr (std::is_same_v<T, std::int64_t>) return std::to_string(*target);
         if constexpr (std::is_same_v<T, bool>) return *target ? "true" : "false";
         if constexpr (std::is_same_v<T, std::string>) return quote(*target);
-        if constexpr (std::is_same_v<T, TaskKind>) return quote(to_string(*target));
         if constexpr (ConfigChoice<T>) return quote(to_string(*target));
         if constexpr (std::is_same_v<T, std::vector<double>>) {
           std::vector<std::string> items;
@@ -528,8 +665,9 @@ std::string value_text(const KeyDef& def) {
 }  // namespace
 
 Config parse_config(const std::string& toml_text, const std::string& source_name,
-                    const std::vector<std::string>& overrides) {
+                    const std::vector<std::string>& overrides, OverrideOrigin origin) {
   Config config;
+  check_text_shape(toml_text, {source_name, 1});
   toml::table root;
   try {
     root = toml::parse(toml_text, source_name);
@@ -541,13 +679,14 @@ Config parse_config(const std::string& toml_text, const std::string& source_name
   }
   SetKeys set_keys;
   apply_table(config, root, source_name, set_keys);
-  for (const auto& o : overrides) apply_override(config, o, set_keys);
+  for (const auto& o : overrides) apply_override(config, o, set_keys, origin);
   check_task_keys(config, set_keys);
   check_consistency(config, source_name);
   return config;
 }
 
-Config load_config(const std::string& path, const std::vector<std::string>& overrides) {
+Config load_config(const std::string& path, const std::vector<std::string>& overrides,
+                   OverrideOrigin origin) {
   // A directory opens as a stream that reads as empty on Linux: it would silently be a config
   // of all defaults, that is a full-size run.
   std::error_code ec;
@@ -559,7 +698,27 @@ Config load_config(const std::string& path, const std::vector<std::string>& over
   } catch (const InputFileError& e) {
     throw ConfigError(e.what());
   }
-  return parse_config(text, path, overrides);
+  // A file of another kind is named as such, not reported as a TOML syntax error (issue 39:
+  // `evolve --config robot.json` said "TOML syntax error" on line 1).
+  const FileMagic magic = file_magic(path);
+  switch (magic) {
+    case FileMagic::json:
+      throw ConfigError(path +
+                        ": is a JSON file (a robot file?), not a TOML config; robot files go to "
+                        "softevo eval, render and view, and carry their run's config");
+    case FileMagic::hdf5:
+      throw ConfigError(path +
+                        ": is an HDF5 file (a run archive?), not a TOML config; `softevo info` "
+                        "shows an archive's config, and --resume --out continues its run");
+    case FileMagic::png:
+    case FileMagic::zip:
+    case FileMagic::gzip:
+      throw ConfigError(path + ": is a binary file (" +
+                        (magic == FileMagic::png ? "PNG" : "compressed") + "), not a TOML config");
+    case FileMagic::unknown:
+      break;
+  }
+  return parse_config(text, path, overrides, origin);
 }
 
 Config apply_overrides(const Config& base, const std::vector<std::string>& overrides) {
@@ -605,24 +764,6 @@ std::vector<StructuralMaterial> material_table(const PhysicsConfig& physics) {
 const std::vector<TaskKind>& task_kinds() {
   static const std::vector<TaskKind> kinds = {TaskKind::gait, TaskKind::directed, TaskKind::rotate};
   return kinds;
-}
-
-const char* to_string(TaskKind kind) {
-  switch (kind) {
-    case TaskKind::gait:
-      return "gait";
-    case TaskKind::directed:
-      return "directed";
-    case TaskKind::rotate:
-      return "rotate";
-  }
-  return "unknown";
-}
-
-std::optional<TaskKind> task_kind_from_string(const std::string& name) {
-  for (TaskKind k : task_kinds())
-    if (name == to_string(k)) return k;
-  return std::nullopt;
 }
 
 std::string experiment_name(const Config& config) {

@@ -106,10 +106,12 @@ enum class TaskKind : std::uint8_t {
   directed,  // locomotion towards each of task.directions (§7.2-§7.4)
   rotate,    // in-place rotation about +z (§7.6)
 };
-// Every kind in enum order, and its config name ("gait", "directed", "rotate").
+template <>
+struct ChoiceNames<TaskKind> {
+  static constexpr std::array<const char*, 3> names = {"gait", "directed", "rotate"};
+};
+// Every kind in enum order (to_string and choice_names<TaskKind> give the config names).
 const std::vector<TaskKind>& task_kinds();
-const char* to_string(TaskKind kind);
-std::optional<TaskKind> task_kind_from_string(const std::string& name);
 
 struct TaskConfig {
   TaskKind kind = TaskKind::gait;
@@ -176,7 +178,7 @@ struct TerrainConfig {
 
 // Median rest volume of the 57 chambers of the 40 thesis champions [m^3] (about 133 cm^3;
 // docs/model.md §3.8): the default reference volume of pneumatics.supply_pressure_scaling =
-// "inverse_volume". Recomputed from ../shared/reference by tests/physics/test_pneumatics.cpp.
+// "inverse_volume". Recomputed from the thesis champions by tests/physics/test_pneumatics.cpp.
 inline constexpr double kThesisMedianChamberVolume = 1.3299984857439995e-4;
 
 struct PneumaticsConfig {
@@ -308,12 +310,25 @@ class ConfigError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The shape a config text may have, checked before TOML parsing (a ConfigError naming the line
+// otherwise): no config needs more, and a parser's or an error report's cost then stays bounded
+// whatever the input (a 50,000-digit number or an inline table 10,000 deep crashed every reader
+// through the stack, issue 39). --set values get the same limits.
+inline constexpr std::size_t kMaxConfigLineBytes = 10000;
+inline constexpr int kMaxConfigNesting = 8;  // arrays and inline tables inside one another
+
+// Where overrides come from, for their error messages: "--set neat.pop_size=4: ..." on the
+// command line, 'overrides["neat.pop_size"] = 4: ...' from Python (issue 39).
+enum class OverrideOrigin { command_line, python };
+
 // Parse a TOML file strictly, then apply overrides "section.key=value" (TOML value syntax; a bare
 // word is taken as a string). Throws ConfigError.
-Config load_config(const std::string& path, const std::vector<std::string>& overrides = {});
+Config load_config(const std::string& path, const std::vector<std::string>& overrides = {},
+                   OverrideOrigin origin = OverrideOrigin::command_line);
 // Same from TOML text; `source_name` is used in error messages.
 Config parse_config(const std::string& toml_text, const std::string& source_name,
-                    const std::vector<std::string>& overrides = {});
+                    const std::vector<std::string>& overrides = {},
+                    OverrideOrigin origin = OverrideOrigin::command_line);
 
 // `base` with overrides applied and checked like those of parse_config (a value set by a command
 // option, e.g. `render --seconds`, gets the config's range check). Throws ConfigError.

@@ -81,12 +81,6 @@ bool controller_init_not_random(const Config& c) {
   return c.controller.init != ControllerInit::random;
 }
 
-std::vector<std::string> task_kind_names() {
-  std::vector<std::string> names;
-  for (TaskKind k : task_kinds()) names.emplace_back(to_string(k));
-  return names;
-}
-
 }  // namespace
 
 std::vector<std::string> allowed_strings(const KeyDef& def) {
@@ -95,8 +89,6 @@ std::vector<std::string> allowed_strings(const KeyDef& def) {
         using T = std::remove_pointer_t<decltype(target)>;
         if constexpr (ConfigChoice<T>) {
           return choice_names<T>();
-        } else if constexpr (std::is_same_v<T, TaskKind>) {
-          return task_kind_names();
         } else {
           return def.allowed;
         }
@@ -126,6 +118,7 @@ std::vector<KeyDef> schema(Config& c) {
        .key = "eval_timeout_seconds",
        .target = &r.eval_timeout_seconds,
        .min = 0,
+       .max = 1.0e7,  // 116 days; near 9.2e9 s a deadline overflowed the clock (issue 39)
        .unit = "s"},
       {.section = "run", .key = "on_failure", .target = &r.on_failure},
       {.section = "run",

@@ -1,8 +1,8 @@
 // FNV-1a 64, the one hash behind every digest softevo stores or compares: the physics state hash
 // (physics/state.cpp), the config and experiment hashes (common/config_identity.hpp) and the
-// per-generation and fitness digests of run archives (io/archive.cpp). It is not a cryptographic
-// hash: it detects accidental change (docs/archive.md), and its value for given bytes is fixed
-// forever, because archives and golden tests store it.
+// per-generation and fitness digests of run archives (io/archive_digest.cpp). It is not a
+// cryptographic hash: it detects accidental change (docs/archive.md), and its value for given bytes
+// is fixed forever, because archives and golden tests store it.
 #pragma once
 
 #include <cstddef>

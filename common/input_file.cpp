@@ -79,6 +79,14 @@ std::string read_input_file(const std::string& path, std::uint64_t limit, const 
   return bytes;
 }
 
+std::string not_a_regular_file(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0)
+    return errno == ENOENT ? "does not exist"
+                           : std::string("cannot be read: ") + std::strerror(errno);
+  return S_ISREG(st.st_mode) ? "" : "is " + kind_of(st.st_mode);
+}
+
 FileMagic file_magic(const std::string& path) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return FileMagic::unknown;

@@ -28,6 +28,11 @@ struct InputLimits {
 // larger than `limit`. Never blocks on a FIFO (it is opened without waiting for a writer).
 std::string read_input_file(const std::string& path, std::uint64_t limit, const std::string& what);
 
+// Why `path` cannot be read as a file without opening it (symbolic links followed): "" for a
+// regular file, else "is a directory", "is a FIFO (named pipe)", ... or "does not exist". For
+// readers that open by name (libhdf5): opening a FIFO would block until a writer comes.
+std::string not_a_regular_file(const std::string& path);
+
 // What a regular file is by its first bytes, so that a command given a file of the wrong kind
 // can say what it got and which command takes that ("a robot file", not "not an HDF5 file").
 enum class FileMagic { unknown, hdf5, json, png, zip, gzip };

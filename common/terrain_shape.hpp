@@ -22,8 +22,8 @@ struct TerrainShape {
   bool operator==(const TerrainShape&) const = default;
 };
 
-// One number of TerrainShape: where it lives, its config key ([terrain] section, docs/config.md)
-// and range, its trace attribute (docs/trace.md) and the heightfield that uses it.
+// One number of TerrainShape: where it lives, its config key ([terrain] section, docs/model.md
+// §2.8a) and range, its trace attribute (docs/trace.md) and the heightfield that uses it.
 struct TerrainShapeField {
   double TerrainShape::*member;
   const char* key;

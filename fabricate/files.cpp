@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fabricate/fabricate.hpp"
+#include "render/png.hpp"
 #include "render/render.hpp"
 
 namespace softevo::fabricate {

@@ -130,6 +130,14 @@ int main(int argc, char** argv) {
           text.str() + std::string(1, '\0') +
               "run.seed=3\nneat.pop_size=8\ntask.directions=[0.0, 90.0]\nbody.lattice=[4,4,4]");
     }
+    // Near the stated limits of a config (common/config.hpp): a long number and deep nesting,
+    // from which the fuzzer reaches past them (its inputs go up to 64 KiB, bootstrap.sh).
+    write_file(out / "config" / "long-line.toml",
+               "[run]\nseed = " + std::string(softevo::kMaxConfigLineBytes - 10, '7') + "\n");
+    std::string deep = "[neat]\nactivation_options = ";
+    for (int i = 0; i < softevo::kMaxConfigNesting; ++i) deep += "[";
+    write_file(out / "config" / "deep.toml",
+               deep + "\"sin\"" + std::string(softevo::kMaxConfigNesting, ']') + "\n");
     write_file(out / "robot_file" / "open.json", robot_json(false));
     write_file(out / "robot_file" / "open-reference.json", robot_json(true));
     archive(out / "archive" / "gait-1.h5", 1, 1, {"fitness", "distance", "status"});

@@ -71,7 +71,11 @@ struct RunInfo {
   // physics/revision.hpp; an archive written before the attribute existed reads as 1
   std::int32_t physics_revision = 1;
   std::int64_t seed = 0;
-  std::int32_t ranks = 1;   // (not part of the run's identity)
+  std::int32_t ranks = 1;  // (not part of the run's identity)
+  // What ran it last: "softevo-mpi" (ranks are MPI ranks), "softevo evolve" or "softevo.evolve"
+  // (ranks - 1 worker threads); "" in archives written before the attribute (softevo-mpi's).
+  // Not part of the run's identity.
+  std::string program;
   std::string host;         // (not part of the run's identity)
   std::string start_time;   // ISO 8601 UTC (not part of the run's identity)
   std::string end_time;     // ISO 8601 UTC, "" while running

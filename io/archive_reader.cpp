@@ -76,6 +76,7 @@ RunInfo Archive::info() const {
                              : 1;
     r.seed = f.read_attribute<std::int64_t>("seed");
     r.ranks = f.read_attribute<std::int32_t>("ranks");
+    if (f.has_attribute("program")) r.program = f.read_string_attribute("program", kStringBytes);
     r.host = f.read_string_attribute("host", kStringBytes);
     r.start_time = f.read_string_attribute("start_time", kStringBytes);
     r.end_time = f.read_string_attribute("end_time", kStringBytes);
@@ -131,8 +132,15 @@ std::vector<std::int64_t> Archive::generations() const {
 GenerationRecord Archive::generation(std::int64_t gen) const {
   return archive_errors([&] {
     const std::string name = "generations/" + generation_group_name(gen);
-    if (!file_->has_link(name))
-      throw ArchiveError(path_ + ": no generation " + std::to_string(gen) + " (/" + name + ")");
+    if (!file_->has_link(name)) {
+      // Which ones there are, so that a mistyped --generation can be corrected (issue 39).
+      const std::vector<std::int64_t> gens = generations();
+      throw ArchiveError(path_ + ": no generation " + std::to_string(gen) + " (/" + name + "); " +
+                         (gens.empty()
+                              ? std::string("the archive has no generation yet")
+                              : "the archive has generations " + std::to_string(gens.front()) +
+                                    ".." + std::to_string(gens.back())));
+    }
     require_segment(name);
     const h5::Group g = file_->open_group(name);
     GenerationRecord r;

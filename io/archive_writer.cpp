@@ -40,6 +40,7 @@ void write_run_info(const h5::File& file, const RunInfo& info) {
   file.write_attribute<std::int32_t>("physics_revision", info.physics_revision);
   file.write_attribute<std::int64_t>("seed", info.seed);
   file.write_attribute<std::int32_t>("ranks", info.ranks);
+  if (!info.program.empty()) file.write_string_attribute("program", info.program, Charset::utf8);
   file.write_string_attribute("host", info.host, Charset::utf8);
   file.write_string_attribute("start_time", info.start_time, Charset::utf8);
   file.write_string_attribute("end_time", info.end_time, Charset::utf8);

@@ -2,10 +2,13 @@
 #include "io/trace.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <utility>
 #include <vector>
 
+#include "common/config.hpp"
 #include "common/safe_write.hpp"
 #include "io/h5.hpp"
 
@@ -74,6 +77,95 @@ void Trace::check(const std::string& where) const {
   expect_size(time.size(), frames, "time", where);
   expect_size(voxel_cells.size(), voxels * 3, "voxel_cells", where);
   expect_size(voxel_material.size(), voxels, "voxel_material", where);
+}
+
+namespace {
+
+// "`what` = value: must be `rule`" with the value in its shortest round-trip form.
+[[noreturn]] void bad_value(const std::string& where, const std::string& what, double value,
+                            const std::string& rule) {
+  throw std::invalid_argument(where + ": " + what + " = " + toml_number(value) + ": must be " +
+                              rule + " (docs/trace.md \"Limits\")");
+}
+
+void check_range(const std::string& where, const std::string& what, double value, double lo,
+                 double hi, bool lo_exclusive = false) {
+  const bool above = lo_exclusive ? value > lo : value >= lo;
+  if (std::isfinite(value) && above && value <= hi) return;
+  char rule[96];
+  std::snprintf(rule, sizeof rule, "finite, in %s%g, %g]", lo_exclusive ? "(" : "[", lo, hi);
+  bad_value(where, what, value, rule);
+}
+
+// Every value of `values` finite and in [lo, hi]; the error names the first one that is not.
+template <class T>
+void check_each(const std::string& where, const char* dataset, const std::vector<T>& values,
+                double lo, double hi) {
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    const auto v = static_cast<double>(values[i]);
+    if (!(std::isfinite(v) && v >= lo && v <= hi))
+      check_range(where, std::string(dataset) + " value " + std::to_string(i), v, lo, hi);
+  }
+}
+
+}  // namespace
+
+void Trace::check_values(const std::string& where) const {
+  constexpr double kPos = TraceLimits::position_m;
+  check_range(where, "attribute voxel_size [m]", voxel_size, 0.0, TraceLimits::max_voxel_size_m,
+              true);
+  check_range(where, "attribute frame_rate [Hz]", frame_rate, 0.0, TraceLimits::max_frame_rate_hz,
+              true);
+  check_range(where, "attribute dt [s]", dt, 0.0, TraceLimits::max_dt_s);
+  if (steps_per_frame < 0)
+    bad_value(where, "attribute steps_per_frame", static_cast<double>(steps_per_frame), ">= 0");
+  if (direction_deg)
+    check_range(where, "attribute direction_deg [deg]", *direction_deg, -180.0, 180.0);
+  if (fitness && !std::isfinite(*fitness))
+    bad_value(where, "attribute fitness", *fitness, "finite");
+  for (std::size_t i = 0; i < voxel_cells.size(); ++i)
+    if (voxel_cells[i] < 0 || voxel_cells[i] >= TraceLimits::lattice_cells)
+      bad_value(where, "voxel_cells value " + std::to_string(i), voxel_cells[i],
+                "in [0, " + std::to_string(TraceLimits::lattice_cells) + ")");
+  check_each(where, "voxel_material", voxel_material, 1, TraceLimits::materials);
+  check_each(where, "positions [m]", positions, -kPos, kPos);
+  check_each(where, "orientations", orientations, -2.0, 2.0);
+  // A unit quaternion (never renormalised in the simulation, so a little off): one of length
+  // far from 1 turns a cube into nothing or into a cube many times its size.
+  for (std::size_t q = 0; q + 3 < orientations.size(); q += 4) {
+    const double norm = std::sqrt(
+        orientations[q] * orientations[q] + orientations[q + 1] * orientations[q + 1] +
+        orientations[q + 2] * orientations[q + 2] + orientations[q + 3] * orientations[q + 3]);
+    if (!(norm >= 0.5 && norm <= 1.5))
+      bad_value(where, "orientations quaternion " + std::to_string(q / 4) + " length", norm,
+                "about 1 (a unit quaternion)");
+  }
+  // Pressures and valve commands are not checked: a simulation records NaN for a chamber that
+  // encloses no volume (p = n / V, docs/model.md §3.3), and the controller's commands then follow
+  // the NaN sensor input. They only colour chambers and fill plots, which show such a value as
+  // none.
+  for (std::size_t f = 0; f < time.size(); ++f) {
+    if (!std::isfinite(time[f]) || time[f] < 0.0)
+      bad_value(where, "time [s] of frame " + std::to_string(f), time[f], "finite and >= 0");
+    if (f > 0 && time[f] < time[f - 1])
+      bad_value(where, "time [s] of frame " + std::to_string(f), time[f],
+                "at least the time of the frame before (times never go back)");
+  }
+  if (!terrain) return;
+  const Terrain& g = *terrain;
+  // The numbers of the ground's own heightfield within the config's ranges
+  // (common/terrain_shape.hpp); every position within the positions' limit.
+  for (const TerrainShapeField& f : kTerrainShapeFields) {
+    const bool used = (g.kind == "bumps" && f.heightfield == HeightfieldKind::bumps) ||
+                      (g.kind == "steps" && f.heightfield == HeightfieldKind::steps) ||
+                      (g.kind == "slope" && f.heightfield == HeightfieldKind::slope);
+    if (used)
+      check_range(where, std::string("attribute ") + f.trace_attribute + " [" + f.unit + "]",
+                  g.shape.*f.member, f.min, f.max, f.min_exclusive);
+  }
+  for (const auto& [name, value] : terrain_numbers(g))
+    check_range(where, std::string("attribute ") + name + " [m]", *value, -kPos, kPos);
+  check_each(where, "terrain_row_x [m]", g.row_x, -kPos, kPos);
 }
 
 void write_trace(const std::string& path, const Trace& t, Overwrite overwrite) {
@@ -201,6 +293,11 @@ Trace read_trace(const std::string& path) {
     if (file.has_link("terrain_row_x"))
       g.row_x = file.open_dataset("terrain_row_x").read<double>(64);
     t.terrain = std::move(g);
+  }
+  try {
+    t.check_values(path);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(e.what());
   }
   return t;
 }

@@ -23,6 +23,13 @@ struct TraceLimits {
   static constexpr std::int64_t frames = 100'000'000;  // records (> 19 days at 60 Hz)
   static constexpr std::int64_t robot_json_bytes = 64LL << 20;
   static constexpr std::int64_t string_bytes = 4096;  // format, status
+  // Values (docs/trace.md "Limits"): what a simulation can record, with room to spare.
+  static constexpr std::int32_t lattice_cells = 64;   // voxel cell indices in [0, 64)
+  static constexpr std::int32_t materials = 10;       // physics.material_count <= 10
+  static constexpr double position_m = 1.0e4;         // |coordinate| of a voxel or of the ground
+  static constexpr double max_voxel_size_m = 10.0;    // physics.voxel_size <= 10 m
+  static constexpr double max_frame_rate_hz = 1.0e4;  // task.control_rate <= 10 kHz
+  static constexpr double max_dt_s = 1.0;
 };
 
 // Everything a trace holds. Per-frame arrays are row-major with the frame index outermost.
@@ -64,6 +71,13 @@ struct Trace {
   // Throws std::invalid_argument naming the first array whose length does not match the
   // counts (`where` names the trace in the message).
   void check(const std::string& where) const;
+  // Throws std::invalid_argument naming the first value a simulation cannot have recorded
+  // (docs/trace.md "Limits"): a non-finite or out-of-range attribute (voxel_size, frame_rate,
+  // dt, direction, fitness, the terrain's numbers), a position, quaternion or time that is not
+  // finite or is out of range, times that go back, a voxel cell or material out of range. A
+  // renderer or viewer may then rely on the geometry being sane. Pressures and valve commands
+  // may be NaN (a chamber that encloses no volume) and are not checked.
+  void check_values(const std::string& where) const;
 };
 
 // Writes `trace` to `path` atomically (common/safe_write.hpp: temporary file, fsync, rename;
@@ -77,7 +91,8 @@ void write_trace(const std::string& path, const Trace& trace,
 // so that traces written by other tools can be drawn: a missing /time is f / frame_rate, a
 // missing frame_rate 60 Hz (one frame per control frame), a missing voxel_size 0.01 m, missing
 // pressures and valves leave chambers = 0. Throws std::runtime_error naming the file, the
-// object and the reason (a missing required dataset, a wrong shape).
+// object and the reason (a missing required dataset, a wrong shape, a value that
+// Trace::check_values refuses).
 Trace read_trace(const std::string& path);
 
 // `path` is an HDF5 file with a /positions dataset, the mark of a trace. Throws only for a file

@@ -196,6 +196,13 @@ const std::map<std::string, std::string> kLaunchEnvironment = launch_environment
 
 }  // namespace
 
+ProgressReporter ProgressReporter::to_sink(std::int64_t total_generations,
+                                           std::function<void(const std::string&)> sink) {
+  ProgressReporter reporter(nullptr, nullptr, nullptr, total_generations);
+  reporter.sink_ = std::move(sink);
+  return reporter;
+}
+
 ProgressReporter ProgressReporter::console(std::int64_t total_generations, ProgressMode mode,
                                            bool quiet, std::string label) {
   const auto env = [](const char* name) -> const char* {
@@ -269,14 +276,18 @@ void ProgressReporter::generation_finished(const GenerationSummary& s) {
                      static_cast<double>(generations_reported_);
   const double elapsed =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  if (out_ != nullptr) {
-    std::fprintf(out_, "%s%s\n", label_.c_str(),
-                 generation_line(s, total_generations_, elapsed, eta).c_str());
-    std::fflush(out_);
+  if (out_ != nullptr || sink_) {
+    const std::string line = label_ + generation_line(s, total_generations_, elapsed, eta);
+    if (sink_) sink_(line);
+    if (out_ != nullptr) {
+      std::fprintf(out_, "%s\n", line.c_str());
+      std::fflush(out_);
+    }
   }
   const std::string warning = generation_warning(s);
+  if (sink_ && !warning.empty()) sink_(program_ + ": warning: " + label_ + warning);
   if (warn_ != nullptr && !warning.empty()) {
-    std::fprintf(warn_, "softevo-mpi: warning: %s%s\n", label_.c_str(), warning.c_str());
+    std::fprintf(warn_, "%s: warning: %s%s\n", program_.c_str(), label_.c_str(), warning.c_str());
     std::fflush(warn_);
   }
 }

@@ -90,6 +90,10 @@ class ProgressReporter {
                    std::string label = "");
   // A reporter that prints nothing.
   static ProgressReporter silent() { return ProgressReporter(nullptr, nullptr, nullptr, 0); }
+  // A reporter that hands each generation line and warning, as the console would print them
+  // (without the newline), to `sink` instead (Python prints them through sys.stdout).
+  static ProgressReporter to_sink(std::int64_t total_generations,
+                                  std::function<void(const std::string&)> sink);
   // stdout for the lines (none when quiet), stderr for the warnings and, as `mode` decides,
   // the live line. `label` as for the constructor.
   static ProgressReporter console(std::int64_t total_generations, ProgressMode mode, bool quiet,
@@ -101,6 +105,8 @@ class ProgressReporter {
   void learning_started(const LearningProgress& round);
   void generation_finished(const GenerationSummary& s);
   void message(const char* text);  // a free-form line (clears the live line first)
+  // The program that starts each warning line ("softevo-mpi" unless set).
+  void set_program(std::string program) { program_ = std::move(program); }
 
  private:
   void clear_live();
@@ -108,6 +114,8 @@ class ProgressReporter {
   std::FILE* live_;
   std::FILE* warn_;
   std::string label_;
+  std::string program_ = "softevo-mpi";
+  std::function<void(const std::string&)> sink_;
   std::int64_t total_generations_;
   std::int64_t generation_ = 0;
   std::int64_t generations_reported_ = 0;

@@ -146,7 +146,14 @@ std::size_t open_descriptors() {
 }  // namespace
 
 std::uint64_t estimate_run_memory(const Config& config) {
-  const auto members = static_cast<std::uint64_t>(std::max<std::int64_t>(config.neat.pop_size, 0));
+  const auto pop = static_cast<std::uint64_t>(std::max<std::int64_t>(config.neat.pop_size, 0));
+  // Every species keeps at least max(min_species_size, elitism) members (docs/model.md §8.5). The
+  // per-member figure was measured at the default 2, so only a larger minimum adds members: up
+  // to (minimum - 2) more for each of at most pop/2 species of 2 (issue 39: min_species_size
+  // grew a population of 4 by 300 MB/s and was not counted here).
+  const auto minimum = static_cast<std::uint64_t>(
+      std::max<std::int64_t>({config.neat.min_species_size, config.neat.elitism, 2}));
+  const std::uint64_t members = pop + pop / 2 * (minimum - 2);
   std::uint64_t per_member = kBytesPerMember;
   if (config.learning.method != LearningMethod::none)
     per_member += kBytesPerLearningCandidate *
@@ -212,9 +219,9 @@ void reserve_descriptors(std::size_t runs) {
 
 PreparedRun prepare_run(const Config& config, const RunOptions& options, int ranks) {
   if (options.resume && options.overwrite)
-    throw StartupError(options.out_path +
-                       ": --resume (continue this archive) and --overwrite (replace it) "
-                       "contradict each other; give one of them");
+    throw StartupError(options.out_path + ": " + options.names.resume +
+                       " (continue this archive) and " + options.names.overwrite +
+                       " (replace it) contradict each other; give one of them");
   // Every evaluation of the run stays within the work limits: refused here, not as a run of
   // failed evaluations (or, before the limits, of days per evaluation).
   try {
@@ -236,6 +243,7 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
   info.physics_revision = physics::kPhysicsRevision;
   info.seed = config.run.seed;
   info.ranks = ranks;
+  info.program = options.program;
   info.host = options.host.empty() ? host_name() : options.host;
   info.start_time = iso8601_now();
   info.config_hash = hash;
@@ -296,9 +304,10 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
         throw StartupError(
             out + ": cannot resume: this run's config differs from the archive's in " +
             std::to_string(count) + (count == 1 ? " key" : " keys") + " (" + differing +
-            "); only run.generations (--generations) may change on resume: leave out --config "
-            "and the overrides to continue with the archive's config, or give the run "
-            "another --out");
+            "); only run.generations (" + options.names.generations +
+            ") may change on resume: leave out " + options.names.config + " and " +
+            options.names.overrides +
+            " to continue with the archive's config, or give the run another " + options.names.out);
       run.run_length_changed = old_text != run.config_text;
       if (old.physics_revision != physics::kPhysicsRevision)
         throw StartupError(
@@ -354,9 +363,9 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
       throw StartupError(out + ": cannot resume: bad checkpoint: " + e.what());
     }
   } else if (exists && !options.overwrite) {
-    throw StartupError(out +
-                       " exists: pass --resume to continue it, --overwrite to replace it, or "
-                       "choose another --out");
+    throw StartupError(out + " exists: pass " + options.names.resume + " to continue it, " +
+                       options.names.overwrite + " to replace it, or choose another " +
+                       options.names.out);
   }
   if (!run.population)
     run.population.emplace(evo::Population::create(config, task_inputs(config),
@@ -623,16 +632,13 @@ void RunLoop::check_failed_generations(const GenerationRecord& rec,
   const bool all_failed =
       !rec.status.empty() && std::all_of(rec.status.begin(), rec.status.end(), failure);
   failed_generations_ = all_failed ? failed_generations_ + 1 : 0;
-  const std::int64_t limit = run_.config.run.stop_after_failed_generations;
-  if (limit == 0 || failed_generations_ < limit) return;
-  std::array<std::size_t, 7> counts{};
+  StatusCounts counts{};
   for (std::uint8_t s : rec.status)
     if (s < counts.size()) ++counts[s];
-  std::string statuses;
-  for (std::size_t s = 0; s < counts.size(); ++s)
-    if (counts[s] > 0)
-      statuses += (statuses.empty() ? "" : ", ") + std::to_string(counts[s]) + " " +
-                  to_string(static_cast<EvalStatus>(s));
+  for (std::size_t s = 0; s < counts.size(); ++s) run_.statuses_this_start[s] += counts[s];
+  const std::int64_t limit = run_.config.run.stop_after_failed_generations;
+  if (limit == 0 || failed_generations_ < limit) return;
+  const std::string statuses = status_counts_text(counts);
   std::string cause;
   for (const GenomeOutcome& o : evaluated)
     if (!o.message.empty()) {

@@ -79,9 +79,22 @@ class LocalExecutor : public UnitExecutor {
   EvaluateFn evaluate_;
 };
 
+// How the messages of a start name the caller's options: the command line's by default; Python
+// (softevo.evolve) names its keyword arguments instead (issue 39: it said "pass --resume").
+struct OptionNames {
+  std::string resume = "--resume", overwrite = "--overwrite", out = "--out",
+              generations = "--generations", config = "--config", overrides = "the overrides";
+  static OptionNames python() {
+    return {
+        "resume=True", "overwrite=True", "out=", "generations=", "changes to config", "overrides="};
+  }
+};
+
 struct RunOptions {
   std::string out_path;
-  bool resume = false;     // continue `out_path` if it exists (a new run otherwise)
+  OptionNames names;                    // for the messages
+  std::string program = "softevo-mpi";  // io::RunInfo::program
+  bool resume = false;                  // continue `out_path` if it exists (a new run otherwise)
   bool overwrite = false;  // replace an existing `out_path` (at the first archive write)
   std::string host;        // "" = gethostname()
   // Throughput (docs/scaling.md); neither changes a result bit. Off = the schedule of earlier
@@ -124,6 +137,10 @@ struct PreparedRun {
   // --resume of an archive checkpointed within a learning generation: that generation's
   // controller learning after its last completed round, which the run continues.
   std::optional<GenerationLearning> learning;
+  // The archived statuses of the generations this start evaluated, counted by EvalStatus: a run
+  // none of whose robots was ever ok ends with an error (run_driver.hpp), as one whose
+  // generations all failed does.
+  StatusCounts statuses_this_start{};
 };
 
 // Descriptors a job needs beside one run lock per run: this process's configs, the archive

@@ -87,6 +87,17 @@ void print_summary(const PreparedRun& r, RunOutcome outcome, const std::string& 
 
 }  // namespace
 
+std::string no_robot_ok(const PreparedRun& run) {
+  const auto& statuses = run.statuses_this_start;
+  std::int64_t evaluated = 0;
+  for (std::int64_t n : statuses) evaluated += n;
+  if (evaluated == 0 || statuses[static_cast<std::size_t>(EvalStatus::ok)] > 0) return "";
+  return run.options.out_path + ": no robot of the " + std::to_string(evaluated) +
+         " evaluated was ok (" + status_counts_text(statuses) +
+         "): the archive is complete, but the setup cannot work as configured (check the "
+         "physics and pneumatics keys)";
+}
+
 std::string rank0_stop_cause() {
   if (launcher_gone()) return "rank 0: " + launcher_gone_reason();
   const std::string signal = stop_signal_name();
@@ -116,7 +127,10 @@ int drive_runs(const std::vector<PreparedRun*>& runs, UnitExecutor& executor,
           ProgressReporter::console(run->config.run.generations, options.progress, options.terse));
   }
   std::vector<ProgressReporter*> progress;
-  for (ProgressReporter& r : reporters) progress.push_back(&r);
+  for (ProgressReporter& r : reporters) {
+    r.set_program(options.program);
+    progress.push_back(&r);
+  }
   const auto t0 = std::chrono::steady_clock::now();
   const double cpu0 = cpu_seconds();
   std::vector<RunOutcome> outcomes;
@@ -135,7 +149,15 @@ int drive_runs(const std::vector<PreparedRun*>& runs, UnitExecutor& executor,
     if (o == RunOutcome::interrupted) overall = o;
   std::string reason = stop_reason ? stop_reason() : "";
   if (reason.empty() && overall == RunOutcome::interrupted) reason = rank0_stop_cause();
-  const int code = overall == RunOutcome::interrupted ? kExitRequeue : 0;
+  int code = overall == RunOutcome::interrupted ? kExitRequeue : 0;
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    if (outcomes[r] != RunOutcome::complete) continue;
+    const std::string none_ok = no_robot_ok(*runs[r]);
+    if (none_ok.empty()) continue;
+    std::fprintf(stderr, "%s: error: %s\n", options.program.c_str(), none_ok.c_str());
+    std::fflush(stderr);
+    if (code == 0) code = kExitNoRobotOk;
+  }
   // -q keeps the one line that says how to continue an interrupted run.
   if (chatty || (!options.quiet && overall == RunOutcome::interrupted)) {
     const double wall =

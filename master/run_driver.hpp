@@ -25,8 +25,18 @@ struct DriverOptions {
   ProgressMode progress = ProgressMode::automatic;  // --progress: the live line
 };
 
+// A run that completed without a single robot ok in the generations it evaluated (every one
+// killed, diverged or failed: e.g. pneumatics.conductivity = 15 explodes them all) is archived
+// complete but ends with this exit code and an error line, as a run whose generations all
+// failed does (exit 1; issue 39: it used to exit 0).
+inline constexpr int kExitNoRobotOk = 1;
+// That error's text for `run` (naming its archive and the statuses), or "" when some robot of the
+// generations this start evaluated was ok, or none was evaluated.
+std::string no_robot_ok(const PreparedRun& run);
+
 // Runs `runs` (prepared by prepare_run) on `executor`, printing as `options` say; returns the
-// exit code: kExitRequeue if any run was interrupted, else 0. `stop_reason` (optional) says why
+// exit code: kExitRequeue if any run was interrupted, else kExitNoRobotOk if a complete run had
+// no robot ok, else 0. `stop_reason` (optional) says why
 // an interrupted run stopped ("" = the signal this process received). A RunError is rethrown
 // with where --resume continues each run.
 int drive_runs(const std::vector<PreparedRun*>& runs, UnitExecutor& executor,

@@ -35,6 +35,10 @@ namespace softevo::master {
 // The worker threads for `softevo evolve` when none are asked for: the cores this process may
 // run on (its CPU affinity, which Slurm and taskset restrict), at least 1.
 int available_cores();
+// The most worker threads one process starts (`softevo evolve --workers`, `softevo.evolve`):
+// far above any node's cores, and below the count whose thread stacks alone exhaust a machine's
+// memory (100,000 threads aborted the Python interpreter, issue 39).
+inline constexpr int kMaxWorkerThreads = 4096;
 
 class ThreadExecutor : public UnitExecutor {
  public:

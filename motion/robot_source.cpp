@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "common/eval_types.hpp"
+#include "common/round_trip.hpp"
 #include "evo/genome.hpp"
 #include "io/archive.hpp"
 #include "io/run_lock.hpp"
@@ -153,9 +154,9 @@ Motion simulate_motion(Config config, const BodyPlan& plan, const ControllerSpec
                              (result.message.empty() ? to_string(result.status) : result.message));
   }
   char line[160];
-  std::snprintf(line, sizeof line, "%s fitness %.17g, status %s, %.2f s simulated",
-                to_string(config.task.kind), result.fitness, to_string(result.status),
-                result.sim_seconds);
+  std::snprintf(line, sizeof line, "%s fitness %s, status %s, %.2f s simulated",
+                to_string(config.task.kind), round_trip(result.fitness).c_str(),
+                to_string(result.status), result.sim_seconds);
   motion.summary = line;
   motion.status = to_string(result.status);
   return motion;
@@ -273,8 +274,8 @@ Motion load_trace(const std::string& path, const MotionRequest& request) {
   if (motion.poses.empty()) throw std::runtime_error(path + ": trace has no frame");
   if (trace.fitness && !trace.status.empty()) {
     char line[160];
-    std::snprintf(line, sizeof line, "traced fitness %.17g, status %s", *trace.fitness,
-                  trace.status.c_str());
+    std::snprintf(line, sizeof line, "traced fitness %s, status %s",
+                  round_trip(*trace.fitness).c_str(), trace.status.c_str());
     motion.summary = line;
     motion.status = trace.status;
   }
@@ -369,7 +370,8 @@ RobotFile robot_of(const ArchivedIndividual& individual) {
   const evo::Genome genome = evo::decode_genome(individual.genome);
   const std::string name = individual.experiment + " gen " + std::to_string(individual.generation) +
                            " id " + std::to_string(individual.id);
-  const worker::BuiltRobot built = worker::build_robot(individual.config, genome);
+  const worker::BuiltRobot built =
+      worker::build_robot(individual.config, genome, *tasks::make_task(individual.config));
   if (!built.valid || !built.actuatable) {
     throw std::runtime_error(individual.archive_path + ": individual " +
                              std::to_string(individual.id) + " of generation " +
@@ -414,7 +416,8 @@ Motion load_motion(const std::string& input, const MotionRequest& request) {
     Motion motion =
         simulate_motion(ind.config, robot.body, robot.controller, request, robot.name, ids);
     char archived[96];
-    std::snprintf(archived, sizeof archived, "; archived fitness %.17g", ind.fitness);
+    std::snprintf(archived, sizeof archived, "; archived fitness %s",
+                  round_trip(ind.fitness).c_str());
     motion.summary += archived;
     return motion;
   }

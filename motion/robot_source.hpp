@@ -1,7 +1,7 @@
 // Where a robot and its motion come from: a robot file, an `eval --trace` HDF5 file
 // (docs/trace.md), or one individual of a run archive (its genome developed and re-simulated
-// with the archived config, exactly as the run evaluated it). Used by `softevo render` and
-// `softevo replay`, and meant for the viewer.
+// with the archived config, exactly as the run evaluated it). Used by `softevo render`,
+// `softevo replay` and the viewer (view/).
 //
 // Its own room rather than io/: it re-simulates (worker/), develops genomes (evo/) and builds
 // bodies and poses (scene/), while io/ is the storage layer that master/ and softevo-mpi link

@@ -1,4 +1,5 @@
 #include "render/compose.hpp"
+#include "render/font.hpp"
 
 #include <unistd.h>
 
@@ -135,13 +136,14 @@ Layout parse_layout(const std::string& name) {
   throw std::invalid_argument("layout must be strip or overlay, not '" + name + "'");
 }
 
-std::vector<double> timelapse_times(const Timelapse& timelapse, View view, double end) {
+std::vector<double> timelapse_times(const Timelapse& timelapse, double end) {
   const int n = timelapse.snapshots;
   if (n < 1 || n > kMaxSnapshots)
     throw std::invalid_argument("a time-lapse needs 1 to 64 snapshots, not " + std::to_string(n));
-  // n evenly spaced over [start, start + span].
-  const double span = timelapse.span ? *timelapse.span : (view == View::top ? end : 0.5);
-  double start = timelapse.start ? *timelapse.start : (view == View::top ? 0.0 : 5.0);
+  // n evenly spaced over [start, start + span], by default over the whole clip (issue 39: 0.5 s
+  // from 5 s, the old default of side and iso views, showed no motion at all).
+  double start = timelapse.start ? *timelapse.start : 0.0;
+  const double span = timelapse.span ? *timelapse.span : std::max(0.0, end - start);
   start = std::clamp(start, 0.0, std::max(0.0, end - span));
   std::vector<double> times;
   for (int i = 0; i < n; ++i) times.push_back(n == 1 ? start : start + span * i / (n - 1));
@@ -152,7 +154,7 @@ Image render_timelapse(const Clip& clip, View view, const Timelapse& timelapse, 
                        int height, SceneOptions scene) {
   const int n = timelapse.snapshots;
   std::vector<Pose> snaps;
-  for (const double t : timelapse_times(timelapse, view, clip.poses.back().time))
+  for (const double t : timelapse_times(timelapse, clip.poses.back().time))
     snaps.push_back(clip.poses[pose_at(clip.poses, t)]);
   const Eigen::AlignedBox3d box = scene_box(clip.body, snaps, scene.floor_z);
   if (timelapse.layout == Layout::strip) {

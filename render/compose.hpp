@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "common/safe_write.hpp"
 #include "render/render.hpp"
 
 namespace softevo::render {
@@ -38,8 +39,8 @@ Layout parse_layout(const std::string& name);
 
 struct Timelapse {
   int snapshots = 4;            // evenly spaced over [start, start + span]
-  std::optional<double> span;   // [s] default: the whole clip (top view) or 0.5 s
-  std::optional<double> start;  // [s] default: 0 (top view) or 5 s; clamped into the clip
+  std::optional<double> span;   // [s] default: from start to the end of the clip
+  std::optional<double> start;  // [s] default: 0; clamped into the clip
   Layout layout = Layout::strip;
 };
 // Strip: one panel per snapshot (size per panel, 0 = 360 x 300 pixels), each labelled with its
@@ -51,7 +52,7 @@ Image render_timelapse(const Clip& clip, View view, const Timelapse& timelapse, 
                        int height, SceneOptions scene);
 // The snapshot times [s] render_timelapse shows of a clip whose last pose is at `end` [s].
 // Throws std::invalid_argument unless 1 <= snapshots <= 64.
-std::vector<double> timelapse_times(const Timelapse& timelapse, View view, double end);
+std::vector<double> timelapse_times(const Timelapse& timelapse, double end);
 
 // Full path of an executable `program` on PATH, if any.
 std::optional<std::string> find_on_path(const std::string& program);

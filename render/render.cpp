@@ -1,12 +1,7 @@
 // Software rasteriser for `softevo render` (see render.hpp for the approach).
 #include "render/render.hpp"
-#include "common/safe_write.hpp"
 #include "render/font.hpp"
 #include "scene/cells.hpp"
-
-#ifdef SOFTEVO_HAVE_PNG
-#include <png.h>
-#endif
 
 #include <algorithm>
 #include <cmath>
@@ -108,6 +103,112 @@ void place_chambers(const Body& body, const CellIndex& cells, const Pose& pose,
   }
 }
 
+// The vertices of a body's lattice: corner (i, j, k) of the cells, i.e. cell c has the corners
+// c + (0|1, 0|1, 0|1) (cells are in [0, 2^21) per axis), numbered in the order they are first
+// asked for.
+class VertexGrid {
+ public:
+  // The index of corner `corner` (0..7: bit 0 = +x, bit 1 = +y, bit 2 = +z) of `cell`.
+  int at(const Eigen::Vector3i& cell, int corner) {
+    const Eigen::Vector3i v = cell + Eigen::Vector3i(corner & 1, (corner >> 1) & 1, corner >> 2);
+    const auto key = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(v.x())) << 42) |
+                     (static_cast<std::uint64_t>(static_cast<std::uint32_t>(v.y())) << 21) |
+                     static_cast<std::uint64_t>(static_cast<std::uint32_t>(v.z()));
+    return index_.try_emplace(key, static_cast<int>(index_.size())).first->second;
+  }
+  int count() const { return static_cast<int>(index_.size()); }
+
+ private:
+  std::unordered_map<std::uint64_t, int> index_;
+};
+
+// The four corners (0..7, as VertexGrid::at) of face f (kFaceSteps order) of a cell, in cyclic
+// order around the face.
+std::array<int, 4> face_corners(int face) {
+  const int axis = face / 2;
+  const int side = (face % 2 == 0) ? 1 : 0;
+  const int u = (axis + 1) % 3, w = (axis + 2) % 3;
+  std::array<int, 4> corners{};
+  const int steps[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  for (int k = 0; k < 4; ++k) corners[k] = (side << axis) | (steps[k][0] << u) | (steps[k][1] << w);
+  return corners;
+}
+
+// See render.hpp and docs/rendering.md "Deformed voxels".
+Surface deformed_surface(const Body& body, const CellIndex& cells, const Pose& pose,
+                         const std::vector<Eigen::Vector3d>& chamber_pos,
+                         const std::vector<Eigen::Quaterniond>& chamber_rot) {
+  const int v = static_cast<int>(body.voxel_cells.size());
+  const int c = static_cast<int>(body.chamber_cells.size());
+  const double s = body.voxel_size;
+  VertexGrid grid;
+  // Per vertex: the sum and count of the voxels' corners, and of the chamber cells' corners.
+  std::vector<Eigen::Vector3d> voxel_sum, chamber_sum;
+  std::vector<int> voxel_count, chamber_count;
+  const auto add = [&](int vertex, const Eigen::Vector3d& p, bool voxel) {
+    if (static_cast<std::size_t>(vertex) >= voxel_sum.size()) {
+      voxel_sum.resize(vertex + 1, Eigen::Vector3d::Zero());
+      chamber_sum.resize(vertex + 1, Eigen::Vector3d::Zero());
+      voxel_count.resize(vertex + 1, 0);
+      chamber_count.resize(vertex + 1, 0);
+    }
+    (voxel ? voxel_sum : chamber_sum)[vertex] += p;
+    ++(voxel ? voxel_count : chamber_count)[vertex];
+  };
+  std::vector<Eigen::Matrix3d> rot(static_cast<std::size_t>(v));
+  for (int i = 0; i < v; ++i) rot[i] = pose.orientation[i].normalized().toRotationMatrix();
+  for (int i = 0; i < v; ++i) {
+    // Half the voxel's extent towards each face: half a voxel, stretched by the strain of the
+    // link on that side (docs/model.md §2.3: the offset of P in N's frame along the link axis
+    // over the rest length, minus 1), the whole link's strain on each of its halves.
+    double half[3][2];  // [axis][0 = negative side, 1 = positive side]
+    for (int axis = 0; axis < 3; ++axis) {
+      for (int side = 0; side < 2; ++side) {
+        half[axis][side] = 0.5 * s;
+        const int n = cells.at(body.voxel_cells[i] + kFaceSteps[2 * axis + (1 - side)]);
+        if (n < 0 || n >= v) continue;  // no link: an empty or chamber cell
+        const int lo = side == 1 ? i : n, hi = side == 1 ? n : i;
+        const double along = (rot[lo].transpose() * (pose.position[hi] - pose.position[lo]))[axis];
+        half[axis][side] = 0.5 * along;
+      }
+    }
+    for (int corner = 0; corner < 8; ++corner) {
+      const Eigen::Vector3d offset((corner & 1) ? half[0][1] : -half[0][0],
+                                   (corner & 2) ? half[1][1] : -half[1][0],
+                                   (corner & 4) ? half[2][1] : -half[2][0]);
+      add(grid.at(body.voxel_cells[i], corner), pose.position[i] + rot[i] * offset, true);
+    }
+  }
+  for (int j = 0; j < c; ++j) {
+    const Eigen::Matrix3d r = chamber_rot[j].normalized().toRotationMatrix();
+    for (int corner = 0; corner < 8; ++corner) {
+      const Eigen::Vector3d offset((corner & 1) ? 0.5 * s : -0.5 * s,
+                                   (corner & 2) ? 0.5 * s : -0.5 * s,
+                                   (corner & 4) ? 0.5 * s : -0.5 * s);
+      add(grid.at(body.chamber_cells[j], corner), chamber_pos[j] + r * offset, false);
+    }
+  }
+  Surface surface;
+  surface.vertices.resize(static_cast<std::size_t>(grid.count()));
+  for (int k = 0; k < grid.count(); ++k)
+    surface.vertices[k] = voxel_count[k] > 0 ? Eigen::Vector3d(voxel_sum[k] / voxel_count[k])
+                                             : Eigen::Vector3d(chamber_sum[k] / chamber_count[k]);
+  // The outer skin of the voxels (chambers count as filled), then the chambers' faces towards
+  // anything but another chamber cell.
+  for (int i = 0; i < v + c; ++i) {
+    const Eigen::Vector3i cell = i < v ? body.voxel_cells[i] : body.chamber_cells[i - v];
+    for (int f = 0; f < 6; ++f) {
+      const int n = cells.at(cell + kFaceSteps[f]);
+      if (i < v ? n >= 0 : n >= v) continue;
+      Surface::Quad quad{{}, i};
+      const std::array<int, 4> corners = face_corners(f);
+      for (int k = 0; k < 4; ++k) quad.vertex[k] = grid.at(cell, corners[k]);
+      surface.quads.push_back(quad);
+    }
+  }
+  return surface;
+}
+
 struct Raster {
   int width;
   int height;
@@ -134,64 +235,90 @@ const Eigen::Vector3d kLight = Eigen::Vector3d(-0.35, -0.55, 1.0).normalized();
 constexpr double kAmbient = 0.5;
 constexpr double kDiffuse = 0.5;
 
-// Rasterises one cube face: a parallelogram under orthographic projection. Pixel centre p
-// lies in it iff p = O + a A + b B with a, b in [0, 1]; depth is affine in (a, b) as well.
-void raster_face(Raster& r, const Eigen::Vector3d& centre, const Eigen::Matrix3d& rot, int face,
-                 const Eigen::Vector3d& half, Colour base, float alpha) {
-  const int axis = face / 2;
-  const double sign = (face % 2 == 0) ? 1.0 : -1.0;
-  const Eigen::Vector3d normal = sign * rot.col(axis);
-  const Eigen::Vector3d edge_a = rot.col((axis + 1) % 3) * (2.0 * half[(axis + 1) % 3]);
-  const Eigen::Vector3d edge_b = rot.col((axis + 2) % 3) * (2.0 * half[(axis + 2) % 3]);
-  const Eigen::Vector3d origin = centre + normal * half[axis] - 0.5 * edge_a - 0.5 * edge_b;
-  const Eigen::Vector3d o = r.project(origin);
-  const Eigen::Vector3d a = r.project_vector(edge_a);
-  const Eigen::Vector3d b = r.project_vector(edge_b);
-  const double det = a.x() * b.y() - a.y() * b.x();
-  if (std::abs(det) < 1e-6) return;  // seen edge-on: covers no pixel centre
+// Rasterises one triangle (a, b, c) of a face: a pixel centre lies in it iff its barycentric
+// coordinates are all >= 0 (> 0 for the coordinates in `strict`, so that the two triangles of a
+// quad do not both draw their shared diagonal); depth is affine in them under orthographic
+// projection. Pixels within r.outline of an edge in `outlined` (edge k is the one opposite
+// vertex k) are darker and more opaque: the dark voxel edges.
+constexpr double kEdgeTolerance = 1e-9;  // [-] in barycentric coordinates
 
-  // Two-sided lighting: a face turned away from the camera is seen from inside the body.
-  Eigen::Vector3d n = normal;
-  if (n.dot(r.camera->forward) > 0.0) n = -n;
-  const float shade = static_cast<float>(kAmbient + kDiffuse * std::max(0.0, n.dot(kLight)));
-
-  const double len_a = std::hypot(a.x(), a.y());
-  const double len_b = std::hypot(b.x(), b.y());
-  // Distance of a pixel from the parallelogram's edges [pixel], for dark cube outlines.
-  const double height_over_a = std::abs(det) / std::max(len_b, 1e-12);  // per unit of a
-  const double height_over_b = std::abs(det) / std::max(len_a, 1e-12);  // per unit of b
-  const double outline = r.outline;
-
-  double min_x = o.x(), max_x = o.x(), min_y = o.y(), max_y = o.y();
-  for (const Eigen::Vector3d& corner :
-       {Eigen::Vector3d(o + a), Eigen::Vector3d(o + b), Eigen::Vector3d(o + a + b)}) {
-    min_x = std::min(min_x, corner.x());
-    max_x = std::max(max_x, corner.x());
-    min_y = std::min(min_y, corner.y());
-    max_y = std::max(max_y, corner.y());
+void raster_triangle(Raster& r, const std::array<Eigen::Vector3d, 3>& p, Colour colour, float alpha,
+                     std::array<bool, 3> outlined, std::array<bool, 3> strict) {
+  const double det =
+      (p[1].x() - p[0].x()) * (p[2].y() - p[0].y()) - (p[2].x() - p[0].x()) * (p[1].y() - p[0].y());
+  if (std::abs(det) < 1e-9) return;  // seen edge-on: covers no pixel centre
+  // Height of the triangle over each edge [pixel]: lambda_k * height_k is a pixel's distance
+  // from edge k.
+  std::array<double, 3> height{};
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d& e0 = p[(k + 1) % 3];
+    const Eigen::Vector3d& e1 = p[(k + 2) % 3];
+    height[k] = std::abs(det) / std::max(std::hypot(e1.x() - e0.x(), e1.y() - e0.y()), 1e-12);
   }
+  const double min_x = std::min({p[0].x(), p[1].x(), p[2].x()});
+  const double max_x = std::max({p[0].x(), p[1].x(), p[2].x()});
+  const double min_y = std::min({p[0].y(), p[1].y(), p[2].y()});
+  const double max_y = std::max({p[0].y(), p[1].y(), p[2].y()});
   const int x0 = std::max(0, static_cast<int>(std::floor(min_x)));
   const int x1 = std::min(r.width - 1, static_cast<int>(std::ceil(max_x)));
   const int y0 = std::max(0, static_cast<int>(std::floor(min_y)));
   const int y1 = std::min(r.height - 1, static_cast<int>(std::ceil(max_y)));
   for (int py = y0; py <= y1; ++py) {
     for (int px = x0; px <= x1; ++px) {
-      const double dx = px + 0.5 - o.x();
-      const double dy = py + 0.5 - o.y();
-      const double u = (dx * b.y() - dy * b.x()) / det;
-      const double w = (a.x() * dy - a.y() * dx) / det;
-      if (u < 0.0 || u > 1.0 || w < 0.0 || w > 1.0) continue;
+      const double x = px + 0.5, y = py + 0.5;
+      std::array<double, 3> l{};
+      bool inside = true;
+      for (int k = 0; k < 3 && inside; ++k) {
+        const Eigen::Vector3d& e0 = p[(k + 1) % 3];
+        const Eigen::Vector3d& e1 = p[(k + 2) % 3];
+        l[k] = ((e1.x() - e0.x()) * (y - e0.y()) - (x - e0.x()) * (e1.y() - e0.y())) / det;
+        // A little tolerance: a pixel centre on an edge two faces share belongs to at least one.
+        inside = strict[k] ? l[k] > kEdgeTolerance : l[k] >= -kEdgeTolerance;
+      }
+      if (!inside) continue;
       const std::size_t idx = static_cast<std::size_t>(py) * r.width + px;
-      const float depth = static_cast<float>(o.z() + u * a.z() + w * b.z());
+      const float depth = static_cast<float>(l[0] * p[0].z() + l[1] * p[1].z() + l[2] * p[2].z());
       if (depth >= r.opaque_depth[idx]) continue;
-      const double edge =
-          std::min(std::min(u, 1.0 - u) * height_over_a, std::min(w, 1.0 - w) * height_over_b);
-      const float factor = shade * (edge < outline ? 0.55F : 1.0F);
-      const float edge_alpha = edge < outline ? std::min(1.0F, alpha + 0.25F) : alpha;
-      r.fragments.push_back(Fragment{depth,
-                                     Colour{base.r * factor, base.g * factor, base.b * factor},
-                                     edge_alpha, r.heads[idx]});
+      double edge = std::numeric_limits<double>::infinity();
+      for (int k = 0; k < 3; ++k)
+        if (outlined[k]) edge = std::min(edge, l[k] * height[k]);
+      const bool dark = edge < r.outline;
+      const float factor = dark ? 0.55F : 1.0F;
+      r.fragments.push_back(
+          Fragment{depth, Colour{colour.r * factor, colour.g * factor, colour.b * factor},
+                   dark ? std::min(1.0F, alpha + 0.25F) : alpha, r.heads[idx]});
       r.heads[idx] = static_cast<std::int32_t>(r.fragments.size() - 1);
+    }
+  }
+}
+
+// Rasterises one face of the surface, a quad (q0, q1, q2, q3) in world coordinates (in general
+// not flat: a deformed voxel's face), as the triangles (q0, q1, q2) and (q0, q2, q3), outlined
+// along the quad's four edges only. Lit as one face by the normal of its diagonals' cross
+// product, from both sides (a face turned away from the camera is seen from inside the body).
+void raster_quad(Raster& r, const std::array<Eigen::Vector3d, 4>& q, Colour base, float alpha) {
+  Eigen::Vector3d n = (q[2] - q[0]).cross(q[3] - q[1]);
+  if (n.norm() < 1e-300) return;
+  n.normalize();
+  if (n.dot(r.camera->forward) > 0.0) n = -n;
+  const float shade = static_cast<float>(kAmbient + kDiffuse * std::max(0.0, n.dot(kLight)));
+  const Colour lit{base.r * shade, base.g * shade, base.b * shade};
+  std::array<Eigen::Vector3d, 4> s;
+  for (int k = 0; k < 4; ++k) s[k] = r.project(q[k]);
+  raster_triangle(r, {s[0], s[1], s[2]}, lit, alpha, {true, false, true}, {false, false, false});
+  raster_triangle(r, {s[0], s[2], s[3]}, lit, alpha, {true, true, false}, {false, false, true});
+}
+
+// A box of half sizes `half` [m] about `centre`, turned by `rot` (SceneOptions::insets): its six
+// faces as quads.
+void raster_box(Raster& r, const Eigen::Vector3d& centre, const Eigen::Matrix3d& rot,
+                const Eigen::Vector3d& half, Colour colour, float alpha) {
+  for (int axis = 0; axis < 3; ++axis) {
+    const Eigen::Vector3d a = rot.col((axis + 1) % 3) * half[(axis + 1) % 3];
+    const Eigen::Vector3d b = rot.col((axis + 2) % 3) * half[(axis + 2) % 3];
+    for (double sign : {1.0, -1.0}) {
+      const Eigen::Vector3d c = centre + sign * rot.col(axis) * half[axis];
+      raster_quad(r, {c - a - b, c + a - b, c + a + b, c - a + b}, colour, alpha);
     }
   }
 }
@@ -354,64 +481,6 @@ void Image::set(int x, int y, std::array<std::uint8_t, 3> c) {
   std::memcpy(&rgb[i], c.data(), 3);
 }
 
-void require_png_support([[maybe_unused]] const std::string& path) {
-#ifndef SOFTEVO_HAVE_PNG
-  throw std::runtime_error("cannot write or read PNG " + path +
-                           ": softevo was built without libpng (install libpng-dev, reconfigure "
-                           "and rebuild; video output such as .mp4 works without it)");
-#endif
-}
-
-#ifdef SOFTEVO_HAVE_PNG
-void write_png(const Image& image, const std::string& path, Overwrite overwrite) {
-  if (image.width <= 0 || image.height <= 0 ||
-      image.rgb.size() != static_cast<std::size_t>(image.width) * image.height * 3) {
-    throw std::invalid_argument("write_png " + path + ": image has no pixels");
-  }
-  png_image out;
-  std::memset(&out, 0, sizeof(out));
-  out.version = PNG_IMAGE_VERSION;
-  out.width = static_cast<png_uint_32>(image.width);
-  out.height = static_cast<png_uint_32>(image.height);
-  out.format = PNG_FORMAT_RGB;
-  // Atomic, and never through a symlink or over a special file (docs/output-files.md).
-  AtomicOutput file(path, overwrite);
-  if (png_image_write_to_file(&out, file.temp_path().c_str(), 0, image.rgb.data(), 0, nullptr) ==
-      0) {
-    const std::string reason = out.message;
-    png_image_free(&out);
-    throw std::runtime_error("cannot write PNG " + path + ": " + reason);
-  }
-  file.commit();
-}
-
-Image read_png(const std::string& path) {
-  png_image in;
-  std::memset(&in, 0, sizeof(in));
-  in.version = PNG_IMAGE_VERSION;
-  if (png_image_begin_read_from_file(&in, path.c_str()) == 0) {
-    throw std::runtime_error("cannot read PNG " + path + ": " + in.message);
-  }
-  in.format = PNG_FORMAT_RGB;
-  Image image(static_cast<int>(in.width), static_cast<int>(in.height), {0, 0, 0});
-  if (png_image_finish_read(&in, nullptr, image.rgb.data(), 0, nullptr) == 0) {
-    const std::string reason = in.message;
-    png_image_free(&in);
-    throw std::runtime_error("cannot read PNG " + path + ": " + reason);
-  }
-  return image;
-}
-#else
-void write_png(const Image&, const std::string& path, Overwrite) {
-  require_png_support(path);
-}
-
-Image read_png(const std::string& path) {
-  require_png_support(path);
-  return {};
-}
-#endif
-
 void place_chamber_cells(const Body& body, const Pose& pose, std::vector<Eigen::Vector3d>& position,
                          std::vector<Eigen::Quaterniond>& orientation) {
   const CellIndex cells(body);
@@ -464,15 +533,22 @@ Camera fit_camera(View view, const Eigen::AlignedBox3d& box, int width, int heig
   return cam;
 }
 
+Surface body_surface(const Body& body, const Pose& pose) {
+  if (pose.position.size() != body.voxel_cells.size() ||
+      pose.orientation.size() != body.voxel_cells.size()) {
+    throw std::invalid_argument("render: pose has " + std::to_string(pose.position.size()) +
+                                " voxels, body has " + std::to_string(body.voxel_cells.size()));
+  }
+  const CellIndex cells(body);
+  std::vector<Eigen::Vector3d> chamber_pos;
+  std::vector<Eigen::Quaterniond> chamber_rot;
+  place_chambers(body, cells, pose, chamber_pos, chamber_rot);
+  return deformed_surface(body, cells, pose, chamber_pos, chamber_rot);
+}
+
 Eigen::AlignedBox3d pose_bounds(const Body& body, const Pose& pose) {
   Eigen::AlignedBox3d box;
-  // A turned cube reaches at most half its space diagonal from its centre.
-  const double reach = 0.5 * std::sqrt(3.0) * body.voxel_size;
-  const Eigen::Vector3d r(reach, reach, reach);
-  for (const auto& p : pose.position) {
-    box.extend(p - r);
-    box.extend(p + r);
-  }
+  for (const Eigen::Vector3d& p : body_surface(body, pose).vertices) box.extend(p);
   return box;
 }
 
@@ -577,13 +653,8 @@ std::uint64_t render_buffer_bytes(int width, int height, int supersample) {
 Image render_poses(const Body& body, const std::vector<Pose>& poses, const Camera& camera,
                    const SceneOptions& options) {
   if (poses.empty()) throw std::invalid_argument("render: no pose to draw");
-  for (const Pose& pose : poses) {
-    if (pose.position.size() != body.voxel_cells.size() ||
-        pose.orientation.size() != body.voxel_cells.size()) {
-      throw std::invalid_argument("render: pose has " + std::to_string(pose.position.size()) +
-                                  " voxels, body has " + std::to_string(body.voxel_cells.size()));
-    }
-  }
+  std::vector<Surface> surfaces;
+  for (const Pose& pose : poses) surfaces.push_back(body_surface(body, pose));
   const int ss = std::clamp(options.supersample, 1, 4);
   Raster r{camera.width * ss, camera.height * ss, camera.scale * ss, 0.7 * ss, &camera, {}, {}, {}};
   const std::size_t pixels = static_cast<std::size_t>(r.width) * r.height;
@@ -592,53 +663,45 @@ Image render_poses(const Body& body, const std::vector<Pose>& poses, const Camer
   std::vector<Colour> base(pixels);
 
   Eigen::AlignedBox3d scene;
-  for (const Pose& pose : poses) scene.extend(pose_bounds(body, pose));
+  for (const Surface& surface : surfaces)
+    for (const Eigen::Vector3d& p : surface.vertices) scene.extend(p);
   draw_floor(r, base, options, scene, ss);
 
-  const CellIndex cells(body);
-  const double half = 0.5 * body.voxel_size * options.voxel_scale;
-  std::vector<Eigen::Vector3d> chamber_pos;
-  std::vector<Eigen::Quaterniond> chamber_rot;
+  const int v = static_cast<int>(body.voxel_cells.size());
   for (std::size_t k = 0; k < poses.size(); ++k) {
     const Pose& pose = poses[k];
+    const Surface& surface = surfaces[k];
     const float fade =
         k < options.pose_fade.size() ? static_cast<float>(options.pose_fade[k]) : 1.0F;
-    // Only the outer skin of the body (chambers count as filled) is transparent material;
-    // inner faces would add up to an opaque block.
-    for (std::size_t i = 0; i < body.voxel_cells.size(); ++i) {
-      const Eigen::Matrix3d rot = pose.orientation[i].normalized().toRotationMatrix();
-      const Colour colour = to_colour(material_colour(body.voxel_material[i], body.material_count));
-      for (int f = 0; f < 6; ++f) {
-        if (cells.at(body.voxel_cells[i] + kFaceSteps[f]) >= 0) continue;
-        raster_face(r, pose.position[i], rot, f, Eigen::Vector3d::Constant(half), colour,
+    for (const Surface::Quad& quad : surface.quads) {
+      std::array<Eigen::Vector3d, 4> corners;
+      for (int c = 0; c < 4; ++c) corners[c] = surface.vertices[quad.vertex[c]];
+      if (quad.item < v) {
+        // Only the outer skin of the body (chambers count as filled) is transparent material;
+        // inner faces would add up to an opaque block.
+        raster_quad(r, corners,
+                    to_colour(material_colour(body.voxel_material[quad.item], body.material_count)),
                     static_cast<float>(options.body_alpha) * fade);
+        continue;
       }
-    }
-    for (const SceneOptions::Inset& inset : options.insets) {
-      const Eigen::Matrix3d rot = pose.orientation[inset.voxel].normalized().toRotationMatrix();
-      const Eigen::Vector3d centre = pose.position[inset.voxel] + rot * inset.centre;
-      for (int f = 0; f < 6; ++f)
-        raster_face(r, centre, rot, f, 0.5 * inset.size, to_colour(inset.colour), fade);
-    }
-    if (body.chamber_cells.empty()) continue;
-    place_chambers(body, cells, pose, chamber_pos, chamber_rot);
-    const int v = static_cast<int>(body.voxel_cells.size());
-    for (std::size_t j = 0; j < body.chamber_cells.size(); ++j) {
-      // Dark, darker the more the chamber is inflated (1.0 -> 1.2 bar, §3.5).
+      // A chamber cell: dark, darker the more the chamber is inflated (1.0 -> 1.2 bar, §3.5).
+      // Its faces are the walls' inner faces, which are not drawn (not skin).
+      const int j = quad.item - v;
       double inflation = 0.0;
       const int q = body.chamber_index[j];
-      if (q >= 0 && static_cast<std::size_t>(q) < pose.chamber_pressure.size()) {
+      // (A chamber that encloses no volume has a NaN pressure: not inflated.)
+      if (q >= 0 && static_cast<std::size_t>(q) < pose.chamber_pressure.size() &&
+          std::isfinite(pose.chamber_pressure[q])) {
         inflation = std::clamp((pose.chamber_pressure[q] - 1.0e5) / 0.2e5, 0.0, 1.0);
       }
       const float g = static_cast<float>(0.26 - 0.16 * inflation);
-      const Colour colour{g, g, g * 1.1F};
-      const Eigen::Matrix3d rot = chamber_rot[j].normalized().toRotationMatrix();
-      for (int f = 0; f < 6; ++f) {
-        if (cells.at(body.chamber_cells[j] + kFaceSteps[f]) >= v) continue;  // same blob
-        // Slightly smaller than a cell so it sits inside the walls' faces, not on them.
-        raster_face(r, chamber_pos[j], rot, f, Eigen::Vector3d::Constant(0.97 * half), colour,
-                    static_cast<float>(options.chamber_alpha) * fade);
-      }
+      raster_quad(r, corners, Colour{g, g, g * 1.1F},
+                  static_cast<float>(options.chamber_alpha) * fade);
+    }
+    for (const SceneOptions::Inset& inset : options.insets) {
+      const Eigen::Matrix3d rot = pose.orientation[inset.voxel].normalized().toRotationMatrix();
+      raster_box(r, pose.position[inset.voxel] + rot * inset.centre, rot, 0.5 * inset.size,
+                 to_colour(inset.colour), fade);
     }
   }
 
@@ -719,96 +782,6 @@ long count_pixels_unlike(const Image& image, std::array<std::uint8_t, 3> backgro
     }
   }
   return count;
-}
-
-namespace {
-// 5x7 glyphs, 7 rows of 5 columns, '#' = ink. Lower case is drawn with the upper-case glyphs.
-struct Glyph {
-  char c;
-  std::array<const char*, 7> rows;
-};
-constexpr Glyph kFont[] = {
-    {'0', {".###.", "#...#", "#..##", "#.#.#", "##..#", "#...#", ".###."}},
-    {'1', {"..#..", ".##..", "..#..", "..#..", "..#..", "..#..", ".###."}},
-    {'2', {".###.", "#...#", "....#", "...#.", "..#..", ".#...", "#####"}},
-    {'3', {"#####", "...#.", "..#..", "...#.", "....#", "#...#", ".###."}},
-    {'4', {"...#.", "..##.", ".#.#.", "#..#.", "#####", "...#.", "...#."}},
-    {'5', {"#####", "#....", "####.", "....#", "....#", "#...#", ".###."}},
-    {'6', {"..##.", ".#...", "#....", "####.", "#...#", "#...#", ".###."}},
-    {'7', {"#####", "....#", "...#.", "..#..", ".#...", ".#...", ".#..."}},
-    {'8', {".###.", "#...#", "#...#", ".###.", "#...#", "#...#", ".###."}},
-    {'9', {".###.", "#...#", "#...#", ".####", "....#", "...#.", ".##.."}},
-    {'A', {".###.", "#...#", "#...#", "#####", "#...#", "#...#", "#...#"}},
-    {'B', {"####.", "#...#", "#...#", "####.", "#...#", "#...#", "####."}},
-    {'C', {".###.", "#...#", "#....", "#....", "#....", "#...#", ".###."}},
-    {'D', {"####.", "#...#", "#...#", "#...#", "#...#", "#...#", "####."}},
-    {'E', {"#####", "#....", "#....", "####.", "#....", "#....", "#####"}},
-    {'F', {"#####", "#....", "#....", "####.", "#....", "#....", "#...."}},
-    {'G', {".###.", "#...#", "#....", "#.###", "#...#", "#...#", ".####"}},
-    {'H', {"#...#", "#...#", "#...#", "#####", "#...#", "#...#", "#...#"}},
-    {'I', {".###.", "..#..", "..#..", "..#..", "..#..", "..#..", ".###."}},
-    {'J', {"..###", "...#.", "...#.", "...#.", "...#.", "#..#.", ".##.."}},
-    {'K', {"#...#", "#..#.", "#.#..", "##...", "#.#..", "#..#.", "#...#"}},
-    {'L', {"#....", "#....", "#....", "#....", "#....", "#....", "#####"}},
-    {'M', {"#...#", "##.##", "#.#.#", "#.#.#", "#...#", "#...#", "#...#"}},
-    {'N', {"#...#", "#...#", "##..#", "#.#.#", "#..##", "#...#", "#...#"}},
-    {'O', {".###.", "#...#", "#...#", "#...#", "#...#", "#...#", ".###."}},
-    {'P', {"####.", "#...#", "#...#", "####.", "#....", "#....", "#...."}},
-    {'Q', {".###.", "#...#", "#...#", "#...#", "#.#.#", "#..#.", ".##.#"}},
-    {'R', {"####.", "#...#", "#...#", "####.", "#.#..", "#..#.", "#...#"}},
-    {'S', {".####", "#....", "#....", ".###.", "....#", "....#", "####."}},
-    {'T', {"#####", "..#..", "..#..", "..#..", "..#..", "..#..", "..#.."}},
-    {'U', {"#...#", "#...#", "#...#", "#...#", "#...#", "#...#", ".###."}},
-    {'V', {"#...#", "#...#", "#...#", "#...#", "#...#", ".#.#.", "..#.."}},
-    {'W', {"#...#", "#...#", "#...#", "#.#.#", "#.#.#", "#.#.#", ".#.#."}},
-    {'X', {"#...#", "#...#", ".#.#.", "..#..", ".#.#.", "#...#", "#...#"}},
-    {'Y', {"#...#", "#...#", ".#.#.", "..#..", "..#..", "..#..", "..#.."}},
-    {'Z', {"#####", "....#", "...#.", "..#..", ".#...", "#....", "#####"}},
-    {'.', {".....", ".....", ".....", ".....", ".....", ".##..", ".##.."}},
-    {',', {".....", ".....", ".....", ".....", ".##..", "..#..", ".#..."}},
-    {'-', {".....", ".....", ".....", "#####", ".....", ".....", "....."}},
-    {'+', {".....", "..#..", "..#..", "#####", "..#..", "..#..", "....."}},
-    {'=', {".....", ".....", "#####", ".....", "#####", ".....", "....."}},
-    {':', {".....", ".##..", ".##..", ".....", ".##..", ".##..", "....."}},
-    {'/', {"....#", "...#.", "...#.", "..#..", ".#...", ".#...", "#...."}},
-    {'(', {"...#.", "..#..", ".#...", ".#...", ".#...", "..#..", "...#."}},
-    {')', {".#...", "..#..", "...#.", "...#.", "...#.", "..#..", ".#..."}},
-    {'#', {".#.#.", ".#.#.", "#####", ".#.#.", "#####", ".#.#.", ".#.#."}},
-    {'%', {"##..#", "##..#", "...#.", "..#..", ".#...", "#..##", "#..##"}},
-    {'_', {".....", ".....", ".....", ".....", ".....", ".....", "#####"}},
-    {'|', {"..#..", "..#..", "..#..", "..#..", "..#..", "..#..", "..#.."}},
-};
-}  // namespace
-
-int text_width(const std::string& text, int size) {
-  if (const std::optional<int> w = font_text_width(text, size)) return *w;
-  return 6 * size * static_cast<int>(text.size());
-}
-
-void draw_text(Image& image, int x, int y, const std::string& text,
-               std::array<std::uint8_t, 3> colour, int size) {
-  if (draw_font_text(image, x, y, text, colour, size)) return;
-  int pen = x;
-  for (char ch : text) {
-    const char up = (ch >= 'a' && ch <= 'z') ? static_cast<char>(ch - 'a' + 'A') : ch;
-    const Glyph* glyph = nullptr;
-    for (const Glyph& g : kFont) {
-      if (g.c == up) glyph = &g;
-    }
-    if (glyph != nullptr) {
-      for (int row = 0; row < 7; ++row) {
-        for (int col = 0; col < 5; ++col) {
-          if (glyph->rows[row][col] != '#') continue;
-          for (int dy = 0; dy < size; ++dy) {
-            for (int dx = 0; dx < size; ++dx) {
-              image.set(pen + col * size + dx, y + row * size + dy, colour);
-            }
-          }
-        }
-      }
-    }
-    pen += 6 * size;
-  }
 }
 
 }  // namespace softevo::render

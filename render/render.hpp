@@ -1,13 +1,16 @@
 // Headless software renderer for voxel robots: no GPU, no display. Used by `softevo render`.
 //
-// Every voxel is drawn as a cube of edge `voxel_size`, centred on its simulated position and
-// turned by its orientation quaternion (rigid cubes: link deformation is not drawn). Structural
-// material is semi-transparent and coloured by stiffness like the thesis (figure 3.1: blue =
-// stiffest, red = softest); chamber cells, which have no voxel of their own in the simulation,
-// are placed between their wall voxels and drawn dark, so they show through the body. The
-// projection is orthographic; every cube face is then an exact parallelogram on screen, which
-// keeps the rasteriser small. Transparency is exact per pixel: all fragments are kept in
-// per-pixel lists, sorted by depth and blended back to front over the floor.
+// Every voxel is drawn deformed, as the thesis system's viewer draws it: its eight corners follow
+// from its simulated position, its orientation and the strains of its links (a voxel stretched
+// along a link is drawn longer on that side), and the corners that neighbouring voxels share
+// meet at their mean, so a body is drawn as one body however it is stretched or inflated
+// (docs/rendering.md "Deformed voxels"). Structural material is semi-transparent and coloured by
+// stiffness like the thesis (figure 3.1: blue = stiffest, red = softest); chamber cells, which
+// have no voxel of their own in the simulation, are placed between their wall voxels and drawn
+// dark, so they show through the body. The projection is orthographic; every face (a quad, in
+// general not flat) is drawn as two triangles. Transparency is exact per pixel: all fragments
+// are kept in per-pixel lists, sorted by depth and blended back to front over the floor. PNG
+// files: render/png.hpp; text: render/font.hpp.
 #pragma once
 
 #include <array>
@@ -21,7 +24,6 @@
 #include <Eigen/Geometry>
 
 #include "common/body_plan.hpp"
-#include "common/safe_write.hpp"
 #include "scene/scene.hpp"
 
 namespace softevo::render {
@@ -43,14 +45,22 @@ struct Image {
   void set(int x, int y, std::array<std::uint8_t, 3> c);
 };
 
-// libpng, atomically (common/safe_write.hpp: an existing regular file is replaced only with
-// Overwrite::replace); throws std::runtime_error naming the path and the reason.
-void write_png(const Image& image, const std::string& path,
-               Overwrite overwrite = Overwrite::refuse);
-Image read_png(const std::string& path);
-// libpng is optional (SOFTEVO_ENABLE_PNG): throws std::runtime_error naming `path` when this
-// build has no PNG support, so a render fails before it simulates.
-void require_png_support(const std::string& path);
+// The surface drawn of a body in one pose (docs/rendering.md "Deformed voxels"): the lattice's
+// vertices (cell corners) where the voxels' deformed corners meet, and the faces that are drawn.
+struct Surface {
+  // [m] One per lattice vertex a cell touches: the mean of the corners of the voxels that share
+  // it; a vertex no voxel touches (inside a chamber) is the mean of the chamber cells' corners.
+  std::vector<Eigen::Vector3d> vertices;
+  struct Quad {
+    std::array<int, 4> vertex;  // indices into `vertices`, in order around the face
+    int item;                   // voxel i (< voxels), or voxels + j for chamber cell j
+  };
+  // The voxels' outer skin (a face towards an empty cell; chambers count as filled), and the
+  // chamber cells' faces towards anything but another chamber cell.
+  std::vector<Quad> quads;
+};
+// Throws std::invalid_argument when the pose does not match the body.
+Surface body_surface(const Body& body, const Pose& pose);
 
 // Where the chamber cells of `body` are drawn in `pose` (they have no voxel in the simulation):
 // between their wall voxels, as the renderer places them. Used by the browser viewer, which
@@ -80,16 +90,13 @@ Camera view_camera(View view, int width, int height);
 // the image) left free on each side.
 Camera fit_camera(View view, const Eigen::AlignedBox3d& box, int width, int height,
                   double margin = 0.06);
-// Bounding box of every cube of a pose, chamber cells included.
+// Bounding box of the surface of a pose (body_surface), chamber cells included.
 Eigen::AlignedBox3d pose_bounds(const Body& body, const Pose& pose);
 
 struct SceneOptions {
   double body_alpha = 0.5;     // opacity of one structural face [-]
   double chamber_alpha = 0.9;  // opacity of one chamber face [-]
   int supersample = 2;         // anti-aliasing: render at n x n samples per pixel
-  // Drawn cube edge / voxel size. Rigid cubes of a deformed body leave cracks between them;
-  // a little over 1 hides them.
-  double voxel_scale = 1.0;
   bool floor = true;
   // Visual floor height [m]: a voxel touches the floor when its centre is at z = 0 (§2.8), so
   // the cube's lower face is half a voxel below it.
@@ -146,14 +153,5 @@ std::array<std::uint8_t, 3> material_colour(int material, int material_count);
 inline constexpr double kSoftLightness = 58.0, kStiffLightness = 32.0;
 inline constexpr double kSoftHueDeg = 400.0, kStiffHueDeg = 302.0;  // 400 = 40 past a turn
 inline constexpr double kMaterialChroma = 70.0;
-
-// Text with its top-left corner at pixel (x, y), cap height 7 `size` pixels: in DejaVu Sans
-// when the build has stb_truetype and the font (render/font.hpp), else in a small built-in
-// bitmap font (5x7 cells, printable ASCII in capitals; unknown characters are blanks, each font
-// pixel `size` x `size` image pixels).
-void draw_text(Image& image, int x, int y, const std::string& text,
-               std::array<std::uint8_t, 3> colour, int size = 2);
-// Width [pixel] of `text` as draw_text draws it.
-int text_width(const std::string& text, int size = 2);
 
 }  // namespace softevo::render

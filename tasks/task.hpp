@@ -7,7 +7,7 @@
 //   - the archive and `eval --json` ask for the names of the fitness components;
 //   - live views (the viewer, the Python env) ask a running unit for its score so far and hand
 //     it the steering input.
-// The task's config keys live in [task] (common/config.cpp, marked with their task).
+// The task's config keys live in [task] (common/config_schema.cpp, each row marked with its task).
 //
 // MPI-free and HDF5-free; the interface itself is physics-free (the robot is passed as the
 // physics model and state, forward-declared here).

@@ -10,8 +10,8 @@
 // controller. --set overrides apply to either; the output says which config was used. The task:
 // --task, else the --config file's, else the one the controller's inputs fit
 // (tasks::default_task_for: directed for a directed controller, else gait). Fitness is printed with
-// full double precision (%.17g). --direction D evaluates the target direction D alone
-// (task.directions = [D]).
+// full double precision (the shortest text that reads back as the same double). --direction D
+// evaluates the target direction D alone (task.directions = [D]).
 //
 // --seconds, --direction and --timeout set task.eval_seconds, task.directions and
 // run.eval_timeout_seconds and get their range checks (a bad value is a config error naming the
@@ -39,6 +39,7 @@
 #include "common/eval_types.hpp"
 #include "common/printable.hpp"
 #include "common/robot.hpp"
+#include "common/round_trip.hpp"
 #include "common/safe_write.hpp"
 #include "motion/trace_recorder.hpp"
 #include "physics/model.hpp"
@@ -60,9 +61,9 @@ struct EvalArgs {
   std::string trace;
   std::string config_file;
   std::vector<std::string> overrides;
-  std::string direction;  // TOML value text of the one target direction ("" = the config's)
-  std::string timeout;    // TOML value text of run.eval_timeout_seconds ("" = the config's)
-  bool force = false;     // replace an existing --trace file
+  std::optional<double> direction;  // [deg] the one target direction (none = the config's)
+  std::optional<double> timeout;    // [s] run.eval_timeout_seconds (none = the config's)
+  bool force = false;               // replace an existing --trace file
   std::string simd = "best";
 };
 
@@ -79,8 +80,10 @@ int run_eval(const EvalArgs& a) {
   settings.config_path = a.config_file;
   settings.overrides = a.overrides;
   if (a.seconds) settings.overrides.push_back("task.eval_seconds=" + toml_number(*a.seconds));
-  if (!a.direction.empty()) settings.overrides.push_back("task.directions=[" + a.direction + "]");
-  if (!a.timeout.empty()) settings.overrides.push_back("run.eval_timeout_seconds=" + a.timeout);
+  if (a.direction)
+    settings.overrides.push_back("task.directions=[" + toml_number(*a.direction) + "]");
+  if (a.timeout)
+    settings.overrides.push_back("run.eval_timeout_seconds=" + toml_number(*a.timeout));
   settings.task = a.task;
   if (!a.integrator.empty())
     settings.integrator = parse_choice<Integrator>(a.integrator, "--integrator");
@@ -192,16 +195,16 @@ int run_eval(const EvalArgs& a) {
                 robot.controller.directed ? ", directed controller" : "",
                 to_string(config.physics.integrator), ablation.c_str());
     std::printf("config       %s\n", printable(config_source).c_str());
-    std::printf("fitness      %.17g\n", result.fitness);
+    std::printf("fitness      %s\n", round_trip(result.fitness).c_str());
     if (archived)
-      std::printf("archived     %.17g (%s)\n", *archived,
+      std::printf("archived     %s (%s)\n", round_trip(*archived).c_str(),
                   same_bits(*archived, result.fitness) ? "reproduced bit for bit"
                                                        : "DIFFERS from this evaluation");
     std::printf("status       %s%s%s\n", to_string(result.status),
                 result.message.empty() ? "" : ": ", result.message.c_str());
     for (std::size_t k = 0; k < result.components.size(); ++k) {
       const UnitFitness& u = result.components[k];
-      std::printf("  unit %zu: F %.17g", k, u.fitness);
+      std::printf("  unit %zu: F %s", k, round_trip(u.fitness).c_str());
       for (std::size_t i = 0; i < names.size() && i < u.values.size(); ++i)
         std::printf("  %s %.10g%s%s", names[i].name.c_str(), u.values[i],
                     names[i].unit.empty() ? "" : " ", names[i].unit.c_str());
@@ -224,19 +227,20 @@ void register_eval(CLI::App& app, int& exit_code) {
   auto* cmd = app.add_subcommand("eval", "evaluate a robot file (fitness, components, status)");
   auto a = std::make_shared<EvalArgs>();
   cmd->add_option("ROBOT", a->robot, "robot file (softevo.robot/1 JSON)")->required();
-  std::vector<std::string> task_names;
-  for (TaskKind k : task_kinds()) task_names.emplace_back(to_string(k));
   cmd->add_option("--task", a->task,
                   "the task (default: the --config file's, else the one the controller's inputs "
                   "fit)")
-      ->check(CLI::IsMember(task_names));
+      ->check(CLI::IsMember(choice_names<TaskKind>()));
   cmd->add_option("--integrator", a->integrator, "physics integrator")
       ->check(CLI::IsMember(choice_names<Integrator>()));
   add_seconds_option(*cmd, a->seconds, "simulated seconds");
   cmd->add_option("--ablate", a->ablate, "feed zeros to the oscillator or the pressure sensors")
       ->check(CLI::IsMember({"oscillator", "sensors"}));
+  // Numbers, as render's and view's --direction (issue 39: these took any text); the range is
+  // the config's check (task.directions, run.eval_timeout_seconds), which names the key.
   cmd->add_option("--direction", a->direction,
-                  "directed task: evaluate only this target direction [deg] (task.directions)");
+                  "directed task: evaluate only this target direction [deg, counter-clockwise] "
+                  "(task.directions)");
   cmd->add_option("--timeout", a->timeout,
                   "wall-clock limit of the evaluation [s], status timeout beyond it: sets "
                   "run.eval_timeout_seconds (default 600; 0 = no limit)");

@@ -24,6 +24,7 @@ namespace {
 
 int run_evolve(RunCommandOptions& o, int workers) {
   if (workers <= 0) workers = master::available_cores();
+  o.program = "softevo evolve";
   master::install_stop_handlers();
   std::vector<master::PreparedRun> runs;
   try {
@@ -76,7 +77,7 @@ void register_evolve(CLI::App& app, int& exit_code) {
   sub->add_option("-j,--workers", *workers,
                   "worker threads (default: the cores this process may run on, " +
                       std::to_string(master::available_cores()) + " here)")
-      ->check(CLI::Range(1, 4096));
+      ->check(CLI::Range(1, master::kMaxWorkerThreads));
   sub->callback([&exit_code, options, workers] { exit_code = run_evolve(*options, *workers); });
 }
 

@@ -16,6 +16,7 @@
 #include "common/config_identity.hpp"
 #include "common/eval_types.hpp"
 #include "common/robot.hpp"
+#include "common/round_trip.hpp"
 #include "evo/genome.hpp"
 #include "io/archive.hpp"
 #include "tools/commands.hpp"
@@ -90,9 +91,9 @@ void register_export(CLI::App& app, int& exit_code) {
       j["output"] = a->out;
       std::printf("%s\n", j.dump().c_str());
     } else {
-      std::printf("%s: generation %lld, id %lld, fitness %.17g (%s) -> %s\n", a->path.c_str(),
-                  static_cast<long long>(g), static_cast<long long>(rec.id[row]), rec.fitness[row],
-                  evaluation.status.c_str(), a->out.c_str());
+      std::printf("%s: generation %lld, id %lld, fitness %s (%s) -> %s\n", a->path.c_str(),
+                  static_cast<long long>(g), static_cast<long long>(rec.id[row]),
+                  round_trip(rec.fitness[row]).c_str(), evaluation.status.c_str(), a->out.c_str());
     }
     exit_code = kExitOk;
   });

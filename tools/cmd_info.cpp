@@ -57,6 +57,7 @@ void register_info(CLI::App& app, int& exit_code) {
       j["physics_revision"] = info.physics_revision;
       j["seed"] = info.seed;
       j["ranks"] = info.ranks;
+      j["program"] = info.program.empty() ? "softevo-mpi" : info.program;
       j["host"] = info.host;
       j["start_time"] = info.start_time;
       j["end_time"] = info.end_time;
@@ -89,6 +90,7 @@ void register_info(CLI::App& app, int& exit_code) {
                                                         {"evaluations", learning->evaluations},
                                                         {"iterations", learning->iterations},
                                                         {"mean_gain", learning->mean_gain()},
+                                                        {"gain_unit", summary.fitness_unit},
                                                         {"best_gain", learning->gain_best}}
                                : nlohmann::ordered_json();
       auto& gens = j["generations"] = nlohmann::ordered_json::array();
@@ -123,8 +125,14 @@ void register_info(CLI::App& app, int& exit_code) {
       if (note) std::printf("                 %s\n", note->c_str());
       if (!info.stop_reason.empty())
         std::printf("stopped          %s\n", shown(info.stop_reason).c_str());
-      std::printf("written by       softevo %s (commit %s), %d ranks on %s\n",
-                  shown(info.version).c_str(), shown(info.git_commit).c_str(), info.ranks,
+      // softevo evolve and softevo.evolve record ranks = worker threads + 1 (the master), as
+      // softevo-mpi at that many ranks would have written the same archive.
+      const bool threads = !info.program.empty() && info.program != "softevo-mpi";
+      const int workers = threads ? info.ranks - 1 : info.ranks;
+      std::printf("written by       %s %s (commit %s), %d %s on %s\n",
+                  shown(info.program.empty() ? "softevo-mpi" : info.program).c_str(),
+                  shown(info.version).c_str(), shown(info.git_commit).c_str(), workers,
+                  threads ? (workers == 1 ? "worker thread" : "worker threads") : "ranks",
                   shown(info.host).c_str());
       std::printf("physics revision %d\n", info.physics_revision);
       std::printf("time             %s .. %s\n", shown(info.start_time).c_str(),
@@ -144,10 +152,10 @@ void register_info(CLI::App& app, int& exit_code) {
       if (learning)
         std::printf(
             "learning         %lld bodies x %lld iterations, %lld evaluations, gain mean "
-            "%+.6g best %+.6g\n",
+            "%+.6g %s best %+.6g %s\n",
             static_cast<long long>(learning->bodies), static_cast<long long>(learning->iterations),
             static_cast<long long>(learning->evaluations), learning->mean_gain(),
-            learning->gain_best);
+            summary.fitness_unit.c_str(), learning->gain_best, summary.fitness_unit.c_str());
       std::printf("fitness_digest   %s\n", summary.fitness_digest.c_str());
       std::printf("content_digest   %s\n", summary.content_digest.c_str());
       if (check.ok())

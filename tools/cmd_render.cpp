@@ -24,6 +24,7 @@
 #include "motion/robot_source.hpp"
 #include "render/compose.hpp"
 #include "render/gif.hpp"
+#include "render/png.hpp"
 #include "render/render.hpp"
 #include "tools/commands.hpp"
 
@@ -87,42 +88,6 @@ void print_written_json(const RenderArgs& args, const char* kind, int width, int
   std::printf("%s\n", j.dump().c_str());
 }
 
-// Without ffmpeg a video is written as its frames: OUT-frames/frame-000000.png, ... (what
-// ffmpeg would have encoded), with the command that makes the video of them.
-int write_frame_sequence(const RenderArgs& args, const render::Clip& clip, View view,
-                         const render::SceneOptions& scene, Overwrite overwrite) {
-  render::require_png_support(args.output);
-  const fs::path out(args.output);
-  const fs::path dir = out.parent_path() / (out.stem().string() + "-frames");
-  std::error_code ec;
-  if (fs::exists(dir, ec) && overwrite == Overwrite::refuse)
-    throw std::runtime_error("render: " + dir.string() +
-                             " exists (the frames of a video without ffmpeg); --force replaces "
-                             "its frames");
-  fs::create_directories(dir, ec);
-  if (ec) throw std::runtime_error("render: cannot create " + dir.string() + ": " + ec.message());
-  int width = 0, height = 0, index = 0;
-  const int frames = render::render_frames(
-      clip, view, {args.fps, args.width, args.height}, scene, [&](const Image& image) {
-        char name[32];
-        std::snprintf(name, sizeof name, "frame-%06d.png", index++);
-        render::write_png(image, (dir / name).string(), Overwrite::replace);
-        width = image.width;
-        height = image.height;
-        return true;
-      });
-  const std::string pattern = (dir / "frame-%06d.png").string();
-  if (args.json) {
-    print_written_json(args, "frames", width, height, frames, pattern);
-  } else {
-    std::printf("wrote %d frames to %s (%dx%d): ffmpeg is not on PATH, so no %s\n", frames,
-                dir.string().c_str(), width, height, args.output.c_str());
-    std::printf("make the video with: ffmpeg -framerate %g -i %s -pix_fmt yuv420p %s\n", args.fps,
-                pattern.c_str(), args.output.c_str());
-  }
-  return kExitOk;
-}
-
 // Refuses a picture whose buffers cannot fit in the memory left, before anything is simulated
 // or allocated (issue 29: 8192 x 8192 at supersample 4, 60 GB, ended in a bare
 // std::bad_alloc). One frame is rendered at a time; a strip keeps its panels and joins them.
@@ -164,6 +129,18 @@ int run_render(const RenderArgs& args) {
   if (video && args.timelapse > 0) {
     throw std::invalid_argument("render: --timelapse makes a PNG; video output shows every frame");
   }
+  // A video other than a GIF is encoded by ffmpeg: without it, say so before anything is
+  // simulated (issue 39: frames were written and the exit was 0, with no video).
+  std::optional<std::string> ffmpeg;
+  if (video && !gif) {
+    ffmpeg = render::find_on_path("ffmpeg");
+    if (!ffmpeg)
+      throw std::runtime_error("render: " + args.output +
+                               " is encoded by ffmpeg, which is not on PATH: install it (Debian: "
+                               "apt-get install ffmpeg) or write an animated GIF (-o " +
+                               fs::path(args.output).replace_extension(".gif").string() +
+                               "), which needs no ffmpeg");
+  }
   render::Timelapse timelapse;
   timelapse.snapshots = args.timelapse;
   timelapse.span = args.span;
@@ -197,8 +174,8 @@ int run_render(const RenderArgs& args) {
       return render::video_frame_times(fps, end);
     };
   } else if (args.timelapse > 0) {
-    request.shown_times = [timelapse, view](double end) {
-      return render::timelapse_times(timelapse, view, end);
+    request.shown_times = [timelapse](double end) {
+      return render::timelapse_times(timelapse, end);
     };
   } else {
     request.shown_times = [at = args.at](double) { return std::vector<double>{at}; };
@@ -277,7 +254,6 @@ int run_render(const RenderArgs& args) {
     scene.ground_min = lo;
     scene.ground_max = hi;
   }
-  if (motion.poses.size() > 1) scene.voxel_scale = 1.04;  // deformed: hide the cracks
   const std::optional<double> direction = args.direction ? args.direction : motion.direction_deg;
   if (direction && view != View::side) {
     scene.target_direction_deg = direction;
@@ -298,8 +274,6 @@ int run_render(const RenderArgs& args) {
     return kExitOk;
   }
   if (video) {
-    const auto ffmpeg = render::find_on_path("ffmpeg");
-    if (!ffmpeg) return write_frame_sequence(args, clip, view, scene, overwrite);
     const render::VideoWritten v = render::write_video(
         clip, view, {args.fps, args.width, args.height}, scene, *ffmpeg, args.output, overwrite);
     if (args.json)
@@ -340,10 +314,9 @@ void register_render(CLI::App& app, int& exit_code) {
                   "4.4); without it a single image or a video")
       ->check(CLI::Range(1, 64));
   cmd->add_option("--span", args->span,
-                  "seconds covered by the time-lapse (default 0.5 s side/iso, whole run top)")
+                  "seconds covered by the time-lapse (default: from --start to the end)")
       ->check(finite_in(0.0, 3600.0));
-  cmd->add_option("--start", args->start,
-                  "time of the first snapshot [s] (default 5 s side/iso, 0 top)")
+  cmd->add_option("--start", args->start, "time of the first snapshot [s] (default 0)")
       ->check(finite_in(0.0, 3600.0));
   cmd->add_option("--layout", args->layout,
                   "strip (panels side by side) | overlay (one scene, earlier poses fainter); "

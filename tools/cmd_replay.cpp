@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/eval_types.hpp"
+#include "common/round_trip.hpp"
 #include "tools/commands.hpp"
 #include "validation/replay.hpp"
 
@@ -57,10 +58,10 @@ int run_replay(const ReplayArgs& args) {
       rows.push_back(row);
       continue;
     }
-    std::printf("generation %lld id %lld: fitness %.17g status %s (archived %.17g %s)",
+    std::printf("generation %lld id %lld: fitness %s status %s (archived %s %s)",
                 static_cast<long long>(ind.generation), static_cast<long long>(ind.id),
-                r.outcome.fitness, to_string(r.outcome.status), ind.fitness,
-                to_string(static_cast<EvalStatus>(ind.status)));
+                round_trip(r.outcome.fitness).c_str(), to_string(r.outcome.status),
+                round_trip(ind.fitness).c_str(), to_string(static_cast<EvalStatus>(ind.status)));
     if (!args.verify) {
       std::printf("\n");
     } else if (!r.verifiable) {

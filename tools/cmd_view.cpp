@@ -16,6 +16,7 @@
 
 #include "common/input_file.hpp"
 #include "common/printable.hpp"
+#include "common/round_trip.hpp"
 #include "common/safe_write.hpp"
 #include "tools/commands.hpp"
 #include "view/client_session.hpp"
@@ -89,9 +90,9 @@ int run_view(const ViewArgs& args) {
       std::printf("%s\n", j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
       return kExitOk;
     }
-    std::printf("wrote %s and %s (%d records, status %s, fitness %.17g)\n", args.save_trace.c_str(),
+    std::printf("wrote %s and %s (%d records, status %s, fitness %s)\n", args.save_trace.c_str(),
                 view::steering_log_path(args.save_trace).c_str(), session.records(),
-                to_string(session.status()), session.result()->fitness);
+                to_string(session.status()), round_trip(session.result()->fitness).c_str());
     return kExitOk;
   }
 
@@ -174,12 +175,14 @@ void register_view(CLI::App& app, int& exit_code) {
   cmd->add_flag("--best", args->best, "archive: the generation's best individual (default)")
       ->excludes(id_opt);
   cmd->add_option("--config", args->request.config_file,
-                  "robot file: config to simulate with (default: thesis defaults)");
+                  "robot file: config to simulate with (default: the robot file's run config, "
+                  "else the built-in thesis values)");
   cmd->add_option("--set", args->request.overrides,
                   "robot file: config override section.key=value");
   cmd->add_option("--task", args->request.task,
                   "robot file: task (gait | directed | rotate; default: the one the controller's "
-                  "inputs fit)");
+                  "inputs fit)")
+      ->check(CLI::IsMember(choice_names<TaskKind>()));
   add_seconds_option(*cmd, args->request.seconds, "simulated seconds");
   cmd->add_option("--direction", args->request.direction_deg,
                   "directed task: initial target direction [deg, counter-clockwise]")

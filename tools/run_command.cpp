@@ -69,6 +69,7 @@ std::optional<Config> archived_config(const RunCommandOptions& o) {
 master::RunOptions run_options(const RunCommandOptions& o, std::string out_path) {
   master::RunOptions ro;
   ro.out_path = std::move(out_path);
+  ro.program = o.program;
   // The archive's folder is created, whether the default runs/ or the one --out names (the
   // output checks then say why, should that fail).
   const fs::path parent = fs::path(ro.out_path).parent_path();
@@ -130,7 +131,8 @@ void add_run_options(CLI::App& app, RunCommandOptions& o) {
       ->check(at_least(1));
   app.add_option("--set", o.overrides, "override a key: section.key=value (repeatable)");
   app.add_flag("--resume", o.resume,
-               "continue the archive from its newest checkpoint (a new run if it does not exist)");
+               "continue the archive from its newest checkpoint (with --config: a new run if it "
+               "does not exist; without: the archive must exist)");
   app.add_flag("--overwrite", o.overwrite, "replace an existing archive");
   app.add_option("--progress", o.progress,
                  "the live line within a generation: auto (a terminal, or an interactive "
@@ -191,9 +193,44 @@ void check_job_memory(const std::vector<const Config*>& configs) {
   if (!warning.empty()) std::fprintf(stderr, "warning: %s\n", warning.c_str());
 }
 
+// --resume without --config continues an archive, which must exist: a mistyped --out (or none)
+// silently started a run of the default config (issue 39). With --config, --resume still starts
+// the run when its archive is absent (the Slurm scripts pass it on every start and requeue).
+void check_resume_has_an_archive(const RunCommandOptions& o) {
+  if (!o.resume || !o.config_paths.empty() || !o.seeds.empty()) return;
+  if (o.out_path.empty())
+    throw master::StartupError(
+        "--resume without --config continues the archive that --out names: give --out (or "
+        "--config, to start or continue that config's run); nothing was started");
+  std::error_code ec;
+  if (fs::exists(o.out_path, ec)) return;
+  fs::path dir = fs::path(o.out_path).parent_path();
+  if (dir.empty()) dir = ".";
+  const std::string wanted = fs::path(o.out_path).filename().string();
+  std::vector<std::pair<std::size_t, std::string>> near;
+  for (auto it = fs::directory_iterator(dir, ec); !ec && it != fs::directory_iterator();
+       it.increment(ec)) {
+    if (it->path().extension() != ".h5") continue;
+    const std::string name = it->path().filename().string();
+    near.emplace_back(edit_distance(wanted, name), (dir / name).string());
+  }
+  std::sort(near.begin(), near.end());
+  std::string listing;
+  for (std::size_t i = 0; i < near.size() && i < 5; ++i)
+    listing += (i == 0 ? "" : ", ") + near[i].second;
+  throw master::StartupError(
+      o.out_path + ": cannot resume: no such archive; " +
+      (listing.empty()
+           ? "no archive (*.h5) in " + dir.string()
+           : "archives near it: " + listing +
+                 (near.size() > 5 ? " (" + std::to_string(near.size()) + " in all)" : "")) +
+      "; give --config to start a new run; nothing was started");
+}
+
 }  // namespace
 
 std::vector<master::PreparedRun> prepare_runs(RunCommandOptions& o, int ranks) {
+  check_resume_has_an_archive(o);
   if (const std::optional<Config> config = archived_config(o)) {
     o.from_archive = true;
     check_job_memory({&*config});

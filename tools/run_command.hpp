@@ -36,6 +36,7 @@ struct RunCommandOptions {
   std::string seeds;          // "1-10", "1,3,5-7": several runs in one job (one per config x seed)
   std::string out_dir;        // their archives: <out-dir>/<config name>-<seed, 2 digits>.h5
   bool from_archive = false;  // set by prepare_runs: --resume without --config took /config
+  std::string program = "softevo-mpi";  // recorded in the archive (io::RunInfo::program)
 };
 
 // "did you mean" lines for the mistyped options of a failed parse of `app` (its subcommands

@@ -1,5 +1,5 @@
 // Validation against reference robots: a directory of robot files with their `reference`
-// values (the thesis champions of ../shared/reference/bestbots) evaluated in parallel, and the
+// values (e.g. the thesis champions: tests/reference_data.hpp) evaluated in parallel, and the
 // rank statistics that compare them. Shared by `softevo champions` and `softevo bench eval`.
 #pragma once
 

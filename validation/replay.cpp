@@ -9,6 +9,7 @@
 
 #include "common/config.hpp"
 #include "common/eval_types.hpp"
+#include "common/round_trip.hpp"
 #include "io/archive.hpp"
 #include "physics/revision.hpp"
 #include "worker/evaluate.hpp"
@@ -42,8 +43,9 @@ std::string compare_components(const master::GenomeOutcome& outcome,
                               static_cast<std::size_t>(at - archived.component_columns.begin())];
       if (!same_bits(row[k], stored) && !(std::isnan(row[k]) && std::isnan(stored))) {
         char buf[200];
-        std::snprintf(buf, sizeof buf, "component %s of unit %zu: %.17g != archived %.17g",
-                      columns[k].c_str(), d, row[k], stored);
+        std::snprintf(buf, sizeof buf, "component %s of unit %zu: %s != archived %s",
+                      columns[k].c_str(), d, round_trip(row[k]).c_str(),
+                      round_trip(stored).c_str());
         return buf;
       }
     }
@@ -113,8 +115,9 @@ ReplayResult replay(const motion::ArchivedIndividual& individual, const tasks::T
                       to_string(static_cast<EvalStatus>(individual.status));
   } else if (!same_bits(result.outcome.fitness, individual.fitness)) {
     char buf[160];
-    std::snprintf(buf, sizeof buf, "fitness %.17g != archived %.17g (bits differ)",
-                  result.outcome.fitness, individual.fitness);
+    std::snprintf(buf, sizeof buf, "fitness %s != archived %s (bits differ)",
+                  round_trip(result.outcome.fitness).c_str(),
+                  round_trip(individual.fitness).c_str());
     result.mismatch = buf;
   } else if (!individual.components.empty()) {
     result.mismatch = compare_components(result.outcome, individual, task);

@@ -2,11 +2,9 @@
 #include "view/client_session.hpp"
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
-#include <set>
 
 #include <nlohmann/json.hpp>
 
@@ -35,28 +33,22 @@ std::string file_stem(const std::string& name) {
   return s.empty() ? "robot" : s.substr(0, 80);
 }
 
-// `message` with each of `paths` (relative ones too) and every absolute path in it replaced by
-// its last component: what an error may show a page.
-std::string without_paths(std::string message, const std::vector<std::string>& paths) {
-  for (const std::string& p : paths) {
-    const std::string name = fs::path(p).filename().string();
-    if (p.empty() || p == "." || p == name) continue;
-    for (auto at = message.find(p); at != std::string::npos; at = message.find(p, at + 1))
-      message.replace(at, p.size(), name.empty() ? std::string("the save directory") : name);
-  }
-  const auto ends = [](char c) {
-    return c == ' ' || c == '\'' || c == '"' || c == ':' || c == ',';
+// What the page is told of a failed save: the kind of failure in plain words, never the error's
+// own text, which may hold temporary paths, the process id, file descriptors and addresses
+// (libhdf5's error stack does; docs/viewer.md "Limits"). The whole text goes to the server's log.
+std::string plain_save_failure(const std::string& detail) {
+  static const std::pair<const char*, const char*> kReasons[] = {
+      {"No space left on device", "no space is left on the disk"},
+      {"Disk quota exceeded", "the disk quota is exceeded"},
+      {"Read-only file system", "the save directory is on a read-only file system"},
+      {"Permission denied", "the save directory may not be written"},
+      {"No such file or directory", "the save directory does not exist"},
+      {"Not a directory", "the save directory does not exist"},
   };
-  for (std::size_t at = 0; at < message.size(); ++at) {
-    const bool starts = message[at] == '/' && (at == 0 || ends(message[at - 1]) ||
-                                               message[at - 1] == '(' || message[at - 1] == '=');
-    if (!starts) continue;
-    std::size_t end = at;
-    while (end < message.size() && !ends(message[end]) && message[end] != ')') ++end;
-    const std::string name = fs::path(message.substr(at, end - at)).filename().string();
-    message.replace(at, end - at, name.empty() ? std::string("the save directory") : name);
-  }
-  return message;
+  for (const auto& [cause, words] : kReasons)
+    if (detail.find(cause) != std::string::npos)
+      return std::string("the save failed: ") + words + "; nothing was written";
+  return "the save failed; nothing was written (the server's log says why)";
 }
 
 // The ground's grid as the page reads it: float32 heights little-endian in base64.
@@ -119,23 +111,13 @@ json ClientSession::hello_json(const TerrainGrid& ground) const {
     colours.push_back({c[0], c[1], c[2]});
   }
   j["voxel_colours"] = colours;
-  // The outer skin (a face towards an empty cell; chambers count as filled): the page draws
-  // only these voxels, as the still renderer does, so that the chambers show through.
-  std::set<std::array<int, 3>> filled;
-  for (const auto& c : body.voxel_cells) filled.insert({c.x(), c.y(), c.z()});
-  for (const auto& c : body.chamber_cells) filled.insert({c.x(), c.y(), c.z()});
-  json skin = json::array();
-  for (const auto& c : body.voxel_cells) {
-    bool outside = false;
-    for (int axis = 0; axis < 3 && !outside; ++axis)
-      for (int step : {-1, 1}) {
-        std::array<int, 3> n = {c.x(), c.y(), c.z()};
-        n[static_cast<std::size_t>(axis)] += step;
-        outside = outside || !filled.count(n);
-      }
-    skin.push_back(outside ? 1 : 0);
-  }
-  j["voxel_skin"] = skin;
+  // The lattice cells (i, j, k) of the voxels, then of the chamber cells, flat: the page draws
+  // the body deformed from them as the still renderer does (docs/rendering.md "Deformed
+  // voxels"): which faces are skin, which corners neighbours share.
+  json cells = json::array();
+  for (const auto* list : {&body.voxel_cells, &body.chamber_cells})
+    for (const auto& c : *list) cells.insert(cells.end(), {c.x(), c.y(), c.z()});
+  j["cells"] = cells;
   j["chamber_index"] = body.chamber_index;
   j["fabrication"] = fabrication_json(body);
   j["planned_records"] = session_->planned_records();
@@ -331,10 +313,9 @@ void ClientSession::save_files(const fs::path& path) {
   try {
     session_->save(path.string(), Overwrite::refuse);
   } catch (const std::exception& e) {
-    // The page learns nothing of the machine's paths: every path in the message is replaced
-    // by the file's name (the error itself, e.g. "No space left on device", stays).
-    throw std::runtime_error("the save failed: " +
-                             without_paths(e.what(), {path.string(), log, options_.save_dir}));
+    // The page learns nothing of the machine: the details go to the server's log only.
+    if (options_.log) options_.log("the save of " + path.string() + " failed: " + e.what());
+    throw std::runtime_error(plain_save_failure(e.what()));
   }
   if (options_.save_budget) {
     std::error_code ec;

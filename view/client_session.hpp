@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -43,6 +44,9 @@ struct ClientOptions {
   // The ground's grid reaches this far [m] beyond the robot's path, and a new one is sent when
   // the robot comes within half of it of the edge (a live robot walks off any fixed square).
   double terrain_margin_m = kTerrainGridMargin;
+  // The server's log (one line per call, no newline): what the page is not told, such as the
+  // full error of a failed save. The server writes it to stderr; empty = not logged.
+  std::function<void(const std::string&)> log;
 };
 
 class ClientSession {

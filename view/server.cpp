@@ -109,6 +109,12 @@ struct Server::Impl {
 
   Impl(const ViewInput& in, ServerOptions opts) : input(in), options(std::move(opts)) {
     if (!options.client.save_budget) options.client.save_budget = std::make_shared<SaveBudget>();
+    if (!options.client.log) options.client.log = [this](const std::string& line) { log(line); };
+  }
+  // The server's log: stderr, or the options' log when one is given.
+  void log(const std::string& line) const {
+    if (options.log) return options.log(line);
+    std::fprintf(stderr, "softevo view: %s\n", line.c_str());
   }
   void accept();
   bool allowed_origin(std::string_view origin) const;
@@ -143,14 +149,12 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
     upgrade_ = std::move(request);
     ws_.async_accept(upgrade_, [self = shared_from_this()](beast::error_code ec) {
       if (ec) return;
-      try {
+      const bool started = self->guarded([&] {
         self->client_ =
             std::make_unique<ClientSession>(self->server_.input, self->server_.options.client);
-      } catch (const std::exception& e) {
-        self->queue({{false, error_json(std::string("cannot start the session: ") + e.what())}});
-        return;
-      }
-      self->queue(self->client_->start());
+        return self->client_->start();
+      });
+      if (!started) return;
       self->last_tick_ = std::chrono::steady_clock::now();
       self->read();
       self->schedule_tick();
@@ -158,26 +162,47 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
   }
 
  private:
+  // Runs what a page's session does (start, a message, a tick) and queues its messages. An
+  // exception never leaves the handler (it would end the server's one thread, and so every
+  // page): the page gets a plain error and is closed, and the server's log says why. Returns
+  // false then. (Issue 39: a trace with non-finite positions ended the server when the first
+  // page connected.)
+  template <class Act>
+  bool guarded(Act&& act) {
+    try {
+      queue(act());
+      return true;
+    } catch (const std::exception& e) {
+      server_.log(std::string("a page's session failed and was closed: ") + e.what());
+    } catch (...) {
+      server_.log("a page's session failed and was closed");
+    }
+    queue({{false, error_json("the session failed and was closed (the server's log says why)")}});
+    close(websocket::close_code::internal_error);
+    return false;
+  }
+
   // Reads a message in pieces so that one over kMaxWireMessageBytes is never held: at the limit
   // the socket is closed with 1009 (close()), which drains the rest of the message first.
   void read() {
-    ws_.async_read_some(buffer_, kReadChunkBytes,
-                        [self = shared_from_this()](beast::error_code ec, std::size_t) {
-                          if (ec) {  // closed, or the connection broke: all released
-                            self->closed_ = true;
-                            self->timer_.cancel();
-                            self->read_delay_.cancel();
-                            return;
-                          }
-                          if (self->buffer_.size() > kMaxWireMessageBytes)
-                            return self->close(websocket::close_code::too_big);
-                          if (!self->ws_.is_message_done()) return self->read();
-                          const std::string text = beast::buffers_to_string(self->buffer_.data());
-                          self->buffer_.consume(self->buffer_.size());
-                          const auto t0 = std::chrono::steady_clock::now();
-                          self->queue(self->client_->handle(text, self->ws_.got_text()));
-                          self->read_after(std::chrono::steady_clock::now() - t0);
-                        });
+    ws_.async_read_some(
+        buffer_, kReadChunkBytes, [self = shared_from_this()](beast::error_code ec, std::size_t) {
+          if (ec) {  // closed, or the connection broke: all released
+            self->closed_ = true;
+            self->timer_.cancel();
+            self->read_delay_.cancel();
+            return;
+          }
+          if (self->buffer_.size() > kMaxWireMessageBytes)
+            return self->close(websocket::close_code::too_big);
+          if (!self->ws_.is_message_done()) return self->read();
+          const std::string text = beast::buffers_to_string(self->buffer_.data());
+          self->buffer_.consume(self->buffer_.size());
+          const auto t0 = std::chrono::steady_clock::now();
+          if (!self->guarded([&] { return self->client_->handle(text, self->ws_.got_text()); }))
+            return;
+          self->read_after(std::chrono::steady_clock::now() - t0);
+        });
   }
 
   // Fairness: a message that kept the server's one thread busy (a reset, a long seek) delays
@@ -248,7 +273,7 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
       if (self->writing_ && now - self->write_started_ > kWriteStall) return self->drop();
       const double dt = std::chrono::duration<double>(now - self->last_tick_).count();
       self->last_tick_ = now;
-      self->queue(self->client_->tick(dt));
+      if (!self->guarded([&] { return self->client_->tick(dt); })) return;
       self->schedule_tick();
     });
   }
@@ -438,8 +463,7 @@ void Server::Impl::accept() {
       // Out of descriptors (EMFILE, ENFILE) or memory: accepting again at once fails again at
       // once, a loop at full CPU. Wait, then try again (the idle timeouts free descriptors).
       if (!accept_error_reported) {
-        std::fprintf(stderr, "softevo view: cannot accept a connection (%s); retrying\n",
-                     ec.message().c_str());
+        log("cannot accept a connection (" + ec.message() + "); retrying");
         accept_error_reported = true;
       }
       accept_backoff.expires_after(kAcceptBackoff);

@@ -29,8 +29,11 @@ struct ServerOptions {
   std::string bind = "127.0.0.1";
   int port = 8765;  // 0 = any free port
   int max_clients = 4;
-  std::string web_dir;  // view/web with node_modules
-  ClientOptions client;
+  std::string web_dir;   // view/web with node_modules
+  ClientOptions client;  // its log, when empty, is the server's
+  // The server's log, one line per call without a newline: what pages are not told (a page's
+  // failed session, a failed save). Empty = stderr, each line prefixed "softevo view: ".
+  std::function<void(const std::string&)> log;
 };
 
 // The files the page needs, by URL path -> (content type, bytes). Throws std::runtime_error

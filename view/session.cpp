@@ -288,6 +288,13 @@ TerrainGrid terrain_grid(const Session& session, double margin) {
     lo_x = std::min(lo_x, x), hi_x = std::max(hi_x, x);
     lo_y = std::min(lo_y, y), hi_y = std::max(hi_y, y);
   }
+  // The grid's size follows from the path: a path that is not finite (or beyond any ground a
+  // simulation lays) would ask for a grid of any size (issue 39: "vector::reserve").
+  constexpr double kFar = io::TraceLimits::position_m;
+  if (!(lo_x >= -kFar && lo_y >= -kFar && hi_x <= kFar && hi_y <= kFar))
+    throw std::runtime_error(
+        "the robot's path leaves the ground's range (|x|, |y| <= 10 km) or "
+        "is not finite: no ground can be drawn under it");
   lo_x -= margin, lo_y -= margin, hi_x += margin, hi_y += margin;
   const double s = session.input().body.voxel_size;
   g.kind = physics::to_string(terrain.kind);

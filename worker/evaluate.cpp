@@ -2,6 +2,7 @@
 #include "worker/evaluate.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -91,8 +92,13 @@ EvalResult failed(int unit, EvalStatus status, std::string message) {
 
 std::optional<Clock::time_point> deadline_after(double seconds) {
   if (!(seconds > 0.0)) return std::nullopt;
-  return Clock::now() +
-         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+  // Saturated: beyond the clock's range (about 9.2e9 s of nanoseconds from now) the sum would
+  // overflow into the past and every evaluation would time out at once. Half the room left is
+  // the threshold, far from where the double's rounding could matter (still ~146 years).
+  const Clock::time_point now = Clock::now();
+  const double room = std::chrono::duration<double>(Clock::time_point::max() - now).count();
+  if (seconds >= 0.5 * room) return Clock::time_point::max();
+  return now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
 }
 
 void finalize_unit_result(const tasks::Task& task, EvalResult& result) {
@@ -219,7 +225,7 @@ Config robot_eval_config(const RobotFile& robot, const RobotEvalSettings& settin
   return config;
 }
 
-BuiltRobot build_robot(const Config& config, const evo::Genome& genome) {
+BuiltRobot build_robot(const Config& config, const evo::Genome& genome, const tasks::Task& task) {
   BuiltRobot robot;
   evo::DevelopedBody developed = evo::develop_body(genome.cppn, config.body);
   robot.valid = developed.valid;
@@ -227,13 +233,12 @@ BuiltRobot build_robot(const Config& config, const evo::Genome& genome) {
   robot.body = std::move(developed.plan);
   robot.body.materials = material_table(config.physics);
   robot.body.voxel_size = config.physics.voxel_size;
-  robot.controller =
-      evo::to_controller_spec(genome, config, tasks::make_task(config)->controller_inputs());
+  robot.controller = evo::to_controller_spec(genome, config, task.controller_inputs());
   return robot;
 }
 
 RobotFile robot_file_of(const Config& config, const evo::Genome& genome, const std::string& name) {
-  BuiltRobot robot = build_robot(config, genome);
+  BuiltRobot robot = build_robot(config, genome, *tasks::make_task(config));
   RobotFile file;
   file.name = name;
   file.body = std::move(robot.body);
@@ -257,7 +262,7 @@ EvalResult evaluate(const Config& config, const tasks::Task& task, std::uint64_t
   EvalResult result;
   try {
     const evo::Genome genome = evo::decode_genome(request.genome);
-    const BuiltRobot robot = build_robot(config, genome);
+    const BuiltRobot robot = build_robot(config, genome, task);
     if (!robot.valid || !robot.actuatable) {
       result = failed(
           request.unit, EvalStatus::invalid_body,

@@ -160,8 +160,8 @@ std::string describe_config_source(const RobotFile& robot, const RobotEvalSettin
 // The resolved config; throws ConfigError.
 Config robot_eval_config(const RobotFile& robot, const RobotEvalSettings& settings);
 
-// The controller gets the inputs of config's task.
-BuiltRobot build_robot(const Config& config, const evo::Genome& genome);
+// The controller gets the inputs of `task` (config's task: the caller's, evaluate() holds one).
+BuiltRobot build_robot(const Config& config, const evo::Genome& genome, const tasks::Task& task);
 
 // The robot file of a genome (body, controller, genome records), named `name`.
 RobotFile robot_file_of(const Config& config, const evo::Genome& genome, const std::string& name);

@@ -75,6 +75,7 @@ from ._softevo import (  # noqa: F401  (re-exported)
 )
 from ._run import ArchiveIntegrityWarning, Run, open_run  # noqa: F401
 from ._evolve import Evolution, Generation, evolution, evolve  # noqa: F401
+from . import env  # noqa: F401  (softevo.env.SoftRobotEnv after `import softevo`, as documented)
 
 __version__ = _build_info.VERSION
 

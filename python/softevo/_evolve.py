@@ -88,12 +88,17 @@ class Evolution:
                  *, generations: int | None = None, population: int | None = None,
                  seed: int | None = None,
                  overrides: Mapping[str, object] | Iterable[str] | None = None,
-                 resume: bool = False, overwrite: bool = False):
+                 resume: bool = False, overwrite: bool = False, progress: bool = True):
+        if not isinstance(progress, bool):
+            raise TypeError(f"progress must be True or False, got {progress!r}")
+        self.progress = progress
         self.config, name = _resolve(config, overrides, generations, population, seed)
         if workers is None:
             workers = _softevo._available_cores()
-        if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-            raise ValueError(f"workers must be an int >= 1, got {workers!r}")
+        if (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
+                or workers > _softevo._max_workers):
+            raise ValueError(f"workers must be an int from 1 to {_softevo._max_workers} "
+                             f"(as softevo evolve --workers), got {workers!r}")
         if out is None:
             out = os.path.join("runs", f"{name}-{self.config.seed:02d}.h5")
         self.out = os.fspath(out)
@@ -113,6 +118,7 @@ class Evolution:
         try:
             while True:
                 g = self._run.step()
+                self._print_progress()
                 if g is None:
                     return
                 yield self._generation(g)
@@ -122,6 +128,14 @@ class Evolution:
     def close(self) -> None:
         """Ends the run where it is (state interrupted unless every generation is archived)."""
         self._run.close()
+        self._print_progress()
+
+    def _print_progress(self) -> None:
+        # The command line's line per generation (fitness, statuses, ETA) and its warnings,
+        # through sys.stdout so that a notebook shows them too; progress=False drops them.
+        for line in self._run.take_lines():
+            if self.progress:
+                print(line, flush=True)
 
     def __enter__(self) -> "Evolution":
         return self
@@ -154,7 +168,7 @@ def evolve(config, workers: int | None = None, out: str | os.PathLike | None = N
            generations: int | None = None, population: int | None = None,
            seed: int | None = None,
            overrides: Mapping[str, object] | Iterable[str] | None = None,
-           resume: bool = False, overwrite: bool = False) -> Run:
+           resume: bool = False, overwrite: bool = False, progress: bool = True) -> Run:
     """Evolve robots: the run softevo-mpi and `softevo evolve` make of the same config, in this
     process on `workers` threads (default: every core this process may use).
 
@@ -165,6 +179,8 @@ def evolve(config, workers: int | None = None, out: str | os.PathLike | None = N
     checkpoint (a finished run may be extended with a larger `generations`); overwrite:
     replace an existing `out`. callback(generation) is called after each archived generation
     with a softevo.Generation; returning False stops the run there (interrupted, resumable).
+    progress: print the command line's line per generation (best, mean, statuses, ETA) and its
+    warnings; False runs silently.
 
     Returns the archive as a softevo.Run. Raises RunError (a RuntimeError) if the run cannot
     start (the archive exists without resume/overwrite, another run holds it, or it belongs to
@@ -172,7 +188,8 @@ def evolve(config, workers: int | None = None, out: str | os.PathLike | None = N
     with the archive checkpointed and marked interrupted.
     """
     with Evolution(config, workers, out, generations=generations, population=population,
-                   seed=seed, overrides=overrides, resume=resume, overwrite=overwrite) as evo:
+                   seed=seed, overrides=overrides, resume=resume, overwrite=overwrite,
+                   progress=progress) as evo:
         for gen in evo:
             if callback is not None and callback(gen) is False:
                 break

@@ -6,7 +6,8 @@
 
 It needs only numpy. When gymnasium is installed (it is not in Debian 12) the class is a real
 gymnasium.Env and its spaces are gymnasium.spaces.Box; otherwise they are a small Box with the
-same attributes (shape, low, high, dtype, sample()).
+same attributes (shape, low, high, dtype, sample()). With gymnasium the environment is also
+registered as ENV_ID, so that gymnasium.make("softevo/SoftRobot-v0", robot=robot) works.
 
 Frames for videos: SoftRobotEnv(robot, render_mode="rgb_array").render() gives the current
 state as a (height, width, 3) uint8 image from the headless renderer (no display, no GPU).
@@ -163,3 +164,19 @@ class SoftRobotEnv(_Base):
 
     def close(self) -> None:
         """Nothing to release (kept for the Gymnasium interface)."""
+
+
+ENV_ID = "softevo/SoftRobot-v0"  # the id registered with gymnasium, where it is installed
+
+
+def _register_with_gymnasium(gymnasium) -> bool:
+    """Registers SoftRobotEnv as ENV_ID with `gymnasium` (once: an id already there is kept)."""
+    if gymnasium is None:
+        return False
+    registry = getattr(getattr(gymnasium, "envs", None), "registry", {})
+    if ENV_ID not in registry:
+        gymnasium.register(id=ENV_ID, entry_point="softevo.env:SoftRobotEnv")
+    return True
+
+
+_register_with_gymnasium(_gymnasium)

@@ -317,7 +317,6 @@ class PySimulation {
     const std::vector<scene::Pose> poses{pose};
     render::SceneOptions scene;
     scene.floor_z = -0.5 * body.voxel_size;
-    scene.voxel_scale = 1.04;  // a deformed body: as `softevo render`, hide the cracks
     const physics::Terrain& terrain = sim_->model().terrain;
     if (terrain.kind != physics::TerrainKind::flat) {
       // As `softevo render`: the surface half a voxel below where a voxel centre rests

@@ -10,8 +10,10 @@
 #include <atomic>
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "common/config.hpp"
 #include "common/robot.hpp"
@@ -19,6 +21,7 @@
 #include "io/archive.hpp"
 #include "master/progress.hpp"
 #include "master/run.hpp"
+#include "master/run_driver.hpp"
 #include "master/signals.hpp"
 #include "master/thread_executor.hpp"
 #include "python/src/bindings.hpp"
@@ -34,10 +37,20 @@ namespace {
 class Evolution {
  public:
   Evolution(const Config& config, const std::string& out, int workers, bool resume, bool overwrite)
-      : progress_(master::ProgressReporter::silent()) {
+      : progress_(master::ProgressReporter::to_sink(config.run.generations,
+                                                    [this](const std::string& line) {
+                                                      const std::lock_guard hold(lines_mutex_);
+                                                      lines_.push_back(line);
+                                                    })) {
+    progress_.set_program("softevo.evolve");
     if (workers <= 0) workers = master::available_cores();
+    if (workers > master::kMaxWorkerThreads)
+      throw py::value_error("workers must be at most " + std::to_string(master::kMaxWorkerThreads) +
+                            ", got " + std::to_string(workers));
     master::RunOptions options;
     options.out_path = out;
+    options.names = master::OptionNames::python();
+    options.program = "softevo.evolve";
     options.resume = resume;
     options.overwrite = overwrite;
     const std::filesystem::path parent = std::filesystem::path(out).parent_path();
@@ -57,6 +70,13 @@ class Evolution {
   }
 
   int workers() const { return executor_->workers(); }
+  // The console's lines (one per generation, with its ETA; warnings) since the last call.
+  std::vector<std::string> take_lines() {
+    const std::lock_guard hold(lines_mutex_);
+    std::vector<std::string> lines;
+    lines.swap(lines_);
+    return lines;
+  }
   std::string out() const { return run_.options.out_path; }
   std::int64_t generations() const { return run_.config.run.generations; }
   std::int64_t generations_done() const { return run_.info.generations_done; }
@@ -68,6 +88,26 @@ class Evolution {
   // (the archive marked interrupted), RunError on an unrecoverable error.
   std::optional<std::int64_t> step() {
     if (closed_) return std::nullopt;
+    try {
+      return step_or_throw();
+    } catch (const py::error_already_set&) {
+      throw;  // KeyboardInterrupt, after the checkpoint
+    } catch (const std::exception& e) {
+      if (closed_) throw;  // the run ended first (stopped, or complete without a robot ok)
+      // A failed run, as on the command line (master::execute_runs): the archive keeps its last
+      // consistent generation and is marked interrupted with the smallest write there is (on a
+      // full disk, no pack: it needs room for a second copy); the lock file stays, as a
+      // failed run's does. close() has nothing left to do.
+      if (loop_) loop_->mark_interrupted();
+      state_ = "interrupted";
+      closed_ = true;
+      run_.lock.reset();
+      throw master::RunError(e.what());
+    }
+  }
+
+ private:
+  std::optional<std::int64_t> step_or_throw() {
     if (run_.already_complete) {
       // execute_run records the end of a run whose generations were all archived before.
       master::execute_run(run_, *executor_, progress_);
@@ -79,7 +119,11 @@ class Evolution {
     }
     if (loop_->finished()) {
       loop_->close(master::RunOutcome::complete);
-      return finish("complete");
+      finish("complete");
+      // As the command line's exit 1: the archive is complete, but no robot was ok.
+      const std::string none_ok = master::no_robot_ok(run_);
+      if (!none_ok.empty()) throw master::RunError(none_ok);
+      return std::nullopt;
     }
     master::GenerationScheduler& scheduler = loop_->begin_generation();
     const std::int64_t g = scheduler.generation();
@@ -109,6 +153,7 @@ class Evolution {
     return g;
   }
 
+ public:
   // Generation g as archived: its statistics and best individual (the lowest id on ties) as a
   // robot, developed as `Run.genome` develops it.
   py::dict summary(std::int64_t g) const {
@@ -158,6 +203,7 @@ class Evolution {
   void close() {
     if (closed_ || !loop_) {
       closed_ = true;
+      if (run_.lock) run_.lock->abandon();  // nothing written: a lock file it created goes
       run_.lock.reset();
       return;
     }
@@ -170,6 +216,9 @@ class Evolution {
   std::optional<std::int64_t> finish(const char* state) {
     state_ = state;
     closed_ = true;
+    // A clean end (complete, or stopped after a checkpoint): the lock file goes with the lock,
+    // as on the command line (docs/archive.md: no .lock beside a finished archive).
+    if (run_.lock) run_.lock->finish();
     run_.lock.reset();  // the run lock: another run may write the archive now
     return std::nullopt;
   }
@@ -183,6 +232,8 @@ class Evolution {
     return interrupted_;
   }
 
+  std::mutex lines_mutex_;
+  std::vector<std::string> lines_;
   master::PreparedRun run_;
   std::unique_ptr<tasks::Task> task_;
   worker::EvaluateOptions unit_options_;
@@ -206,6 +257,8 @@ void bind_evolution(py::module_& m) {
       if (p) std::rethrow_exception(p);
     } catch (const master::StartupError& e) {
       PyErr_SetString(run_error.ptr(), e.what());
+    } catch (const master::RunError& e) {
+      PyErr_SetString(run_error.ptr(), e.what());
     }
   });
   py::class_<Evolution>(m, "_Evolution",
@@ -216,6 +269,7 @@ void bind_evolution(py::module_& m) {
       .def("step", &Evolution::step)
       .def("close", &Evolution::close)
       .def("summary", &Evolution::summary, "generation"_a)
+      .def("take_lines", &Evolution::take_lines)
       .def_property_readonly("workers", &Evolution::workers)
       .def_property_readonly("out", &Evolution::out)
       .def_property_readonly("generations", &Evolution::generations)
@@ -223,6 +277,7 @@ void bind_evolution(py::module_& m) {
       .def_property_readonly("resumed", &Evolution::resumed)
       .def_property_readonly("state", &Evolution::state);
   m.def("_available_cores", &master::available_cores);
+  m.attr("_max_workers") = master::kMaxWorkerThreads;
 }
 
 }  // namespace softevo::python

@@ -289,8 +289,20 @@ Make one with softevo.load_config(path, overrides) or softevo.default_config(tas
         return "<softevo.Config " + experiment_name(c.task) + " " + hash_hex(config_hash(c)) + ">";
       });
 
-  m.def("_load_config", &load_config, "path"_a, "overrides"_a);
-  m.def("_parse_config", &parse_config, "text"_a, "source"_a, "overrides"_a);
+  // Python's overrides are named as Python passes them: overrides["neat.pop_size"] = 4.
+  m.def(
+      "_load_config",
+      [](const std::string& path, const std::vector<std::string>& overrides) {
+        return load_config(path, overrides, OverrideOrigin::python);
+      },
+      "path"_a, "overrides"_a);
+  m.def(
+      "_parse_config",
+      [](const std::string& text, const std::string& source,
+         const std::vector<std::string>& overrides) {
+        return parse_config(text, source, overrides, OverrideOrigin::python);
+      },
+      "text"_a, "source"_a, "overrides"_a);
   m.def("_develop_robot", &develop_robot, "robot"_a, "config"_a);
   m.def("_develop_genome", &develop_genome, "genome"_a, "config"_a);
   m.def(

@@ -2,6 +2,7 @@
 // deliberately broken configs (tests/data/bad_configs), each carrying its exact expected error
 // on its first line ("# expect: ...").
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstring>
@@ -337,6 +338,28 @@ TEST(Config, MissingFileIsAClearError) {
 
 // On Linux a directory opens as a stream that reads as empty: it used to be a config of all
 // defaults, and a full-size run started.
+// A robot file or an archive given as a config is named as what it is (issue 39: a robot file
+// gave a raw TOML syntax error).
+TEST(Config, AFileOfAnotherKindIsNamed) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("softevo-config-kind-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "robot.json") << "{\"format\": \"softevo.robot/1\"}\n";
+  std::ofstream(dir / "run.h5") << "\x89HDF\r\n\x1a\n and more";
+  for (const auto& [name, needle] :
+       {std::pair{"robot.json", "is a JSON file (a robot file?), not a TOML config"},
+        std::pair{"run.h5", "is an HDF5 file (a run archive?), not a TOML config"}}) {
+    try {
+      load_config((dir / name).string());
+      ADD_FAILURE() << name << " loaded";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).find("TOML syntax error"), std::string::npos) << e.what();
+    }
+  }
+  fs::remove_all(dir);
+}
+
 TEST(Config, DirectoryIsNotAConfigFile) {
   const fs::path dir = fs::temp_directory_path() / "softevo_test_config_dir";
   fs::create_directories(dir);
@@ -415,6 +438,62 @@ TEST(Config, StopAfterFailedGenerationsEntersTheTextOnlyOffItsDefault) {
   EXPECT_NE(canonical_text(c).find("stop_after_failed_generations = 0"), std::string::npos);
   EXPECT_EQ(canonical_text(parse_config(canonical_text(c), "canonical")), canonical_text(c));
   expect_config_error("[run]\nstop_after_failed_generations = -1\n", "s.toml", "out of range");
+}
+
+// Hostile text meets a stated limit, not the stack: a 50,000-digit number and an inline table
+// 10,000 deep each crashed every reader (issue 39). Brackets inside strings and comments do not
+// nest, and a line at the limit still parses.
+TEST(Config, LongLinesAndDeepNestingAreClearErrors) {
+  const std::string digits(50000, '7');
+  expect_config_error("[run]\nseed = " + digits + "\n", "long.toml",
+                      "long.toml:2: this line is 50007 bytes; a config line may be at most 10000 "
+                      "bytes");
+  std::string deep = "x = ";  // an inline table 10,000 deep
+  for (int i = 0; i < 10000; ++i) deep += "{a=";
+  deep += "1";
+  for (int i = 0; i < 10000; ++i) deep += "}";
+  expect_config_error("[run]\n" + deep + "\n", "deep.toml",
+                      "deep.toml:2: arrays and inline tables nested more than 8 deep");
+  std::string deep_lines;
+  for (int i = 0; i < 10000; ++i) deep_lines += "[\n";
+  expect_config_error("[neat]\nactivation_options = " + deep_lines, "lines.toml",
+                      "lines.toml:10: arrays and inline tables nested more than 8 deep");
+  // The same limits for --set values.
+  try {
+    parse_config("", "c.toml", {"run.seed=" + digits});
+    ADD_FAILURE() << "a 50,000-digit --set value parsed";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "--set run.seed: the value is 50000 bytes; a config line may be at most 10000 "
+              "bytes");
+  }
+  // Not nesting: brackets in strings (an unknown activation then) and in comments.
+  try {
+    parse_config("[neat]\nactivation_options = [\"[[[[[[[[[[{{{{\"] # [[[[[[[[[[[[\n", "s.toml");
+    ADD_FAILURE() << "an unknown activation parsed";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()).find("nested"), std::string::npos) << e.what();
+  }
+  // At the limit: a comment line of exactly kMaxConfigLineBytes bytes.
+  EXPECT_NO_THROW(parse_config("# " + std::string(kMaxConfigLineBytes - 2, 'x') + "\n", "c.toml"));
+}
+
+// Keys that scale a run's cost are checked against the population (issue 39): at population 4,
+// min_species_size = 1e9 grew memory by 300 MB/s and 100 evaluated 159 robots a generation; a
+// tournament of 1e9 spent CPU in proportion. A timeout near 1e10 s overflowed the clock.
+TEST(Config, SizesBeyondThePopulationAndHugeTimeoutsAreRefused) {
+  expect_config_error("[neat]\npop_size = 4\nmin_species_size = 1000000000\n", "m.toml",
+                      "m.toml: neat.min_species_size = 1000000000 must be <= neat.pop_size = 4");
+  expect_config_error("[neat]\npop_size = 4\nmin_species_size = 100\n", "m.toml",
+                      "neat.min_species_size = 100 must be <= neat.pop_size = 4");
+  expect_config_error("[neat]\npop_size = 4\ntournament_size = 1000000000\n", "t.toml",
+                      "t.toml: neat.tournament_size = 1000000000 must be <= neat.pop_size = 4");
+  EXPECT_NO_THROW(
+      parse_config("[neat]\npop_size = 4\nmin_species_size = 4\ntournament_size = 4\n", "ok.toml"));
+  expect_config_error("[run]\neval_timeout_seconds = 1e10\n", "x.toml",
+                      "run.eval_timeout_seconds = 1e+10 is out of range");
+  EXPECT_EQ(parse_config("[run]\neval_timeout_seconds = 1e7\n", "x.toml").run.eval_timeout_seconds,
+            1.0e7);
 }
 
 }  // namespace softevo

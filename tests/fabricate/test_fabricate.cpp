@@ -25,6 +25,7 @@
 #include "common/robot.hpp"
 #include "evo/development.hpp"
 #include "fabricate/fabricate.hpp"
+#include "render/png.hpp"
 #include "render/render.hpp"
 #include "scene/scene.hpp"
 #include "tests/random_cppn.hpp"

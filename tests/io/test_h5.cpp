@@ -4,6 +4,7 @@
 #include "io/h5.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cstdint>
@@ -270,6 +271,21 @@ TEST(H5, OpeningMissingOrForeignFilesNamesThePath) {
   const Error labelled =
       error_of([&] { File::open(d.file("none.h5"), File::Access::read_only, "run.h5"); });
   EXPECT_EQ(labelled.file(), "run.h5");
+}
+
+// Not a regular file: refused by name before libhdf5 opens it (issue 39: a FIFO blocked `info`,
+// `view`, `replay`, ... and Python's open_run forever; a directory was "not an HDF5 file").
+TEST(H5, AFifoOrADirectoryIsRefusedWithoutBlocking) {
+  TmpDir d;
+  ASSERT_EQ(::mkfifo(d.file("pipe.h5").c_str(), 0600), 0);
+  const Error fifo = error_of([&] { File::open(d.file("pipe.h5")); });
+  EXPECT_EQ(fifo.file(), d.file("pipe.h5"));
+  EXPECT_EQ(fifo.reason(), "is a FIFO (named pipe), not an HDF5 file");
+  EXPECT_FALSE(File::is_hdf5(d.file("pipe.h5")));
+  const Error dir = error_of([&] { File::open(d.path); });
+  EXPECT_EQ(dir.reason(), "is a directory, not an HDF5 file");
+  const Error device = error_of([&] { File::open("/dev/null"); });
+  EXPECT_EQ(device.reason(), "is a character device, not an HDF5 file");
 }
 
 }  // namespace

@@ -7,8 +7,12 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "io/h5.hpp"
 #include "tests/io/tmp_dir.hpp"
@@ -157,6 +161,64 @@ TEST(Trace, WrongShapeNamesFileDatasetAndExpectedShape) {
   EXPECT_FALSE(is_trace(d.file("text.h5")));
   EXPECT_THROW(read_trace(d.file("text.h5")), std::runtime_error);
   EXPECT_THROW(read_trace(d.file("missing.h5")), std::runtime_error);
+}
+
+// Issue 39: a trace with inf positions made `softevo view --export-html` say only
+// "vector::reserve" and ended the live server when a page connected. Every value a simulation
+// cannot have recorded is refused on reading, naming the file, the value and the rule; the
+// writer (which only a simulation feeds) writes what it is given, so these files exist.
+TEST(Trace, ValuesNoSimulationRecordsAreRefusedOnReadingNamingThem) {
+  TmpDir d;
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  Trace bumpy = sample_trace();
+  bumpy.terrain = Trace::Terrain{};
+  bumpy.terrain->kind = "bumps";
+  bumpy.terrain->seed = "00000000000000ff";
+  bumpy.terrain->shape.amplitude = 0.01;
+  bumpy.terrain->shape.correlation_length = 0.05;
+  // A chamber that encloses no volume has no pressure (NaN), and the controller's commands then
+  // follow: a simulation records them, so they are read.
+  bumpy.pressures[1] = nan;
+  bumpy.valve_commands[2] = std::numeric_limits<float>::quiet_NaN();
+  write_trace(d.file("good.h5"), bumpy);
+  EXPECT_NO_THROW(read_trace(d.file("good.h5")));
+
+  const std::vector<std::pair<std::string, std::function<void(Trace&)>>> bad = {
+      {"positions [m] value 4 = inf", [&](Trace& t) { t.positions[4] = inf; }},
+      {"positions [m] value 0 = nan", [&](Trace& t) { t.positions[0] = nan; }},
+      {"positions [m] value 11 = 1e+300", [&](Trace& t) { t.positions[11] = 1e300; }},
+      {"orientations value 2 = nan", [&](Trace& t) { t.orientations[2] = nan; }},
+      {"quaternion 1 length = 0", [&](Trace& t) { t.orientations[4] = 0.0; }},
+      {"voxel_size [m] = -0.01", [&](Trace& t) { t.voxel_size = -0.01; }},
+      {"frame_rate [Hz] = 0", [&](Trace& t) { t.frame_rate = 0.0; }},
+      {"dt [s] = nan", [&](Trace& t) { t.dt = nan; }},
+      {"direction_deg [deg] = 400", [&](Trace& t) { t.direction_deg = 400.0; }},
+      {"fitness = inf", [&](Trace& t) { t.fitness = inf; }},
+      {"voxel_cells value 3 = 70", [&](Trace& t) { t.voxel_cells[3] = 70; }},
+      {"voxel_material value 0 = 0", [&](Trace& t) { t.voxel_material[0] = 0; }},
+      {"time [s] of frame 1 = -1", [&](Trace& t) { t.time[1] = -1.0; }},
+      {"terrain_amplitude [m] = 1e+300", [&](Trace& t) { t.terrain->shape.amplitude = 1e300; }},
+      {"terrain_correlation_length [m] = 0",
+       [&](Trace& t) { t.terrain->shape.correlation_length = 0.0; }},
+      {"terrain_bumps_start_x [m] = -inf", [&](Trace& t) { t.terrain->bumps_start_x = -inf; }},
+      {"terrain_row_x [m] value 0 = nan", [&](Trace& t) { t.terrain->row_x = {nan}; }},
+  };
+  for (const auto& [what, spoil] : bad) {
+    Trace t = bumpy;
+    spoil(t);
+    const std::string path = d.file("bad.h5");
+    write_trace(path, t, Overwrite::replace);
+    try {
+      read_trace(path);
+      ADD_FAILURE() << what << ": no exception";
+    } catch (const std::runtime_error& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find(path), std::string::npos) << message;
+      EXPECT_NE(message.find(what), std::string::npos) << message;
+      EXPECT_NE(message.find("must be"), std::string::npos) << message;
+    }
+  }
 }
 
 }  // namespace

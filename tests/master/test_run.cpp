@@ -609,6 +609,16 @@ TEST(RunMemory, EstimateRefusesBeyondAndWarnsNearTheAvailableMemory) {
   c.learning.method = LearningMethod::es;
   EXPECT_GT(estimate_run_memory(c), million);
   c.learning.method = LearningMethod::none;
+  // A larger minimum species size adds members (issue 39): at the population, each of up to
+  // pop/2 species may hold that many.
+  c.neat.pop_size = 1000;
+  c.neat.min_species_size = 1000;
+  EXPECT_GE(estimate_run_memory(c), thousand + 500ULL * 998 * kBytesPerMember);
+  c.neat.min_species_size = 2;
+  c.neat.elitism = 1000;
+  EXPECT_GE(estimate_run_memory(c), thousand + 500ULL * 998 * kBytesPerMember);
+  c.neat.elitism = small_config().neat.elitism;
+  c.neat.pop_size = 1000000;
 
   const std::vector<const Config*> one = {&c};
   try {

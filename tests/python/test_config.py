@@ -54,6 +54,11 @@ def test_unknown_key_names_file_and_key():
         softevo.load_config(QUICKSTART, overrides={"neat.pop_sizes": 3})
     assert "pop_sizes" in str(e.value)
     assert isinstance(e.value, ValueError)
+    # Python's words, not the command line's (issue 39: it said "--set neat.popsize=4")
+    assert str(e.value).startswith('overrides["neat.pop_sizes"] = 3: ')
+    assert "--set" not in str(e.value)
+    with pytest.raises(softevo.ConfigError, match=r'^overrides\["neat.pop_size"\] = -3: '):
+        softevo.parse_config("", overrides={"neat.pop_size": -3})
 
 
 @pytest.mark.parametrize("bad", sorted((SOURCE_DIR / "tests/data/bad_configs").glob("*.toml")),

@@ -60,6 +60,31 @@ def test_is_a_gymnasium_env_when_gymnasium_is_installed():
     assert issubclass(softevo.env.SoftRobotEnv, gymnasium.Env)
 
 
+def test_importable_as_documented_and_registered_with_gymnasium():
+    """softevo.env after a plain `import softevo` (issue 39: an AttributeError), and the id
+    registered with gymnasium (checked with a stand-in module: Debian 12 has no gymnasium)."""
+    import subprocess
+    import sys
+    code = "import softevo; print(softevo.env.SoftRobotEnv.__name__, softevo.env.ENV_ID)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["SoftRobotEnv", "softevo/SoftRobot-v0"]
+
+    class StandIn:
+        class envs:
+            registry = {}
+
+        @staticmethod
+        def register(id, entry_point):
+            StandIn.envs.registry[id] = entry_point
+
+    assert softevo.env._register_with_gymnasium(StandIn)
+    assert StandIn.envs.registry == {"softevo/SoftRobot-v0": "softevo.env:SoftRobotEnv"}
+    StandIn.envs.registry["softevo/SoftRobot-v0"] = "kept"
+    softevo.env._register_with_gymnasium(StandIn)  # a second import registers nothing new
+    assert StandIn.envs.registry["softevo/SoftRobot-v0"] == "kept"
+    assert not softevo.env._register_with_gymnasium(None)
+
+
 def test_rgb_array_frames_from_the_headless_renderer():
     env = softevo.env.SoftRobotEnv(block_robot(), seconds=0.2, render_mode="rgb_array",
                                    render_size=(160, 120))

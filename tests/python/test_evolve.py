@@ -5,6 +5,7 @@ and best robot, stops on request or Ctrl-C with a checkpoint, and resumes to the
 import os
 import signal
 import subprocess
+import sys
 import threading
 
 import numpy as np
@@ -90,6 +91,61 @@ def test_evolve_with_controller_learning_writes_the_archive_of_the_command_line(
     assert softevo.evaluate(seen[-1].best_robot).fitness == seen[-1].best
 
 
+def test_no_lock_file_stays_beside_a_finished_archive(tiny_config, tmp_path):
+    """As on the command line (issue 39: Python runs left RUN.h5.lock behind)."""
+    out = tmp_path / "done.h5"
+    softevo.evolve(tiny_config, workers=1, out=out, generations=1)
+    assert out.exists()
+    assert not (tmp_path / "done.h5.lock").exists()
+    stopped = tmp_path / "stopped.h5"
+    softevo.evolve(tiny_config, workers=1, out=stopped, generations=3,
+                   callback=lambda g: False)
+    assert not (tmp_path / "stopped.h5.lock").exists()
+    with softevo.evolution(tiny_config, workers=1, out=tmp_path / "never.h5"):
+        pass  # closed before its first generation
+    assert not (tmp_path / "never.h5.lock").exists()
+
+
+def test_a_full_disk_raises_and_the_interpreter_lives_on(tiny_config, tmp_path):
+    """A real full disk (a 200 kB tmpfs; root only): evolve raises RunError naming the cause and
+    the interpreter exits normally afterwards (issue 39: it crashed at exit in libhdf5's
+    clean-up). In a child interpreter, whose exit is what is checked."""
+    if os.geteuid() != 0:
+        pytest.skip("mounting a small tmpfs needs root")
+    small = tmp_path / "small"
+    small.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=200k", "tmpfs", str(small)]).returncode:
+        pytest.skip("cannot mount a small tmpfs")
+    try:
+        script = (
+            "import softevo, sys\n"
+            "try:\n"
+            f"    softevo.evolve({str(tiny_config)!r}, workers=1, out={str(small / 'r.h5')!r},\n"
+            "                   generations=6, progress=False)\n"
+            "except softevo.RunError as e:\n"
+            "    print('raised:', e)\n"
+            "    sys.exit(0)\n"
+            "sys.exit(3)\n")
+        child = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+        assert child.returncode == 0, child.stdout + child.stderr
+        assert "raised:" in child.stdout and "No space left on device" in child.stdout
+    finally:
+        subprocess.run(["umount", "-l", str(small)])
+
+
+def test_progress_lines_by_default_and_silence_on_request(tiny_config, tmp_path, capsys):
+    """The command line's line per generation with its ETA (issue 39: evolve printed nothing)."""
+    softevo.evolve(tiny_config, workers=1, out=tmp_path / "loud.h5", generations=2)
+    lines = [line for line in capsys.readouterr().out.splitlines() if line.startswith("gen ")]
+    assert len(lines) == 2, lines
+    assert "0/2" in lines[0] and "best" in lines[0] and "ETA" in lines[0]
+    softevo.evolve(tiny_config, workers=1, out=tmp_path / "quiet.h5", generations=2,
+                   progress=False)
+    assert capsys.readouterr().out == ""
+    with pytest.raises(TypeError, match="progress"):
+        softevo.evolve(tiny_config, out=tmp_path / "x.h5", progress="yes")
+
+
 def test_a_config_object_and_the_iterator(tiny_config, tmp_path):
     config = softevo.load_config(tiny_config)
     out = tmp_path / "it.h5"
@@ -106,8 +162,11 @@ def test_stop_and_resume_give_the_same_bits(tiny_config, tmp_path):
     run = softevo.evolve(tiny_config, workers=2, out=out, callback=lambda g: g.generation < 1)
     assert run.info["state"] == "interrupted"
     assert run.info["generations_done"] == 2
-    with pytest.raises(softevo.RunError, match="--resume|resume"):
+    # in Python's words (issue 39: it said "pass --resume ... --overwrite ... --out")
+    with pytest.raises(softevo.RunError, match="exists: pass resume=True to continue it, "
+                       "overwrite=True to replace it, or choose another out=") as e:
         softevo.evolve(tiny_config, workers=2, out=out)
+    assert "--" not in str(e.value)
     done = softevo.evolve(tiny_config, workers=3, out=out, resume=True)
     assert done.info["state"] == "complete"
     assert done.fitness_digest() == ref.fitness_digest()
@@ -134,6 +193,12 @@ def test_ctrl_c_checkpoints_and_resume_completes(tiny_config, tmp_path):
 def test_bad_arguments(tiny_config, tmp_path):
     with pytest.raises(ValueError, match="workers"):
         softevo.evolve(tiny_config, workers=0, out=tmp_path / "x.h5")
+    # the command line's cap: 100,000 threads aborted the interpreter (issue 39)
+    with pytest.raises(ValueError, match="workers must be an int from 1 to 4096"):
+        softevo.evolve(tiny_config, workers=100000, out=tmp_path / "x.h5")
+    with pytest.raises(ValueError, match="at most 4096"):
+        softevo._softevo._Evolution(softevo.load_config(tiny_config), str(tmp_path / "x.h5"),
+                                    4097, False, False)
     with pytest.raises(TypeError, match="config"):
         softevo.evolve(42, out=tmp_path / "x.h5")
     with pytest.raises(FileNotFoundError):

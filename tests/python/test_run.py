@@ -3,13 +3,18 @@ table (pandas or numpy), stats, genomes as robots (re-evaluated to their archive
 lineages, and bad archives as exceptions."""
 
 import builtins
+import os
 import struct
+import subprocess
+import sys
 
 import numpy as np
+
 import pytest
 
 import softevo
 import softevo._run
+from conftest import binary
 
 
 def test_config_and_info(tiny_run):
@@ -113,6 +118,13 @@ def test_bad_archives_and_ids(tiny_run, tmp_path):
     with pytest.raises(softevo.ArchiveError, match="text.h5"):
         softevo.open_run(text)
     assert isinstance(softevo.ArchiveError("x"), OSError)
+    # a FIFO is refused, never waited on (issue 39: open_run blocked forever); a directory too
+    fifo = tmp_path / "pipe.h5"
+    os.mkfifo(fifo)
+    with pytest.raises(softevo.ArchiveError, match="is a FIFO"):
+        softevo.open_run(fifo)
+    with pytest.raises(softevo.ArchiveError, match="is a directory"):
+        softevo.open_run(tmp_path)
     run = softevo.open_run(tiny_run)
     with pytest.raises(KeyError, match="999999"):
         run.genome(999999)
@@ -147,6 +159,42 @@ def _tampered_copy(tiny_run, tmp_path):
     bad = tmp_path / "tampered.h5"
     bad.write_bytes(bytes(data))
     return bad
+
+
+@pytest.mark.parametrize("line", ["seed = " + "7" * 50000, "x = " + "{a=" * 10000 + "1" + "}" * 10000],
+                         ids=["50000-digit number", "inline table 10000 deep"])
+def test_an_archive_whose_config_holds_a_hostile_line_is_an_error(tiny_run, tmp_path, line):
+    """Issue 39: such a /config overflowed the config reader's stack in `softevo info` and
+    killed Python's open_run. Both now report the line limit; run in child processes, whose
+    exit (not a signal) is what is checked."""
+    h5py = pytest.importorskip("h5py")
+    bad = tmp_path / "hostile.h5"
+    bad.write_bytes(tiny_run.read_bytes())
+    with h5py.File(bad, "r+") as f:
+        text = f["config"][()].decode() if isinstance(f["config"][()], bytes) else f["config"][()]
+        text = text.replace("[run]\n", "[run]\n" + line + "\n", 1)
+        del f["config"]
+        f.create_dataset("config", data=text.encode())
+        # the hash of the new text (FNV-1a 64), so that the reader goes on to parse it
+        h = 0xcbf29ce484222325
+        for byte in text.encode():
+            h = ((h ^ byte) * 0x100000001b3) & 0xFFFFFFFFFFFFFFFF
+        f.attrs["config_hash"] = f"{h:016x}".encode()
+    info = subprocess.run([str(binary("softevo")), "info", str(bad)], capture_output=True,
+                          text=True)
+    assert info.returncode in (1, 2, 3), (info.returncode, info.stderr[-2000:])
+    assert ("at most 10000 bytes" in info.stdout + info.stderr
+            or "nested more than 8 deep" in info.stdout + info.stderr), info.stdout + info.stderr
+    code = ("import softevo, sys\n"
+            "try:\n"
+            f"    softevo.open_run({str(bad)!r}, verify=False).config\n"
+            "except (softevo.ArchiveError, softevo.ConfigError) as e:\n"
+            "    print('raised:', str(e)[:300])\n"
+            "    sys.exit(0)\n"
+            "sys.exit(3)\n")
+    child = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert child.returncode == 0, child.stdout + child.stderr[-2000:]
+    assert "raised:" in child.stdout
 
 
 def test_a_tampered_archive_raises_by_default(tiny_run, tmp_path):

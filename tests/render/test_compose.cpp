@@ -39,12 +39,32 @@ TEST(Compose, PoseAtTakesTheEarlierOfEquallyNearAndWalksOverSharedTimes) {
   EXPECT_EQ(pose_at(poses, 0.2, 1), 3u);
 }
 
+// Issue 39: `render --timelapse 6` of a 10 s robot drew 6 snapshots within 0.5 s (5.0 ... 5.5 s),
+// which show no motion. By default the snapshots span the whole clip, in every view; --start
+// alone spans from there to the end, --span alone from 0.
+TEST(Compose, TimelapseSpansTheWholeClipByDefault) {
+  Timelapse six;
+  six.snapshots = 6;
+  EXPECT_EQ(timelapse_times(six, 10.0), (std::vector<double>{0, 2, 4, 6, 8, 10}));
+  six.start = 5.0;
+  EXPECT_EQ(timelapse_times(six, 10.0), (std::vector<double>{5, 6, 7, 8, 9, 10}));
+  six.start.reset();
+  six.span = 1.0;
+  EXPECT_EQ(timelapse_times(six, 10.0), (std::vector<double>{0, 0.2, 0.4, 0.6, 0.8, 1}));
+  // A start beyond what the span leaves is moved back into the clip; one snapshot is the start.
+  six.start = 9.5;
+  EXPECT_EQ(timelapse_times(six, 10.0).front(), 9.0);
+  Timelapse one;
+  one.snapshots = 1;
+  EXPECT_EQ(timelapse_times(one, 3.0), (std::vector<double>{0}));
+}
+
 TEST(Compose, SceneBoxReachesDownToTheFloor) {
   const MovingBar bar;
   const Eigen::AlignedBox3d box = scene_box(bar.body, {bar.poses[0], bar.poses[10]}, -0.2);
   EXPECT_DOUBLE_EQ(box.min().z(), -0.2);
-  // The last voxel of the last pose, out to half a cube's space diagonal (pose_bounds).
-  EXPECT_NEAR(box.max().x(), 0.02 + 0.1 + 0.5 * std::sqrt(3.0) * 0.01, 1e-12);
+  // The far face of the last voxel of the last pose (pose_bounds: the drawn surface).
+  EXPECT_NEAR(box.max().x(), 0.02 + 0.1 + 0.5 * 0.01, 1e-12);
 }
 
 TEST(Compose, StillAndStripHaveTheRequestedSizes) {

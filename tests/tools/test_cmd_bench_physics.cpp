@@ -5,6 +5,7 @@
 // such a block, or a block out of range, is a usage error that says why.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -82,10 +83,19 @@ TEST_F(CmdBenchPhysics, CyclesAreTheTimeAtTheMeanOfTheClockMeasuredBeforeAndAfte
     const double before = row["clock_ghz_before"].get<double>();
     const double after = row["clock_ghz_after"].get<double>();
     const double clock = row["clock_ghz"].get<double>();
-    EXPECT_GT(before, 0.2) << "no core of either architecture runs below 200 MHz";
-    EXPECT_LT(before, 10.0);
-    EXPECT_GT(after, 0.2);
-    EXPECT_LT(after, 10.0);
+    // No bound on the figure itself: a test assumes neither the machine's speed nor its load
+    // (a fixed range failed on an Intel Sapphire Rapids core, issue 39).
+    EXPECT_TRUE(std::isfinite(before) && before > 0.0) << before;
+    EXPECT_TRUE(std::isfinite(after) && after > 0.0) << after;
+    EXPECT_EQ(row["clock_method"], "dependent register additions");
+    ASSERT_TRUE(row.contains("clock_ghz_os")) << "the OS's figure, or null where it has none";
+    if (row["clock_ghz_os"].is_null()) {
+      EXPECT_FALSE(row["clock_os_disagrees"].get<bool>());
+    } else {
+      const double os = row["clock_ghz_os"].get<double>();
+      EXPECT_GT(os, 0.0);
+      EXPECT_EQ(row["clock_os_disagrees"].get<bool>(), std::fabs(os - clock) > 0.1 * clock);
+    }
     EXPECT_DOUBLE_EQ(clock, 0.5 * (before + after));
     EXPECT_NEAR(row["cycles_per_voxel_step"].get<double>(),
                 row["us_per_voxel_step"].get<double>() * 1e3 * clock,
@@ -95,6 +105,8 @@ TEST_F(CmdBenchPhysics, CyclesAreTheTimeAtTheMeanOfTheClockMeasuredBeforeAndAfte
   ASSERT_EQ(table.code, 0) << table.output;
   EXPECT_NE(table.output.find("cycles/v-s"), std::string::npos) << table.output;
   EXPECT_NE(table.output.find("core clock"), std::string::npos) << table.output;
+  EXPECT_NE(table.output.find("operating system"), std::string::npos)
+      << "the cross-check is reported either way: " << table.output;
   EXPECT_NE(table.output.find("block4x4x4"), std::string::npos) << table.output;
 }
 #endif

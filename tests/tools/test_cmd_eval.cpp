@@ -13,6 +13,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/config.hpp"
+#include "common/config_identity.hpp"
 #include "common/robot.hpp"
 #include "tests/build_tree.hpp"
 #include "tests/test_controller_spec.hpp"
@@ -54,6 +56,32 @@ class CmdEval : public ::testing::Test {
   }
   fs::path dir_, robot_;
 };
+
+// A robot file whose run config holds a 50,000-digit number or an inline table 10,000 deep: a
+// clear error naming the limit, never a crash (issue 39: the config reader's recursion overflowed
+// the stack in every command that reads the robot file).
+TEST_F(CmdEval, AHostileConfigInsideARobotFileIsAnError) {
+  RobotFile robot = read_robot_file(robot_.string());
+  std::string deep = "x = ";
+  for (int i = 0; i < 10000; ++i) deep += "{a=";
+  for (const std::string& line : {"seed = " + std::string(50000, '7'), deep}) {
+    RobotEvaluation& evaluation = robot.evaluation.emplace();
+    evaluation.config = "[run]\n" + line + "\n";
+    evaluation.config_hash = hash_hex(text_hash(evaluation.config));
+    const fs::path path = dir_ / "hostile.json";
+    write_robot_file(robot, path.string(), Overwrite::replace);
+    const std::string page = (dir_ / "page.html").string();
+    const std::string picture = (dir_ / "picture.png").string();
+    for (const std::string& command : {std::string(" eval "), " render -o '" + picture + "' ",
+                                       " view --export-html '" + page + "' "}) {
+      const auto r = run_command(binary("softevo") + command + "'" + path.string() + "'");
+      EXPECT_TRUE(r.code == 1 || r.code == 2) << command << " exit " << r.code << ": " << r.output;
+      EXPECT_TRUE(r.output.find("a config line may be at most 10000 bytes") != std::string::npos ||
+                  r.output.find("nested more than 8 deep") != std::string::npos)
+          << command << ": " << r.output;
+    }
+  }
+}
 
 TEST_F(CmdEval, GaitJsonHasTheNamedFields) {
   const auto r = run_command(binary("softevo") + " eval '" + robot_.string() +
@@ -174,6 +202,16 @@ TEST_F(CmdEval, OutOfRangeSecondsAndDirectionAreConfigErrorsNamingTheKey) {
   EXPECT_EQ(direction.code, 2) << direction.output;
   EXPECT_NE(direction.output.find("task.directions[0] = nan is out of range"), std::string::npos)
       << direction.output;
+  // --direction and --timeout are numbers, as render's and view's --direction (issue 39).
+  for (const char* option : {"--direction north", "--timeout soon", "--direction [90,0]"}) {
+    const auto text = run_command(eval + " --seconds 0.1 " + option);
+    EXPECT_EQ(text.code, 2) << option << ": " << text.output;
+    EXPECT_NE(text.output.find("Could not convert: "), std::string::npos) << text.output;
+  }
+  const auto timeout = run_command(eval + " --seconds 0.1 --timeout 1e10");
+  EXPECT_EQ(timeout.code, 2) << timeout.output;
+  EXPECT_NE(timeout.output.find("run.eval_timeout_seconds = "), std::string::npos)
+      << timeout.output;
 }
 
 // The work of one evaluation is bounded: the step limits (a 1e-6 m voxel needs about a million

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <charconv>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -229,6 +230,32 @@ TEST_F(CmdExport, TheDefaultIsTheBestAndTheOldSpellingStillWorks) {
   double best = generation.fitness[0];
   for (const double f : generation.fitness) best = std::max(best, f);
   EXPECT_EQ(bits_of(j["fitness"].get<double>()), bits_of(best));
+}
+
+// A generation that is not there names those that are (issue 39), and prints the fitness in its
+// shortest round-trip form, as Python does.
+TEST_F(CmdExport, AMissingGenerationNamesTheOnesThatExistAndFitnessIsShortest) {
+  const io::Archive archive(archive_);
+  const std::vector<std::int64_t> gens = archive.generations();
+  const auto r = test::run_command(binary("softevo") + " export " + archive_ +
+                                   " --generation 99 --out " + (dir_ / "x.json").string());
+  EXPECT_NE(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("no generation 99"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the archive has generations " + std::to_string(gens.front()) + ".." +
+                          std::to_string(gens.back())),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "x.json"));
+  const auto text = test::run_command(binary("softevo") + " export " + archive_ + " --out " +
+                                      (dir_ / "y.json").string());
+  ASSERT_EQ(text.code, 0) << text.output;
+  const io::GenerationRecord last = archive.generation(gens.back());
+  double best = last.fitness[0];
+  for (const double f : last.fitness) best = std::max(best, f);
+  char shortest[32];
+  const auto end = std::to_chars(shortest, shortest + sizeof shortest, best).ptr;
+  EXPECT_NE(text.output.find("fitness " + std::string(shortest, end) + " ("), std::string::npos)
+      << text.output;
 }
 
 TEST_F(CmdExport, SoftevoMpiHasAVersionAndTheOutputSpellings) {

@@ -8,11 +8,14 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "common/robot.hpp"
 #include "io/h5.hpp"
-#include "render/render.hpp"
+#include "render/png.hpp"
 
 #include "tests/build_tree.hpp"
 #include "tests/sanitizers.hpp"
@@ -87,9 +90,11 @@ class CmdRender : public ::testing::Test {
     fs::permissions(bin / "ffmpeg", fs::perms::owner_all);
     return bin;
   }
-  // Trace of the same body shape without chamber: 3 frames moving 1 cm per frame along x.
-  std::string write_trace() {
-    const std::string path = (dir_ / "trace.h5").string();
+  // Trace of the same body shape without chamber: 3 frames moving 1 cm per frame along x (the
+  // first voxel's first x moved by `first_x` [m], the lattice pitch `voxel_size` [m]).
+  std::string write_trace(const std::string& name = "trace.h5", double first_x = 0.0,
+                          double voxel_size = 0.01) {
+    const std::string path = (dir_ / name).string();
     std::vector<std::int32_t> cells;
     std::vector<std::int32_t> material;
     for (int x = 0; x < 4; ++x)
@@ -106,13 +111,14 @@ class CmdRender : public ::testing::Test {
                                cells[3 * i + 2] * 0.01});
         ori.insert(ori.end(), {1.0, 0.0, 0.0, 0.0});
       }
+    pos[0] += first_x;
     // Only what another tool would write: no time, pressures, robot or frame rate.
     const io::h5::File file = io::h5::File::create(path);
     file.write_dataset<double>("positions", {frames, v, 3}, pos);
     file.write_dataset<double>("orientations", {frames, v, 4}, ori);
     file.write_dataset<std::int32_t>("voxel_cells", {v, 3}, cells);
     file.write_dataset<std::int32_t>("voxel_material", {v}, material);
-    file.write_attribute<double>("voxel_size", 0.01);
+    file.write_attribute<double>("voxel_size", voxel_size);
     return path;
   }
   fs::path dir_;
@@ -216,8 +222,37 @@ TEST_F(CmdRender, CutawayShowsTheInletChannels) {
   EXPECT_EQ(run(render + "--cutaway 3 -o " + (dir_ / "x.png").string()), 2);
 }
 
-// Without ffmpeg a video is written as its PNG frames, with the command that encodes them.
-TEST_F(CmdRender, VideoWithoutFfmpegIsWrittenAsAPngFrameSequence) {
+// Issue 39: a trace with inf positions made `view --export-html` say only "vector::reserve" (and
+// the live server exit when a page connected). A trace is checked on reading: `render` and
+// `view` name the file, the value and the rule, and exit 2.
+TEST_F(CmdRender, ATraceWithValuesNoSimulationRecordsIsAClearError) {
+  const std::string inf = write_trace("inf.h5", std::numeric_limits<double>::infinity());
+  const std::string negative = write_trace("negative.h5", 0.0, -0.01);
+  const std::string out = (dir_ / "x.png").string();
+  const std::string html = (dir_ / "x.html").string();
+  const bool has_view = run(softevo_binary() + " view --help") == 0;
+  for (const auto& [trace, what] :
+       {std::pair{inf, std::string("positions [m] value 0 = inf: must be finite")},
+        std::pair{negative, std::string("attribute voxel_size [m] = -0.01: must be finite, in "
+                                        "(0, 10]")}}) {
+    std::vector<std::string> commands = {softevo_binary() + " render " + trace + " -o " + out};
+    if (has_view)
+      commands.push_back(softevo_binary() + " view " + trace + " --export-html " + html);
+    for (const std::string& command : commands) {
+      const auto r = test::run_command(command);
+      EXPECT_EQ(r.code, 2) << command << "\n" << r.output;
+      EXPECT_NE(r.output.find(trace + ": " + what), std::string::npos) << command << "\n"
+                                                                       << r.output;
+    }
+  }
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(html));
+}
+
+// Issue 39: without ffmpeg, `render -o x.mp4` wrote PNG frames and exited 0 without the video.
+// It is an error that says what to install (and that a GIF needs no ffmpeg), given before
+// anything is simulated or written.
+TEST_F(CmdRender, VideoWithoutFfmpegIsAnErrorSayingWhatToInstall) {
   const std::string robot = write_robot();
   // PATH without ffmpeg.
   const fs::path empty_bin = dir_ / "empty-bin";
@@ -225,19 +260,14 @@ TEST_F(CmdRender, VideoWithoutFfmpegIsWrittenAsAPngFrameSequence) {
   const auto r = test::run_command("PATH=" + empty_bin.string() + " " + softevo_binary() +
                                    " render " + robot + " -o " + (dir_ / "x.mp4").string() +
                                    " --seconds 0.2 --fps 10 --width 64 --height 48");
-  ASSERT_EQ(r.code, 0) << r.output;
-  EXPECT_NE(r.output.find("ffmpeg -framerate 10"), std::string::npos) << r.output;
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("ffmpeg, which is not on PATH: install it (Debian: apt-get install "
+                          "ffmpeg)"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("x.gif"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir_ / "x.mp4"));
-  const fs::path frames = dir_ / "x-frames";
-  ASSERT_TRUE(fs::is_directory(frames)) << r.output;
-  EXPECT_TRUE(fs::exists(frames / "frame-000000.png"));
-  EXPECT_TRUE(fs::exists(frames / "frame-000001.png"));
-  EXPECT_EQ(render::read_png((frames / "frame-000000.png").string()).width, 64);
-  // A second run needs --force.
-  EXPECT_EQ(
-      run("PATH=" + empty_bin.string() + " " + softevo_binary() + " render " + robot + " -o " +
-          (dir_ / "x.mp4").string() + " --seconds 0.2 --fps 10 --width 64 --height 48"),
-      2);
+  EXPECT_FALSE(fs::exists(dir_ / "x-frames"));
 }
 
 // Issue 30: `render -o OUT.gif` writes an animated GIF (giflib), no ffmpeg needed.

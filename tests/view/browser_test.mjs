@@ -8,7 +8,10 @@
 //   4. malformed WebSocket messages: each is answered with an error, the server keeps serving;
 //   5. the ground (issue 30): exported on a bumpy config the page draws the terrain mesh, and
 //      its floor pixels are shaded, unlike the flat floor of 3; a live page takes the new ground
-//      the server sends as its robot walks on.
+//      the server sends as its robot walks on;
+//   6. deformed bodies (issue 39): a cube of the quickstart's first run that inflates into a
+//      ball (tests/data/inflated-ball.robot.json) is drawn as one body, no floor showing through
+//      between its voxels (as rigid cubes it was about half holes).
 // Prints the measurements (simulation speed vs real time, render frame rate, socket bytes/s,
 // exported size). Exit 77 (skipped) when the reference champions or chromium are absent.
 //
@@ -65,15 +68,22 @@ async function waitFor(page, fn, arg, timeout = 60000) {
 }
 const probe = (page) => page.evaluate(() => ({ ...window.softevo, socket: undefined, hello: undefined }));
 
-// Robot pixels of a screenshot taken from the page's canvas: colour classes of the voxels.
-async function robotPixels(page) {
-  return page.evaluate(() => {
+// Runs `measure(data, width, height)` in the page on a copy of its canvas's RGBA pixels and
+// returns what it returns (a function's source is sent, so it sees only the page).
+function canvasMeasure(page, measure) {
+  return page.evaluate(`(() => {
     const src = document.querySelector('#scene canvas');
     const c = document.createElement('canvas');
     c.width = src.width; c.height = src.height;
     const g = c.getContext('2d');
     g.drawImage(src, 0, 0);
-    const d = g.getImageData(0, 0, c.width, c.height).data;
+    return (${measure})(g.getImageData(0, 0, c.width, c.height).data, c.width, c.height);
+  })()`);
+}
+
+// Robot pixels of a screenshot taken from the page's canvas: colour classes of the voxels.
+async function robotPixels(page) {
+  return canvasMeasure(page, (d) => {
     let blue = 0, red = 0, dark = 0, coloured = 0, yellow = 0;
     for (let i = 0; i < d.length; i += 4) {
       const r = d[i], gg = d[i + 1], b = d[i + 2];
@@ -92,22 +102,35 @@ async function robotPixels(page) {
 // chambers dark), the fraction that differs from the flat floor's one colour (0xd6d6d1) by more
 // than a little: its grid lines on the flat floor, nearly all of it on a shaded terrain.
 async function floorPixels(page) {
-  return page.evaluate(() => {
-    const src = document.querySelector('#scene canvas');
-    const c = document.createElement('canvas');
-    c.width = src.width; c.height = src.height;
-    const g = c.getContext('2d');
-    g.drawImage(src, 0, 0);
-    const y0 = Math.floor(0.6 * c.height);
-    const d = g.getImageData(0, y0, c.width, c.height - y0).data;
+  return canvasMeasure(page, (d, width, height) => {
     let grey = 0, off = 0;
-    for (let i = 0; i < d.length; i += 4) {
+    for (let i = 4 * width * Math.floor(0.6 * height); i < d.length; i += 4) {
       const r = d[i], gg = d[i + 1], b = d[i + 2];
       if (Math.max(r, gg, b) - Math.min(r, gg, b) > 20 || r + gg + b < 360) continue;
       grey++;
       if (Math.abs(r - 214) + Math.abs(gg - 214) + Math.abs(b - 209) > 24) off++;
     }
     return { grey, off, fraction: off / Math.max(grey, 1), terrain: window.softevo.terrainVertices };
+  });
+}
+
+// Holes in the body: along the rows through the middle half of the body's pixels (coloured or
+// dark), the fraction of pixels between a row's first and last body pixel that are not body.
+async function bodyHoles(page) {
+  return canvasMeasure(page, (d, width, height) => {
+    const body = (x, y) => {
+      const i = 4 * (y * width + x), hi = Math.max(d[i], d[i + 1], d[i + 2]);
+      return hi - Math.min(d[i], d[i + 1], d[i + 2]) > 25 || hi < 130;
+    };
+    let y0 = height, y1 = -1;
+    for (let y = 0; y < height; y++) for (let x = 0; x < width; x++) if (body(x, y)) { y0 = Math.min(y0, y); y1 = y; }
+    let inside = 0, holes = 0;
+    for (let y = Math.round(y0 + 0.25 * (y1 - y0)); y <= y0 + 0.75 * (y1 - y0); y++) {
+      let first = -1, last = -1;
+      for (let x = 0; x < width; x++) if (body(x, y)) { if (first < 0) first = x; last = x; }
+      for (let x = first; first >= 0 && x <= last; x++) { inside++; if (!body(x, y)) holes++; }
+    }
+    return { inside, holes, fraction: holes / Math.max(inside, 1) };
   });
 }
 
@@ -150,6 +173,21 @@ async function toggleFabrication(page) {
     while (window.softevo.renders === r0) await new Promise((r) => requestAnimationFrame(r));
   });
   return page.evaluate(() => ({ ...window.softevo.fabrication }));
+}
+
+// An exported page (file://), paused at scrubber position `at` (a number, or 'max': the end).
+async function pausedExport(html, name, at) {
+  const page = await browser.newPage();
+  page.on('pageerror', (e) => console.log(`${name} page error:`, e.message));
+  await page.goto(`file://${html}`);
+  await waitFor(page, () => window.softevo.frames > 0, undefined, 30000);
+  await page.evaluate((value) => {
+    if (document.getElementById('play').textContent === 'Pause') document.getElementById('play').click();
+    const scrub = document.getElementById('scrub');
+    scrub.value = value === 'max' ? scrub.max : value;
+    scrub.dispatchEvent(new Event('input'));
+  }, at);
+  return page;
 }
 
 const browser = await puppeteer.launch({
@@ -369,18 +407,9 @@ try {
   const roughHtml = path.join(tmp, 'rough.html');
   execFileSync(binary, ['view', gaitBot, '--config', path.join(sourceDir, 'configs', 'gait-rough-open.toml'),
     '--seconds', '2', '--export-html', roughHtml], { stdio: 'inherit' });
-  const rough = await browser.newPage();
-  rough.on('pageerror', (e) => console.log('rough page error:', e.message));
-  await rough.goto(`file://${roughHtml}`);
-  await waitFor(rough, () => window.softevo.frames > 0, undefined, 30000);
   // Paused at 1 s (the scrubber counts exported frames) and seen from the side at an angle.
-  await rough.evaluate(() => {
-    if (document.getElementById('play').textContent === 'Pause') document.getElementById('play').click();
-    const scrub = document.getElementById('scrub');
-    scrub.value = '30';
-    scrub.dispatchEvent(new Event('input'));
-    document.querySelector('[data-view="iso"]').click();
-  });
+  const rough = await pausedExport(roughHtml, 'rough', '30');
+  await rough.evaluate(() => document.querySelector('[data-view="iso"]').click());
   await waitFor(rough, () => window.softevo.last.index === 60 && window.softevo.renderedIndex === 60, undefined, 30000);
   const roughFloor = await floorPixels(rough);
   console.log(`floor (bumps): ${JSON.stringify(roughFloor)}`);
@@ -405,6 +434,23 @@ try {
   check(moved.updates === 1 && moved.x0 === moved.want && moved.vertices === moved.samples,
     `a live page takes the ground the server sends (${moved.updates} update, ${moved.vertices} vertices, x0 ${moved.x0.toFixed(2)} m)`);
   await liveRough.close();
+
+  // ------------------------------------------------------------ 6. deformed bodies, exported
+  const ballHtml = path.join(tmp, 'ball.html');
+  execFileSync(binary, ['view', path.join(sourceDir, 'tests', 'data', 'inflated-ball.robot.json'),
+    '--export-html', ballHtml], { stdio: 'ignore' });
+  // The last frame (2.98 s: a 10 cm cube inflated to about 20 cm), paused, from the side.
+  const ball = await pausedExport(ballHtml, 'ball', 'max');
+  await waitFor(ball, () => window.softevo.last.last && window.softevo.renderedIndex === window.softevo.last.index, undefined, 30000);
+  const holes = await bodyHoles(ball);
+  const drawn = await ball.evaluate(() => window.softevo.surface);
+  console.log(`inflated ball: ${JSON.stringify(holes)}, surface ${JSON.stringify(drawn)}`);
+  check(drawn && drawn.vertices > 0 && drawn.skinQuads > 0 && drawn.chamberQuads > 0,
+    'the page draws the deformed surface (shared vertices, skin and chamber faces)');
+  check(holes.inside > 10000 && holes.fraction < 0.05,
+    `an inflated body is drawn as one body: ${(100 * holes.fraction).toFixed(1)} % of the pixels inside it show the floor (rigid cubes: about 48 %)`);
+  if (shots) await ball.screenshot({ path: path.join(shots, 'export-inflated.png') });
+  await ball.close();
 
   // ------------------------------------------------------------ 3b. hostile names, exported
   // A shared robot file's name must never run as script in the page exported from it.

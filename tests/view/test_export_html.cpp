@@ -14,6 +14,7 @@
 
 #include "physics/terrain.hpp"
 #include "tests/io/tmp_dir.hpp"
+#include "tests/view/fake_web.hpp"
 #include "tests/view/view_test_robot.hpp"
 #include "view/client_session.hpp"
 #include "view/export_html.hpp"
@@ -81,23 +82,7 @@ TEST(ViewExportHtml, RandomNamesNeverLeaveTheirElement) {
 
 // A stand-in for view/web (the real one needs npm ci): the page's markers, and an app.js whose
 // string holds a closing tag in capitals, which must not end its element either.
-struct FakeWeb {
-  test::TmpDir dir;
-  FakeWeb() {
-    const auto put = [&](const std::string& name, const std::string& text) {
-      std::filesystem::create_directories(std::filesystem::path(dir.file(name)).parent_path());
-      std::ofstream(dir.file(name)) << text;
-    };
-    put("index.html",
-        "<html><head><!-- softevo:head --><!-- /softevo:head --></head><body>"
-        "<!-- softevo:app --><!-- /softevo:app --></body></html>");
-    put("app.js", "const s = '</SCRIPT><b>';\n");
-    put("plots.js", "export {};\n");
-    put("style.css", "body {}\n");
-    put("node_modules/three/build/three.module.min.js", "export {};\n");
-    put("node_modules/three/examples/jsm/controls/OrbitControls.js", "export {};\n");
-  }
-};
+using test::FakeWeb;
 
 TEST(ViewExportHtml, HostileRobotNamesStayInsideTheExportedPage) {
   const FakeWeb fake;

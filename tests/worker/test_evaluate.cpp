@@ -6,9 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <vector>
 
 #include "common/config.hpp"
@@ -374,6 +376,25 @@ TEST(EvaluateRequest, TimeoutIsAStatus) {
   EXPECT_LT(r.wall_seconds, 2.0);  // stopped early, not after 5 s of simulation
 }
 
+// A timeout beyond the clock's range saturates instead of wrapping into the past: 1e10 s made
+// every evaluation "time out" at once (issue 39; the config now refuses it, the Python and
+// command-line paths call deadline_after with what they are given).
+TEST(EvaluateRequest, AHugeTimeoutNeverExpires) {
+  for (double seconds : {1.0e10, 1.0e300, std::numeric_limits<double>::infinity()}) {
+    const auto deadline = worker::deadline_after(seconds);
+    ASSERT_TRUE(deadline.has_value());
+    EXPECT_GT(*deadline, worker::Clock::now() + std::chrono::hours(24 * 365 * 100)) << seconds;
+  }
+  EXPECT_FALSE(worker::deadline_after(0.0).has_value());
+  EXPECT_FALSE(worker::deadline_after(std::nan("")).has_value());
+  Config c = tiny_config();
+  c.task.eval_seconds = 0.05;
+  worker::EvaluateOptions o;
+  o.deadline = worker::deadline_after(1.0e10);
+  const EvalResult r = evaluate_request(c, request_for(c), o);
+  EXPECT_EQ(r.status, EvalStatus::ok) << r.message;
+}
+
 TEST(EvaluateRequest, StandInEvaluationAndUnits) {
   Config c = tiny_config();
   c.task.kind = TaskKind::directed;
@@ -393,7 +414,8 @@ TEST(EvaluateRequest, StandInEvaluationAndUnits) {
 TEST(EvaluateRequest, BuildRobotFillsMaterialsFromTheConfig) {
   const Config c = tiny_config();
   const evo::Population pop = evo::Population::create(c, 0, 5);
-  const worker::BuiltRobot r = worker::build_robot(c, pop.members().front().genome);
+  const worker::BuiltRobot r =
+      worker::build_robot(c, pop.members().front().genome, *tasks::make_task(c));
   EXPECT_TRUE(r.valid);
   EXPECT_TRUE(r.actuatable);
   ASSERT_EQ(r.body.materials.size(), static_cast<std::size_t>(c.physics.material_count));

@@ -35,14 +35,13 @@ sun.position.set(-1, -2, 3);
 scene.add(sun);
 
 let hello = null;
+let surface = null;  // the body's lattice: corners, neighbours, faces (buildSurface)
 let voxelMesh = null, chamberMesh = null, channelMesh = null, floorGroup = null, targetLine = null, pathLine = null;
 let start = new THREE.Vector3();  // centroid of the first frame [m]
 let floorZ = -0.005;
 let lastCentroid = null;
 let floorCentre = null;  // where the floor, its grid and the scale bar are centred [m]
 let pathCount = 0, pathLast = -1;  // centroid path points drawn, last record among them
-const matrix = new THREE.Matrix4(), quat = new THREE.Quaternion(), pos = new THREE.Vector3();
-const scaleVec = new THREE.Vector3(1, 1, 1), hidden = new THREE.Vector3(0, 0, 0);
 let charts = null;
 let fitnessSeries = [];  // indices of the components drawn in the fitness plot
 let lastFrame = null;  // the frame shown
@@ -227,24 +226,20 @@ function setup(h) {
   terrainZ = decodeTerrain(h.terrain);
   if (floorGroup) { scene.remove(floorGroup); floorGroup = null; }
   $('title').textContent = `${h.name} (${h.kind}, ${h.task}${probe.mode === 'live' && h.live ? ', live' : probe.mode === 'export' ? ', exported replay' : ''})`;
-  const s = h.voxel_size * 1.04;  // deformed body: hide the cracks between rigid cubes
   if (voxelMesh) scene.remove(voxelMesh);
   if (chamberMesh) scene.remove(chamberMesh);
   // Thesis colours: structural material semi-transparent, blue (hard) to red (soft); chambers
-  // dark, drawn first so that they show through.
-  voxelMesh = new THREE.InstancedMesh(new THREE.BoxGeometry(s, s, s),
-    new THREE.MeshLambertMaterial({ transparent: true, opacity: 0.35, depthWrite: false }), h.voxels);
-  h.voxel_colours.forEach((c, i) => voxelMesh.setColorAt(i, new THREE.Color(c[0] / 255, c[1] / 255, c[2] / 255)));
+  // dark, drawn first so that they show through. Both deformed, as the still renderer draws them.
+  surface = buildSurface(h);
+  probe.surface = { vertices: surface.vertexCount, skinQuads: surface.skin.length, chamberQuads: surface.walls.length };
+  voxelMesh = quadMesh(surface.skin, (item) => h.voxel_colours[item].map((c) => c / 255),
+    new THREE.MeshLambertMaterial({ vertexColors: true, transparent: true, opacity: 0.5, depthWrite: false, side: THREE.DoubleSide }));
   voxelMesh.renderOrder = 2;
-  // The instances move far from where they started: three.js's cached bounds would cull them.
-  voxelMesh.frustumCulled = false;
   scene.add(voxelMesh);
   if (h.chamber_cells > 0) {
-    chamberMesh = new THREE.InstancedMesh(new THREE.BoxGeometry(s * 0.97, s * 0.97, s * 0.97),
-      new THREE.MeshBasicMaterial({ transparent: true, opacity: 0.9 }), h.chamber_cells);
-    for (let j = 0; j < h.chamber_cells; j++) chamberMesh.setColorAt(j, new THREE.Color(0.2, 0.2, 0.22));
+    chamberMesh = quadMesh(surface.walls, () => [0.2, 0.2, 0.22],
+      new THREE.MeshBasicMaterial({ vertexColors: true, transparent: true, opacity: 0.9, side: THREE.DoubleSide }));
     chamberMesh.renderOrder = 1;
-    chamberMesh.frustumCulled = false;
     chamberMesh.visible = $('chambers').checked;
     scene.add(chamberMesh);
   }
@@ -292,6 +287,125 @@ function setup(h) {
   renderFitness(null);
 }
 
+// ---------------------------------------------------------------- deformed surface
+// The body as the still renderer draws it (docs/rendering.md "Deformed voxels", render::body_surface):
+// each voxel's corners follow its position, orientation and the strains of its links, and the
+// corners neighbours share meet at their mean, so a stretched or inflated body is one body.
+// Face order X+, X-, Y+, Y-, Z+, Z- (docs/model.md §2.1); corner c has bit 0 = +x, 1 = +y, 2 = +z.
+const FACE_STEPS = [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]];
+function faceCorners(face) {
+  const axis = face >> 1, side = face % 2 === 0 ? 1 : 0, u = (axis + 1) % 3, w = (axis + 2) % 3;
+  return [[0, 0], [1, 0], [1, 1], [0, 1]].map(([a, b]) => (side << axis) | (a << u) | (b << w));
+}
+
+// The lattice of the hello's cells (voxels, then chamber cells): each item's 8 vertices, its
+// face neighbours, and the faces drawn: the voxels' skin (towards an empty cell) and the chamber
+// cells' faces towards anything but another chamber cell.
+function buildSurface(h) {
+  const v = h.voxels, items = v + h.chamber_cells, cells = h.cells;
+  const key = (x, y, z) => (x * 4096 + y) * 4096 + z;
+  const itemAt = new Map();
+  for (let i = 0; i < items; i++) itemAt.set(key(cells[3 * i], cells[3 * i + 1], cells[3 * i + 2]), i);
+  const vertexOf = new Map();
+  const corner = new Int32Array(8 * items), neighbour = new Int32Array(6 * items);
+  for (let i = 0; i < items; i++) {
+    const [x, y, z] = [cells[3 * i], cells[3 * i + 1], cells[3 * i + 2]];
+    for (let c = 0; c < 8; c++) {
+      const k = key(x + (c & 1), y + ((c >> 1) & 1), z + (c >> 2));
+      if (!vertexOf.has(k)) vertexOf.set(k, vertexOf.size);
+      corner[8 * i + c] = vertexOf.get(k);
+    }
+    FACE_STEPS.forEach(([dx, dy, dz], f) => {
+      const n = itemAt.get(key(x + dx, y + dy, z + dz));
+      neighbour[6 * i + f] = n === undefined ? -1 : n;
+    });
+  }
+  const skin = [], walls = [];
+  for (let i = 0; i < items; i++)
+    for (let f = 0; f < 6; f++) {
+      const n = neighbour[6 * i + f];
+      if (i < v ? n >= 0 : n >= v) continue;
+      (i < v ? skin : walls).push({ item: i, vertex: faceCorners(f).map((c) => corner[8 * i + c]) });
+    }
+  return { voxels: v, items, vertexCount: vertexOf.size, corner, neighbour, skin, walls,
+    vertices: new Float64Array(3 * vertexOf.size) };
+}
+
+// The vertices of a frame into surface.vertices [m]. Half extents from the link strains
+// (§2.3: e = (R_N^T (p_P - p_N))_axis / s - 1, the whole strain on both halves, s/2 without a
+// link), corners p + R (±h), each vertex the mean of the voxels' corners there, else of the
+// chamber cells' (cubes of edge s where the server placed them).
+function surfacePositions(S, f, s) {
+  const n = S.vertexCount, sums = new Float64Array(6 * n), counts = new Int32Array(2 * n);
+  const rot = new Float64Array(9 * S.items);
+  for (let i = 0; i < S.items; i++) {
+    let [w, x, y, z] = [f.quats[4 * i], f.quats[4 * i + 1], f.quats[4 * i + 2], f.quats[4 * i + 3]];
+    const l = Math.hypot(w, x, y, z) || 1;
+    w /= l; x /= l; y /= l; z /= l;
+    // Row-major R: column a is the voxel's axis a in the world.
+    rot.set([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
+      2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+      2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], 9 * i);
+  }
+  const p = f.positions, half = [[0, 0], [0, 0], [0, 0]];
+  for (let i = 0; i < S.items; i++) {
+    const voxel = i < S.voxels;
+    for (let a = 0; a < 3; a++)
+      for (let side = 0; side < 2; side++) {
+        half[a][side] = 0.5 * s;
+        const m = voxel ? S.neighbour[6 * i + 2 * a + (1 - side)] : -1;
+        if (m < 0 || m >= S.voxels) continue;
+        const lo = side ? i : m, hi = side ? m : i;
+        let along = 0;
+        for (let k = 0; k < 3; k++) along += rot[9 * lo + 3 * k + a] * (p[3 * hi + k] - p[3 * lo + k]);
+        half[a][side] = 0.5 * along;
+      }
+    for (let c = 0; c < 8; c++) {
+      const o = [(c & 1) ? half[0][1] : -half[0][0], (c & 2) ? half[1][1] : -half[1][0], (c & 4) ? half[2][1] : -half[2][0]];
+      const vtx = S.corner[8 * i + c], slot = voxel ? 0 : 1;
+      for (let k = 0; k < 3; k++)
+        sums[6 * vtx + 3 * slot + k] += p[3 * i + k] + rot[9 * i + 3 * k] * o[0] + rot[9 * i + 3 * k + 1] * o[1] + rot[9 * i + 3 * k + 2] * o[2];
+      counts[2 * vtx + slot]++;
+    }
+  }
+  for (let vtx = 0; vtx < n; vtx++) {
+    const slot = counts[2 * vtx] > 0 ? 0 : 1;
+    for (let k = 0; k < 3; k++) S.vertices[3 * vtx + k] = sums[6 * vtx + 3 * slot + k] / counts[2 * vtx + slot];
+  }
+}
+
+// A mesh of quads (two triangles each, six vertices, colours per quad).
+function quadMesh(quads, colourOf, material) {
+  const geo = new THREE.BufferGeometry();
+  const colour = new Float32Array(18 * quads.length);
+  quads.forEach((q, k) => { const c = colourOf(q.item); for (let t = 0; t < 6; t++) colour.set(c, 18 * k + 3 * t); });
+  geo.setAttribute('position', new THREE.BufferAttribute(new Float32Array(18 * quads.length), 3));
+  geo.setAttribute('normal', new THREE.BufferAttribute(new Float32Array(18 * quads.length), 3));
+  geo.setAttribute('color', new THREE.BufferAttribute(colour, 3));
+  const mesh = new THREE.Mesh(geo, material);
+  mesh.frustumCulled = false;  // the body moves far from where it started
+  return mesh;
+}
+
+// Writes the quads' corners (triangles q0 q1 q2, q0 q2 q3) and one normal per quad (the cross
+// product of its diagonals: a deformed face is not flat) into the mesh.
+function placeQuads(mesh, quads, vertices) {
+  const pos = mesh.geometry.attributes.position, nor = mesh.geometry.attributes.normal;
+  const at = (vtx, k) => vertices[3 * vtx + k];
+  quads.forEach((q, k) => {
+    const [a, b, c, d] = q.vertex;
+    const e = [0, 1, 2].map((i) => at(c, i) - at(a, i)), g = [0, 1, 2].map((i) => at(d, i) - at(b, i));
+    const nx = e[1] * g[2] - e[2] * g[1], ny = e[2] * g[0] - e[0] * g[2], nz = e[0] * g[1] - e[1] * g[0];
+    const l = Math.hypot(nx, ny, nz) || 1;
+    [a, b, c, a, c, d].forEach((vtx, t) => {
+      pos.setXYZ(6 * k + t, at(vtx, 0), at(vtx, 1), at(vtx, 2));
+      nor.setXYZ(6 * k + t, nx / l, ny / l, nz / l);
+    });
+  });
+  pos.needsUpdate = true;
+  nor.needsUpdate = true;
+}
+
 function centroidOf(positions, count) {
   const c = new THREE.Vector3();
   for (let i = 0; i < count; i++) c.x += positions[3 * i], c.y += positions[3 * i + 1], c.z += positions[3 * i + 2];
@@ -312,7 +426,9 @@ function setView(name) {
 function showFabrication() {
   const on = $('fabrication').checked;
   if (channelMesh) channelMesh.visible = on;
-  if (voxelMesh) voxelMesh.material.opacity = on ? 0.12 : 0.35;
+  // Fainter skin and cavities while on (as render --cutaway draws them), the usual 0.5 and 0.9 off.
+  if (voxelMesh) voxelMesh.material.opacity = on ? 0.15 : 0.5;
+  if (chamberMesh) chamberMesh.material.opacity = on ? 0.6 : 0.9;
   if (on && chamberMesh) chamberMesh.visible = true;
   if (!on && chamberMesh) chamberMesh.visible = $('chambers').checked;
   probe.fabrication = { shown: on, channels: channelMesh ? channelMesh.count : 0,
@@ -337,36 +453,32 @@ function showFrame(f) {
     if (!floorGroup || f.index === 0) buildFloor(start);
     if (!lastCentroid) { lastCentroid = start.clone(); setView('side'); }
   }
-  for (let i = 0; i < f.items; i++) {
-    pos.set(f.positions[3 * i], f.positions[3 * i + 1], f.positions[3 * i + 2]);
-    quat.set(f.quats[4 * i + 1], f.quats[4 * i + 2], f.quats[4 * i + 3], f.quats[4 * i]).normalize();
-    // Inner voxels are not drawn (only the skin is, as in the thesis figures).
-    matrix.compose(pos, quat, i < v && hello.voxel_skin && !hello.voxel_skin[i] ? hidden : scaleVec);
-    if (i < v) voxelMesh.setMatrixAt(i, matrix);
-    else if (chamberMesh) chamberMesh.setMatrixAt(i - v, matrix);
-  }
-  voxelMesh.instanceMatrix.needsUpdate = true;
+  surfacePositions(surface, f, hello.voxel_size);
+  placeQuads(voxelMesh, surface.skin, surface.vertices);
   if (channelMesh) {
+    // Each channel piece in its wall voxel's frame (hello.fabrication.channels).
+    const at = new THREE.Vector3(), turn = new THREE.Quaternion(), place = new THREE.Matrix4();
     hello.fabrication.channels.forEach((seg, k) => {
       const i = seg.voxel;
-      pos.set(f.positions[3 * i], f.positions[3 * i + 1], f.positions[3 * i + 2]);
-      quat.set(f.quats[4 * i + 1], f.quats[4 * i + 2], f.quats[4 * i + 3], f.quats[4 * i]).normalize();
-      const offset = new THREE.Vector3(...seg.centre).applyQuaternion(quat);
-      matrix.compose(pos.add(offset), quat, new THREE.Vector3(...seg.size));
-      channelMesh.setMatrixAt(k, matrix);
+      at.set(f.positions[3 * i], f.positions[3 * i + 1], f.positions[3 * i + 2]);
+      turn.set(f.quats[4 * i + 1], f.quats[4 * i + 2], f.quats[4 * i + 3], f.quats[4 * i]).normalize();
+      at.add(new THREE.Vector3(...seg.centre).applyQuaternion(turn));
+      place.compose(at, turn, new THREE.Vector3(...seg.size));
+      channelMesh.setMatrixAt(k, place);
     });
     channelMesh.instanceMatrix.needsUpdate = true;
   }
   if (chamberMesh) {
+    placeQuads(chamberMesh, surface.walls, surface.vertices);
     // Darker the more inflated (1.0 -> 1.2 bar), as the still renderer does.
-    for (let j = 0; j < hello.chamber_cells; j++) {
-      const p = f.pressures[hello.chamber_index[j]];
+    const colour = chamberMesh.geometry.attributes.color;
+    surface.walls.forEach((q, k) => {
+      const p = f.pressures[hello.chamber_index[q.item - hello.voxels]];
       const inflation = Number.isFinite(p) ? Math.min(Math.max((p - 1e5) / 0.2e5, 0), 1) : 0;
       const g = 0.32 - 0.24 * inflation;
-      chamberMesh.setColorAt(j, new THREE.Color(g, g, g * 1.1));
-    }
-    chamberMesh.instanceMatrix.needsUpdate = true;
-    chamberMesh.instanceColor.needsUpdate = true;
+      for (let t = 0; t < 6; t++) colour.setXYZ(6 * k + t, g, g, g * 1.1);
+    });
+    colour.needsUpdate = true;
   }
   const c = centroidOf(f.positions, v);
   if (lastCentroid && $('follow').checked) {
