@@ -100,7 +100,7 @@ json ClientSession::hello_json(const TerrainGrid& ground) const {
   j["name"] = input_.name;
   j["kind"] = to_string(input_.kind);
   j["live"] = session_->live();
-  j["directed"] = session_->directed();
+  j["directed"] = session_->steerable();
   j["voxel_size"] = body.voxel_size;
   j["voxels"] = body.voxel_cells.size();
   j["chamber_cells"] = body.chamber_cells.size();
@@ -125,7 +125,7 @@ json ClientSession::hello_json(const TerrainGrid& ground) const {
   j["component_names"] = session_->component_names();
   j["component_units"] = session_->component_units();
   j["fitness_unit"] = session_->fitness_unit();
-  j["direction_deg"] = session_->directed() && !input_.config.task.directions.empty()
+  j["direction_deg"] = session_->steerable() && !input_.config.task.directions.empty()
                            ? json(input_.config.task.directions[0])
                            : json(nullptr);
   j["task"] = to_string(input_.config.task.kind);

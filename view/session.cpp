@@ -114,6 +114,8 @@ ViewInput load_view_input(const std::string& path, const ViewRequest& request) {
     in.body = in.trace_motion.body;
     in.config.task.control_rate = trace.frame_rate > 0.0 ? trace.frame_rate : 60.0;
     if (trace.direction_deg) {
+      // A trace records no task, only a target direction, which the directed task alone has;
+      // its replay is then that task's (steerable, direction sensor), asked of its module.
       in.config.task.kind = TaskKind::directed;
       in.config.task.directions = {*trace.direction_deg};
     }
@@ -198,7 +200,7 @@ Session::Session(const ViewInput& input, std::vector<SteerCommand> steering)
     append_trace_record(0);
     return;
   }
-  if (!steering_.empty() && !directed())
+  if (!steering_.empty() && !steerable())
     throw std::invalid_argument(input_.name + ": only a directed robot can be steered");
   live_ = std::make_unique<Live>();
   Live& l = *live_;
@@ -230,7 +232,7 @@ Session::Session(const ViewInput& input, std::vector<SteerCommand> steering)
 
 Session::~Session() = default;
 
-bool Session::directed() const {
+bool Session::steerable() const {
   return tasks::make_task(input_.config)->steerable();
 }
 
@@ -339,7 +341,7 @@ std::string Session::status_message() const {
 }
 
 void Session::steer(double direction_deg) {
-  if (!live_ || !directed()) throw std::logic_error("only a live directed robot can be steered");
+  if (!live_ || !steerable()) throw std::logic_error("only a live directed robot can be steered");
   if (finished()) throw std::logic_error("the simulation has ended; reset to steer again");
   if (!std::isfinite(direction_deg) || direction_deg < -180.0 || direction_deg > 180.0)
     throw std::invalid_argument("steering direction must be within [-180, 180] degrees");
@@ -453,7 +455,7 @@ void Session::save(const std::string& trace_path, Overwrite overwrite) const {
   if (!live_ || !result_) throw std::logic_error("a session is saved when its simulation ended");
   // The unit's configured direction (a steered run's targets are in its steering log).
   const std::optional<double> direction =
-      directed() ? std::optional<double>(live_->config.task.directions.at(0)) : std::nullopt;
+      steerable() ? std::optional<double>(live_->config.task.directions.at(0)) : std::nullopt;
   check_output_target(steering_log_path(trace_path), overwrite);
   live_->recorder.write(trace_path, input_.robot, *result_, control_rate(), direction, overwrite);
   write_file_atomically(steering_log_path(trace_path), steering_log_json(steering_, input_.name),

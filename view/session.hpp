@@ -108,7 +108,9 @@ class Session {
 
   const ViewInput& input() const { return input_; }
   bool live() const { return input_.live(); }
-  bool directed() const;
+  // The robot takes a target direction that can be changed while it runs (its task says so:
+  // tasks::Task::steerable); the page's "directed" field.
+  bool steerable() const;
   // Records of the whole session (control frames + 1 for the final state; a killed robot ends
   // earlier) and the records available so far.
   int planned_records() const { return planned_; }
