@@ -245,13 +245,19 @@ void step_batch(const Model& model, BatchState& b, BatchScratch& sc,
   const StepKernels& kernels = step_kernels(model.simd);
   const int p = b.padded;
   // the external forces by lane; ended and idle lanes take the first running lane's, so that
-  // they follow a plausible motion (their values are never read)
+  // they follow a plausible motion (their values are never read). All zero stays zero.
   int first = 0;
   while (!b.running[first]) ++first;
-  for (int k = 0; k < p; ++k) {
-    const std::span<const Vec3> f = ext_of(k < lanes && b.running[k] ? k : first);
-    for (int v = 0; v < model.voxel_count; ++v)
-      for (int c = 0; c < 3; ++c) sc.external_force[at(v, 3, c, p, k)] = f.empty() ? 0.0 : f[v][c];
+  const bool no_force = std::all_of(external_force.begin(), external_force.end(),
+                                    [](std::span<const Vec3> f) { return f.empty(); });
+  if (!(no_force && sc.external_force_zero)) {
+    for (int k = 0; k < p; ++k) {
+      const std::span<const Vec3> f = ext_of(k < lanes && b.running[k] ? k : first);
+      for (int v = 0; v < model.voxel_count; ++v)
+        for (int c = 0; c < 3; ++c)
+          sc.external_force[at(v, 3, c, p, k)] = f.empty() ? 0.0 : f[v][c];
+    }
+    sc.external_force_zero = no_force;
   }
   // 1. link pass (forces only, §2.12 step 1); a lane with a strain > 100 ends there with the
   //    link state the one-robot step restores (physics/step.cpp), and its slots take a running

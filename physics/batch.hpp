@@ -64,7 +64,8 @@ struct BatchState {
 struct BatchScratch {
   std::vector<double> end_load;  // link end loads (slot * 6 + c) * padded + k, [N] and [N m]
   std::vector<double> old_pos, part2_force, fric, collision_force,
-      external_force;  // (v * 3 + c) * padded + k, [m] and [N]
+      external_force;               // (v * 3 + c) * padded + k, [m] and [N]
+  bool external_force_zero = true;  // every external_force entry is +0
   // §2.5 link damping multipliers c_N, c_P of each link for previous_dt = Model::dt_f (every
   // lane's previous_dt is 0 or dt_f, and at 0 no link has a valid local velocity)
   std::vector<double> damping_neg, damping_pos;  // [sqrt(kg)/s] (links)
