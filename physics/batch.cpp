@@ -153,8 +153,13 @@ BatchState make_batch_state(const Model& model, std::span<const State> states) {
   b.lane.assign(states.begin(), states.end());
   b.running.assign(static_cast<std::size_t>(lanes), 1);
   if (steps_lanes_alone(model, lanes)) return b;
-  const int width = step_kernels(model.simd).batch_lanes;
-  b.padded = (lanes + width - 1) / width * width;
+  // the kernels' width that leaves fewer lanes idle (the wider one when equal)
+  const StepKernels& kernels = step_kernels(model.simd);
+  auto padded_at = [lanes](int width) { return (lanes + width - 1) / width * width; };
+  b.width = padded_at(kernels.batch_narrow.lanes) < padded_at(kernels.batch_wide.lanes)
+                ? kernels.batch_narrow.lanes
+                : kernels.batch_wide.lanes;
+  b.padded = padded_at(b.width);
   const std::size_t p = b.padded, nv = model.voxel_count, nl = model.link_count;
   b.pos.assign(nv * 3 * p, 0.0);
   b.lin_mom = b.ang_mom = b.pos;
@@ -243,6 +248,8 @@ void step_batch(const Model& model, BatchState& b, BatchScratch& sc,
   if (std::none_of(b.running.begin(), b.running.end(), [](std::uint8_t r) { return r != 0; }))
     return;
   const StepKernels& kernels = step_kernels(model.simd);
+  const StepKernels::Batch& passes =
+      b.width == kernels.batch_wide.lanes ? kernels.batch_wide : kernels.batch_narrow;
   const int p = b.padded;
   // the external forces by lane; ended and idle lanes take the first running lane's, so that
   // they follow a plausible motion (their values are never read). All zero stays zero.
@@ -262,7 +269,7 @@ void step_batch(const Model& model, BatchState& b, BatchScratch& sc,
   // 1. link pass (forces only, §2.12 step 1); a lane with a strain > 100 ends there with the
   //    link state the one-robot step restores (physics/step.cpp), and its slots take a running
   //    lane's state and end loads
-  const int diverged = kernels.batch_forces_pass(model, b, sc);
+  const int diverged = passes.forces_pass(model, b, sc);
   for (int k = 0; k < lanes; ++k) {
     if (!b.running[k] || !(diverged >> k & 1)) continue;
     const int from = finish_lane(b, k);
@@ -295,7 +302,7 @@ void step_batch(const Model& model, BatchState& b, BatchScratch& sc,
     }
   }
   // 3-9. the voxel passes; every lane advances its time (a non-finite one too, as step())
-  const int non_finite = kernels.batch_voxel_passes(model, b, sc);
+  const int non_finite = passes.voxel_passes(model, b, sc);
   for (int k = 0; k < lanes; ++k) {
     if (!b.running[k]) continue;
     State& s = b.lane[k];

@@ -7,7 +7,8 @@
 //
 // Layout ("element by lane"): component c of voxel or link e of lane k at
 // (e * components + c) * padded + k, where padded is K rounded up to the kernels' vector width
-// (Model::simd: scalar 1, sse2 / neon 2, avx2 4, avx512 8 lanes). Per lane, what differs between
+// (Model::simd: scalar 1, sse2 / neon 2, avx2 4, avx512 8 or 4 lanes, whichever leaves fewer
+// lanes idle: 4 for K <= 4 and 9-12). Per lane, what differs between
 // evaluations is handled per lane: link modes (a link whose lanes are in different modes computes
 // the large-angle frame and selects per lane), damping validity, floor contact and static friction
 // (per lane in scalar code, as in the one-robot passes), self-collision (each lane's own pair
@@ -16,9 +17,10 @@
 // end_lane() ends, keeps its state from then on and is no longer stepped; a batch whose lanes all
 // ended does nothing.
 //
-// What the measurement of docs/scaling.md ("Lanes across evaluations") found: 8 lanes gain
-// 1.4-1.7x per evaluation over the one-robot step on a full-width AVX-512 core, 4 lanes 1.1-1.2x,
-// and a batch of 1 runs the one-robot step itself (make_batch_state).
+// What docs/scaling.md ("Lanes across evaluations") measured on a full-width AVX-512 core: 8 or
+// 16 evaluations per step cost 0.77-0.85 of each stepped alone (a body whose batch fits the L2:
+// 0.67), 4 about the same as alone, 5 and 10 (lanes idle) more; a batch of 1 runs the one-robot
+// step itself.
 //
 // Only the pneuvox integrator is batched: a symplectic Model steps each lane with
 // physics::step() (same bits, no gain). Pure computation: no allocation in step_batch(), no
@@ -40,7 +42,8 @@ inline constexpr int kMaxBatchLanes = 16;
 
 struct BatchState {
   int lanes = 0;   // K
-  int padded = 0;  // element stride: K rounded up to the kernels' width (lanes >= K are idle)
+  int width = 0;   // evaluations per vector of its kernels (0: each lane steps alone)
+  int padded = 0;  // element stride: K rounded up to `width` (lanes >= K are idle)
   // Voxels: (v * 3 + c) * padded + k; orientation (v * 4 + c) * padded + k, (w, x, y, z).
   std::vector<double> pos;                    // [m]
   std::vector<double> lin_mom;                // [kg m/s]

@@ -51,9 +51,8 @@ constexpr StepKernels make_step_kernels(Simd simd) {
                      &symplectic_voxel_pass<L>,
                      &chamber_volume_lanes<L>,
                      &pressure_forces_lanes<L>,
-                     LB::W,
-                     &batch_link_pass<LB, LinkPass::forces>,
-                     &batch_voxel_passes<LB>};
+                     {LB::W, &batch_link_pass<LB, LinkPass::forces>, &batch_voxel_passes<LB>},
+                     {L::W, &batch_link_pass<L, LinkPass::forces>, &batch_voxel_passes<L>}};
 }
 
 }  // namespace

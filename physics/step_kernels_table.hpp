@@ -32,12 +32,17 @@ struct StepKernels {
   // (PneumaticsScratch::triangle_force)
   void (*pressure_forces)(const PneumaticsModel&, int chamber, float gauge,
                           std::span<const Vec3> positions, PneumaticsScratch&);
-  // The batched step (physics/batch.hpp): evaluations per vector of its passes, the pneuvox
-  // step's first link pass (forces only; the lanes with a strain > 100 as bits) and its voxel
-  // passes with the mid-step link pass (§2.12 steps 3-9; the non-finite lanes as bits).
-  int batch_lanes;
-  int (*batch_forces_pass)(const Model&, BatchState&, BatchScratch&);
-  int (*batch_voxel_passes)(const Model&, BatchState&, BatchScratch&);
+  // The batched step (physics/batch.hpp) at two lane widths, the widest of this instruction set
+  // and the one-robot passes' (equal except at avx512: 8 and 4): evaluations per vector, the
+  // pneuvox step's first link pass (forces only; the lanes with a strain > 100 as bits) and its
+  // voxel passes with the mid-step link pass (§2.12 steps 3-9; the non-finite lanes as bits).
+  struct Batch {
+    int lanes;
+    int (*forces_pass)(const Model&, BatchState&, BatchScratch&);
+    int (*voxel_passes)(const Model&, BatchState&, BatchScratch&);
+  };
+  Batch batch_wide;
+  Batch batch_narrow;
 };
 
 // The table of a width (`best` resolved to the widest this CPU runs; a width this build does not
