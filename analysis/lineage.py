@@ -61,7 +61,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.csv:
         print(",".join(cols))
         for e in line:
-            print(",".join(f"{e[c]:.10g}" if isinstance(e[c], float) else str(e[c]) for c in cols))
+            print(",".join(f"{e[c]:.10g}" if isinstance(e.get(c), float) else str(e.get(c, ""))
+                           for c in cols))
     else:
         me = line[0]
         print(f"lineage of id {ind} (generation {g}, fitness {me['fitness']:.4f}, status "
@@ -78,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"  <- chambers {e['chambers']} -> {prev_chambers}"
             parents = f"{e['parent1']},{e['parent2']}"
             print(f"{e['generation']:>6} {e['id']:>8} {e['fitness']:>12.4f} {e['status']:<17}"
-                  f" {e['voxels']:>6} {e['chambers']:>8} {e['species']:>7} {parents:>15}{change}")
+                  f" {e['voxels']:>6} {e['chambers']:>8} {e.get('species', '-'):>7} {parents:>15}{change}")
             if "note" in e:
                 print(f"       ({e['note']})")
             prev_chambers = e["chambers"]

@@ -6,6 +6,7 @@
 #include "common/config_identity.hpp"
 #include "common/config_schema.hpp"
 #include "common/input_file.hpp"
+#include "common/map_grid.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -682,6 +683,8 @@ Config parse_config(const std::string& toml_text, const std::string& source_name
   for (const auto& o : overrides) apply_override(config, o, set_keys, origin);
   check_task_keys(config, set_keys);
   check_consistency(config, source_name);
+  // The MAP-Elites grid's relations between keys (common/map_grid.hpp).
+  if (config_schema::search_map_elites(config)) map_grid(config, source_name);
   return config;
 }
 
@@ -767,8 +770,11 @@ const std::vector<TaskKind>& task_kinds() {
 }
 
 std::string experiment_name(const Config& config) {
-  // Controller learning is another experiment (docs/model.md §8.11): "gait-closed-learn".
-  const std::string learn = learning_on(config) ? "-learn" : "";
+  // Controller learning is another experiment (docs/model.md §8.11): "gait-closed-learn"; so is
+  // another search strategy (§8.12): "gait-open-map-elites", "gait-open-afpo".
+  std::string learn = learning_on(config) ? "-learn" : "";
+  if (config.search.strategy == SearchKind::map_elites) learn += "-map-elites";
+  if (config.search.strategy == SearchKind::afpo) learn += "-afpo";
   const TerrainConfig& t = config.terrain;
   if (t.kind == GroundKind::flat) return experiment_name(config.task) + learn;
   const std::string kind =

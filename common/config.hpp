@@ -32,6 +32,8 @@ enum class ControllerInit : std::uint8_t { random, oscillator };   // (§8.2, §
 enum class DistanceInput : std::uint8_t { center, pneuvox };       // (§6.2)
 enum class LearningMethod : std::uint8_t { none, es };             // (§8.11)
 enum class Inheritance : std::uint8_t { lamarckian, baldwinian };  // (§8.11)
+enum class SearchKind : std::uint8_t { neat, map_elites, afpo };   // (§8.12)
+enum class AfpoAge : std::uint8_t { lineage, body };               // (§8.12.3)
 
 template <>
 struct ChoiceNames<FailurePolicy> {
@@ -81,6 +83,14 @@ struct ChoiceNames<LearningMethod> {
 template <>
 struct ChoiceNames<Inheritance> {
   static constexpr std::array<const char*, 2> names = {"lamarckian", "baldwinian"};
+};
+template <>
+struct ChoiceNames<SearchKind> {
+  static constexpr std::array<const char*, 3> names = {"neat", "map_elites", "afpo"};
+};
+template <>
+struct ChoiceNames<AfpoAge> {
+  static constexpr std::array<const char*, 2> names = {"lineage", "body"};
 };
 
 struct RunConfig {
@@ -292,6 +302,35 @@ struct LearningConfig {
   double body_mutate_power_factor = 1.0;
 };
 
+// The search strategy of a run (docs/model.md §8.12, thesis 5.3.4-5.3.5): who selects and
+// reproduces each generation. "neat" (the thesis' speciation, the default) leaves [search],
+// [map_elites] and [afpo] out of the canonical text, so every existing config keeps its hash;
+// each other strategy's keys apply to it alone (an error to set for another strategy).
+struct SearchConfig {
+  SearchKind strategy = SearchKind::neat;
+};
+
+// MAP-Elites (§8.12.2): a grid over 1-3 named descriptors (common/map_grid.hpp), each with its
+// range [min, max) and number of bins; the batch of each generation is neat.pop_size.
+struct MapElitesConfig {
+  std::vector<std::string> descriptors = {"chamber_count", "actuated_fraction"};
+  std::vector<double> min = {0.5, 0.0};   // per descriptor, in its unit (§8.12.2)
+  std::vector<double> max = {10.5, 1.0};  // per descriptor, > min
+  std::vector<std::int64_t> bins = {10, 10};
+  std::int64_t max_cells = 10000;  // the grid's cells (product of bins) may not exceed this
+  // Probability that an offspring is crossover(A, B) + mutation of two uniformly drawn elites
+  // instead of a mutated copy of one.
+  double crossover_probability = 0.0;
+  // qd_score = sum over elites of (fitness - qd_offset), in the task's fitness unit.
+  double qd_offset = 0.0;
+};
+
+// Age-fitness Pareto optimisation (§8.12.3): neat.pop_size survivors, each generation
+// pop_size - 1 mutated offspring and one random newcomer.
+struct AfpoConfig {
+  AfpoAge age = AfpoAge::lineage;  // "body": age restarts when a mutation changes the body
+};
+
 struct Config {
   RunConfig run;
   TaskConfig task;
@@ -302,6 +341,9 @@ struct Config {
   BodyConfig body;
   NeatConfig neat;
   LearningConfig learning;
+  SearchConfig search;
+  MapElitesConfig map_elites;
+  AfpoConfig afpo;
 };
 
 // A config problem: message already names file, line, key and the allowed values.

@@ -5,6 +5,8 @@
 #include <string_view>
 #include <type_traits>
 
+#include "common/map_grid.hpp"
+
 namespace softevo::config_schema {
 
 bool terrain_not_flat(const Config& c) {
@@ -24,6 +26,12 @@ bool learning_on(const Config& c) {
 }
 bool supply_scaled(const Config& c) {
   return c.pneumatics.supply_pressure_scaling != SupplyScaling::none;
+}
+bool search_map_elites(const Config& c) {
+  return c.search.strategy == SearchKind::map_elites;
+}
+bool search_afpo(const Config& c) {
+  return c.search.strategy == SearchKind::afpo;
 }
 
 namespace {
@@ -81,6 +89,11 @@ bool controller_init_not_random(const Config& c) {
   return c.controller.init != ControllerInit::random;
 }
 
+bool search_not_neat(const Config& c) {
+  return c.search.strategy != SearchKind::neat;
+}
+constexpr const char* kNotMapElites = "search.strategy is not \"map_elites\"";
+
 }  // namespace
 
 std::vector<std::string> allowed_strings(const KeyDef& def) {
@@ -96,8 +109,9 @@ std::vector<std::string> allowed_strings(const KeyDef& def) {
       def.target);
 }
 
-const std::vector<std::string> kSections = {
-    "run", "task", "physics", "terrain", "pneumatics", "controller", "body", "neat", "learning"};
+const std::vector<std::string> kSections = {"run",        "task",       "physics",    "terrain",
+                                            "pneumatics", "controller", "body",       "neat",
+                                            "learning",   "search",     "map_elites", "afpo"};
 
 std::vector<KeyDef> schema(Config& c) {
   const std::vector<std::string> activations = {"sigmoid", "sin",     "abs",   "square",
@@ -111,6 +125,7 @@ std::vector<KeyDef> schema(Config& c) {
   auto& b = c.body;
   auto& l = c.learning;
   auto& n = c.neat;
+  auto& me = c.map_elites;
   std::vector<KeyDef> rows = {
       {.section = "run", .key = "seed", .target = &r.seed, .min = 0, .max = 9.0e15},
       {.section = "run", .key = "generations", .target = &r.generations, .min = 0, .max = 1.0e7},
@@ -515,6 +530,39 @@ std::vector<KeyDef> schema(Config& c) {
                  .min = 0,
                  .max = 1e6},
                 learning_on, "learning.method is not \"none\""),
+
+      // Search strategies (§8.12): each strategy's keys apply to it alone.
+      {.section = "search",
+       .key = "strategy",
+       .target = &c.search.strategy,
+       .printed_if = search_not_neat},
+      only_when({.section = "map_elites",
+                 .key = "descriptors",
+                 .target = &me.descriptors,
+                 .allowed = map_descriptor_names()},
+                search_map_elites, kNotMapElites),
+      only_when({.section = "map_elites", .key = "min", .target = &me.min}, search_map_elites,
+                kNotMapElites),
+      only_when({.section = "map_elites", .key = "max", .target = &me.max}, search_map_elites,
+                kNotMapElites),
+      only_when({.section = "map_elites", .key = "bins", .target = &me.bins, .min = 1, .max = 1e9},
+                search_map_elites, kNotMapElites),
+      only_when({.section = "map_elites",
+                 .key = "max_cells",
+                 .target = &me.max_cells,
+                 .min = 1,
+                 .max = 1e7},
+                search_map_elites, kNotMapElites),
+      only_when({.section = "map_elites",
+                 .key = "crossover_probability",
+                 .target = &me.crossover_probability,
+                 .min = 0,
+                 .max = 1},
+                search_map_elites, kNotMapElites),
+      only_when({.section = "map_elites", .key = "qd_offset", .target = &me.qd_offset},
+                search_map_elites, kNotMapElites),
+      only_when({.section = "afpo", .key = "age", .target = &c.afpo.age}, search_afpo,
+                "search.strategy is not \"afpo\""),
   };
   // The heightfield's numbers follow terrain.heightfield: their place in the canonical text.
   const auto heightfield = std::find_if(rows.begin(), rows.end(), [](const KeyDef& def) {

@@ -22,7 +22,7 @@ using Target =
                  std::vector<std::int64_t>*, std::vector<std::string>*, FailurePolicy*,
                  ControlLoop*, Integrator*, GroundKind*, HeightfieldKind*, TerrainResample*,
                  SupplyScaling*, CrossoverMethod*, ControllerInit*, DistanceInput*, LearningMethod*,
-                 Inheritance*>;
+                 Inheritance*, SearchKind*, AfpoAge*>;
 
 struct KeyDef {
   const char* section;
@@ -65,5 +65,7 @@ bool terrain_bumps(const Config& c);
 bool terrain_steps(const Config& c);
 bool learning_on(const Config& c);
 bool supply_scaled(const Config& c);
+bool search_map_elites(const Config& c);
+bool search_afpo(const Config& c);
 
 }  // namespace softevo::config_schema

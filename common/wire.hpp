@@ -33,6 +33,9 @@ enum class MessageKind : std::uint16_t {
   // The controller learning of a generation in flight, between two rounds (a run's checkpoint,
   // master/learning_rounds.hpp); never sent.
   learning_state = 7,
+  // The state of a search strategy other than NEAT (evo/search_strategy.hpp: its name, then its
+  // own payload); a run's checkpoint, never sent. NEAT's state stays a `population` message.
+  strategy_state = 8,
 };
 
 // Malformed, truncated or oversized input: the message names the field and the offsets.

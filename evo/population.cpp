@@ -330,18 +330,23 @@ Population Population::deserialize(std::span<const std::uint8_t> bytes, const Ev
   return pop;
 }
 
-void Population::adopt_controller(std::int64_t id, const Genome& learned) {
-  for (Individual& m : members_) {
+void adopt_learned_controller(std::vector<Individual>& members, std::int64_t id,
+                              const Genome& learned, const ControllerShape& shape) {
+  for (Individual& m : members) {
     if (m.id != id) continue;
     if (encode_genome(Genome{m.genome.cppn, {}, {}}) != encode_genome(Genome{learned.cppn, {}, {}}))
       throw std::invalid_argument("adopt_controller: genome " + std::to_string(id) +
                                   ": the learned genome has another body");
-    check_controller_shape(learned, params_.shape);
+    check_controller_shape(learned, shape);
     m.genome.controller = learned.controller;
     m.genome.step_sizes = learned.step_sizes;
     return;
   }
   throw std::invalid_argument("adopt_controller: no member with id " + std::to_string(id));
+}
+
+void Population::adopt_controller(std::int64_t id, const Genome& learned) {
+  adopt_learned_controller(members_, id, learned, params_.shape);
 }
 
 }  // namespace softevo::evo

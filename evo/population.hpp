@@ -41,6 +41,12 @@ using Viability = std::function<bool(const Genome&)>;
 // develop_body(genome.cppn, body).valid && .actuatable (§8.1 step 2).
 Viability robot_viability(const BodyConfig& body);
 
+// Lamarckian inheritance for any strategy's members (docs/model.md §8.11): member `id` takes the
+// controller values and step sizes of `learned`. Throws std::invalid_argument for an unknown
+// id or a learned genome of another body or shape.
+void adopt_learned_controller(std::vector<Individual>& members, std::int64_t id,
+                              const Genome& learned, const ControllerShape& shape);
+
 class Population {
  public:
   struct Best {

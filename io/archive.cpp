@@ -84,7 +84,16 @@ void GenerationRecord::check() const {
           : fitness_before.size() == n && learn_evaluations.size() == n &&
                 learned_genome.size() == n && learning_points >= 1 &&
                 learning_curve.size() == n * static_cast<std::size_t>(learning_points);
-  if (!same || !learning_same)
+  const auto table_ok = [](const StrategyTable& t) {
+    return t.columns.size() <= static_cast<std::size_t>(ArchiveLimits::strategy_columns) &&
+           (t.columns.empty() ? t.values.empty() : t.values.size() % t.columns.size() == 0);
+  };
+  const bool strategy_same =
+      strategy.empty() ||
+      (table_ok(strategy.rows) && table_ok(strategy.map) && strategy.rows.rows() == n &&
+       strategy.map.rows() <= static_cast<std::size_t>(ArchiveLimits::map_cells) &&
+       strategy.metrics.size() <= static_cast<std::size_t>(ArchiveLimits::strategy_columns));
+  if (!same || !learning_same || !strategy_same)
     throw ArchiveError("generation " + std::to_string(generation) +
                        ": record columns have different lengths");
   for (const std::string& c : component_columns)

@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include "common/strategy_report.hpp"
+
 namespace softevo::io {
 
 namespace h5 {
@@ -51,7 +53,13 @@ struct ArchiveLimits {
   static constexpr std::int64_t string_bytes = 4096;           // any string attribute
   // Points of one learning curve: strategy iterations (<= 10^5, common/config.cpp) + 1.
   static constexpr std::int64_t learning_points = 100'001;
+  // A search strategy's tables (/generations/G/strategy): columns of one table, and rows of
+  // the MAP-Elites map (map_elites.max_cells <= 10^7, common/config_schema.cpp).
+  static constexpr std::int64_t strategy_columns = 64;
+  static constexpr std::int64_t map_cells = 10'000'000;
 };
+// Layout version of /generations/G/strategy (docs/archive.md), its attribute schema_version.
+inline constexpr std::int64_t kStrategySchemaVersion = 1;
 
 // A missing, unreadable, foreign or malformed archive, or a failed write; the message names the
 // file, the object and the reason.
@@ -126,6 +134,11 @@ struct GenerationRecord {
   std::int64_t learning_points = 0;  // curve points per row (iterations + 1)
   std::vector<double> learning_curve;
   bool has_learning() const { return !fitness_before.empty(); }
+  // A search strategy other than NEAT (docs/model.md §8.12): its per-row columns (one row per
+  // row above), the MAP-Elites map after the generation and the generation's metrics, in the
+  // group /generations/G/strategy; empty for NEAT (species are the columns above), and in
+  // archives of earlier builds.
+  StrategyReport strategy;
   // Group attributes.
   double best = 0.0;
   double mean = 0.0;

@@ -70,6 +70,20 @@ void hash_generation_results(Fnv& h, const GenerationRecord& r) {
     }
     for (double c : r.learning_curve) h.f64(c);
   }
+  // Only a strategy other than NEAT hashes its group: every NEAT digest is unchanged.
+  if (!r.strategy.empty()) {
+    h.str(r.strategy.strategy);
+    for (const StrategyTable* t : {&r.strategy.rows, &r.strategy.map}) {
+      h.u64(t->columns.size());
+      for (const std::string& c : t->columns) h.str(c);
+      h.u64(t->values.size());
+      for (double v : t->values) h.f64(v);
+    }
+    for (const auto& [name, value] : r.strategy.metrics) {
+      h.str(name);
+      h.f64(value);
+    }
+  }
   h.f64(r.best);
   h.f64(r.mean);
   h.f64(r.sd);

@@ -129,6 +129,42 @@ std::vector<std::int64_t> Archive::generations() const {
   });
 }
 
+namespace {
+
+// /generations/G/strategy (docs/archive.md): every extent checked before it is read.
+StrategyReport read_strategy_group(const h5::Group& g, hsize_t n, const std::string& where) {
+  StrategyReport s;
+  s.strategy = g.read_string_attribute("name", kStringBytes);
+  const auto version = g.read_attribute<std::int64_t>("schema_version");
+  if (version != kStrategySchemaVersion)
+    throw ArchiveError(where + ": schema_version " + std::to_string(version) +
+                       ", this build reads " + std::to_string(kStrategySchemaVersion));
+  const auto table = [&](const std::string& name, std::optional<hsize_t> rows, hsize_t max_rows) {
+    StrategyTable t;
+    if (!g.has_link(name)) return t;
+    const h5::Dataset ds = g.open_dataset(name);
+    t.columns = split_columns(ds.read_string_attribute(kColumnsAttribute, kStringBytes));
+    const std::vector<hsize_t> dims = ds.dims();
+    if (dims.size() != 2 || dims[1] != t.columns.size() ||
+        dims[1] > static_cast<hsize_t>(ArchiveLimits::strategy_columns) ||
+        (rows && dims[0] != *rows) || dims[0] > max_rows)
+      throw ArchiveError(where + "/" + name + " is not [" +
+                         (rows ? std::to_string(*rows) : "rows <= " + std::to_string(max_rows)) +
+                         ", " + std::to_string(t.columns.size()) + "] (columns " +
+                         join_columns(t.columns) + ")");
+    t.values = ds.read<double>();
+    return t;
+  };
+  s.rows = table("rows", n, n);
+  s.map = table("map", std::nullopt, static_cast<hsize_t>(ArchiveLimits::map_cells));
+  const StrategyTable metrics = table("metrics", hsize_t{1}, 1);
+  for (std::size_t k = 0; k < metrics.columns.size(); ++k)
+    s.metrics.emplace_back(metrics.columns[k], metrics.values[k]);
+  return s;
+}
+
+}  // namespace
+
 GenerationRecord Archive::generation(std::int64_t gen) const {
   return archive_errors([&] {
     const std::string name = "generations/" + generation_group_name(gen);
@@ -202,6 +238,8 @@ GenerationRecord Archive::generation(std::int64_t gen) const {
       r.learning_curve = curve.read<double>();
       r.learning_points = static_cast<std::int64_t>(curve_dims[1]);
     }
+    if (g.has_link("strategy"))
+      r.strategy = read_strategy_group(g.open_group("strategy"), n, "/" + name + "/strategy");
     r.best = g.read_attribute<double>("best");
     r.mean = g.read_attribute<double>("mean");
     r.sd = g.read_attribute<double>("sd");

@@ -192,6 +192,28 @@ void write_checkpoint(const h5::File& file, const Checkpoint& checkpoint) {
                                    checkpoint.learning);
 }
 
+// A strategy table as a 2-D dataset with its column names (nothing for a table without columns).
+void write_strategy_table(const h5::Group& g, const std::string& name, const StrategyTable& t) {
+  if (t.columns.empty()) return;
+  g.write_dataset<double>(name, {static_cast<hsize_t>(t.rows()), t.columns.size()}, t.values)
+      .write_string_attribute(kColumnsAttribute, join_columns(t.columns), h5::Charset::ascii);
+}
+
+// /generations/G/strategy (docs/archive.md): a strategy other than NEAT.
+void write_strategy_group(const h5::Group& parent, const StrategyReport& s) {
+  const h5::Group g = parent.create_group("strategy");
+  g.write_string_attribute("name", s.strategy, Charset::utf8);
+  g.write_attribute<std::int64_t>("schema_version", kStrategySchemaVersion);
+  write_strategy_table(g, "rows", s.rows);
+  write_strategy_table(g, "map", s.map);
+  StrategyTable metrics;
+  for (const auto& [key, value] : s.metrics) {
+    metrics.columns.push_back(key);
+    metrics.values.push_back(value);
+  }
+  write_strategy_table(g, "metrics", metrics);
+}
+
 void write_generation_group(const h5::Group& parent, const std::string& name,
                             const GenerationRecord& record) {
   const h5::Group g = parent.create_group(name);
@@ -224,6 +246,7 @@ void write_generation_group(const h5::Group& parent, const std::string& name,
     g.write_dataset<double>("learning_curve", {n, static_cast<hsize_t>(record.learning_points)},
                             record.learning_curve);
   }
+  if (!record.strategy.empty()) write_strategy_group(g, record.strategy);
   g.write_attribute<double>("best", record.best);
   g.write_attribute<double>("mean", record.mean);
   g.write_attribute<double>("sd", record.sd);

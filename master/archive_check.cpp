@@ -8,7 +8,7 @@
 #include "common/config.hpp"
 #include "common/config_identity.hpp"
 #include "common/eval_types.hpp"
-#include "evo/population.hpp"
+#include "evo/search_strategy.hpp"
 #include "master/learning_rounds.hpp"
 #include "tasks/task.hpp"
 
@@ -171,14 +171,14 @@ ArchiveCheck check_archive(const io::Archive& archive) {
                 "/checkpoint is for generation " + std::to_string(cp->generation) +
                     ", generations_done = " + std::to_string(info.generations_done));
       } else if (config) {
-        const evo::Population p = evo::Population::deserialize(
+        const std::unique_ptr<evo::SearchStrategy> p = evo::restore_strategy(
             cp->population, *config, tasks::make_task(*config)->controller_inputs());
-        if (p.generation() != cp->generation)
+        if (p->generation() != cp->generation)
           problem(-1, "checkpoint",
-                  "/checkpoint population is at generation " + std::to_string(p.generation()) +
+                  "/checkpoint population is at generation " + std::to_string(p->generation()) +
                       ", its attribute says " + std::to_string(cp->generation));
         else if (!cp->learning.empty())  // throws as the resume would
-          GenerationLearning::deserialize(cp->learning, *config, p.params(), cp->generation);
+          GenerationLearning::deserialize(cp->learning, *config, p->params(), cp->generation);
       }
     }
   } catch (const std::exception& e) {

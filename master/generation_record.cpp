@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <utility>
 
@@ -144,6 +145,7 @@ GenerationSummary generation_summary(const io::GenerationRecord& rec, const task
       .best = rec.best,
       .mean = rec.mean,
       .species = rec.species_count,
+      .search = strategy_text(rec.strategy),
       .evaluations = work.simulated_units,
       .eval_wall_seconds = rec.eval_wall_seconds,
       .generation_seconds = generation_seconds,
@@ -162,6 +164,22 @@ GenerationSummary generation_summary(const io::GenerationRecord& rec, const task
       summary.max_abs_ok_fitness = std::max(summary.max_abs_ok_fitness, std::fabs(rec.fitness[i]));
   }
   return summary;
+}
+
+std::string strategy_text(const StrategyReport& report) {
+  char buf[128];
+  if (report.strategy == "map_elites") {
+    std::snprintf(buf, sizeof buf, "elites %lld (coverage %.1f%%) qd %.4g",
+                  static_cast<long long>(report.metric("num_elites")),
+                  100.0 * report.metric("coverage"), report.metric("qd_score"));
+    return buf;
+  }
+  if (report.strategy == "afpo") {
+    std::snprintf(buf, sizeof buf, "front %lld mean age %.1f",
+                  static_cast<long long>(report.metric("pareto_front")), report.metric("mean_age"));
+    return buf;
+  }
+  return report.strategy;
 }
 
 }  // namespace softevo::master

@@ -67,4 +67,8 @@ GenerationSummary generation_summary(const io::GenerationRecord& rec, const task
                                      const GenerationWork& work, double generation_seconds,
                                      const GenerationLearning* learning);
 
+// The progress line's figures of a strategy other than NEAT: "elites 34 (coverage 3.4%) qd
+// 118.2" for MAP-Elites, "front 5 mean age 2.3" for AFPO; "" for NEAT (an empty report).
+std::string strategy_text(const StrategyReport& report);
+
 }  // namespace softevo::master

@@ -65,10 +65,12 @@ std::string generation_line(const GenerationSummary& s, std::int64_t total_gener
   std::snprintf(head, sizeof head, "gen %6lld/%lld  best %10.4f%s  mean %10.4f%s  ",
                 static_cast<long long>(s.generation), static_cast<long long>(total_generations),
                 s.best, unit.c_str(), s.mean, unit.c_str());
-  char tail[160];
-  std::snprintf(tail, sizeof tail, "  species %3lld  eval/s %7.2f  elapsed %s  ETA %s",
-                static_cast<long long>(s.species), rate, duration_text(elapsed_seconds).c_str(),
-                duration_text(eta_seconds).c_str());
+  char species[32];
+  std::snprintf(species, sizeof species, "species %3lld", static_cast<long long>(s.species));
+  char tail[256];
+  std::snprintf(tail, sizeof tail, "  %s  eval/s %7.2f  elapsed %s  ETA %s",
+                s.search.empty() ? species : s.search.c_str(), rate,
+                duration_text(elapsed_seconds).c_str(), duration_text(eta_seconds).c_str());
   const std::string reused = s.reused > 0 ? "  reused " + std::to_string(s.reused) : "";
   std::string learned;
   if (s.learned_bodies > 0) {

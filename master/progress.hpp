@@ -26,6 +26,9 @@ struct GenerationSummary {
   double best = 0.0;
   double mean = 0.0;
   std::int64_t species = 0;
+  // A search strategy other than NEAT: its figures in place of the species (strategy_text of
+  // master/generation_record.hpp); "" for NEAT.
+  std::string search;
   std::int64_t evaluations = 0;     // work units simulated
   double eval_wall_seconds = 0.0;   // [s] evaluation phase
   double generation_seconds = 0.0;  // [s] whole generation incl. reproduction and archive

@@ -49,20 +49,6 @@ double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-int task_inputs(const Config& config) {
-  return tasks::make_task(config)->controller_inputs();
-}
-
-// What to do about an archive that fails its checks.
-std::string repair_hint(const std::string& out, const ArchiveCheck& check) {
-  const std::string kept =
-      check.consistent_generations == 0
-          ? "no generation passes them"
-          : "generations 0-" + std::to_string(check.consistent_generations - 1) + " pass them";
-  return "(" + kept + "; `softevo repair " + out +
-         " -o FIXED.h5` copies those into a new file to resume from)";
-}
-
 // generations_done of the archive at `out`, -1 if it cannot be read.
 std::int64_t generations_on_disk(const std::string& out) {
   try {
@@ -99,21 +85,6 @@ void commit_generation(const std::string& out, RunInfo& info, const GenerationRe
 
 }  // namespace
 
-std::string iso8601_now() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
-
-std::string host_name() {
-  char buf[256] = {0};
-  if (::gethostname(buf, sizeof buf - 1) != 0) return "unknown";
-  return buf;
-}
-
 std::optional<std::size_t> LocalExecutor::evaluate_any(
     const std::vector<ActiveGeneration>& generations) {
   // One unit at a time: the oldest generation is finished before any other is started.
@@ -130,280 +101,6 @@ std::optional<std::size_t> LocalExecutor::evaluate_any(
   }
   return a.run;
 }
-
-namespace {
-
-// The descriptors this process has open now (its own, MPI's, libraries'); 0 if unknown.
-std::size_t open_descriptors() {
-  std::error_code ec;
-  std::size_t n = 0;
-  for (auto it = std::filesystem::directory_iterator("/proc/self/fd", ec);
-       !ec && it != std::filesystem::directory_iterator(); it.increment(ec))
-    ++n;
-  return ec ? 0 : n;
-}
-
-}  // namespace
-
-std::uint64_t estimate_run_memory(const Config& config) {
-  const auto pop = static_cast<std::uint64_t>(std::max<std::int64_t>(config.neat.pop_size, 0));
-  // Every species keeps at least max(min_species_size, elitism) members (docs/model.md §8.5). The
-  // per-member figure was measured at the default 2, so only a larger minimum adds members: up
-  // to (minimum - 2) more for each of at most pop/2 species of 2 (issue 39: min_species_size
-  // grew a population of 4 by 300 MB/s and was not counted here).
-  const auto minimum = static_cast<std::uint64_t>(
-      std::max<std::int64_t>({config.neat.min_species_size, config.neat.elitism, 2}));
-  const std::uint64_t members = pop + pop / 2 * (minimum - 2);
-  std::uint64_t per_member = kBytesPerMember;
-  if (config.learning.method != LearningMethod::none)
-    per_member += kBytesPerLearningCandidate *
-                  static_cast<std::uint64_t>(std::max<std::int64_t>(config.learning.population, 0));
-  return kRunBaseBytes + members * per_member;
-}
-
-std::string check_run_memory(const std::vector<const Config*>& configs,
-                             const std::optional<AvailableMemory>& available) {
-  if (!available || configs.empty()) return "";
-  std::uint64_t total = 0;
-  for (const Config* c : configs) total += estimate_run_memory(*c);
-  const Config& first = *configs.front();
-  std::string what = configs.size() == 1
-                         ? "the run (neat.pop_size = " + std::to_string(first.neat.pop_size)
-                         : std::to_string(configs.size()) + " runs of this job (neat.pop_size = " +
-                               std::to_string(first.neat.pop_size) + " in the first";
-  if (first.learning.method != LearningMethod::none)
-    what += ", learning.population = " + std::to_string(first.learning.population);
-  what += ")";
-  const std::string keys =
-      "lower neat.pop_size (--population)" +
-      std::string(first.learning.method != LearningMethod::none ? " or learning.population" : "") +
-      (configs.size() > 1 ? ", or run fewer seeds per job" : "");
-  if (total > available->bytes)
-    throw StartupError(what + " needs about " + mebibytes(total) + " of memory on rank 0, but " +
-                       mebibytes(available->bytes) + " are available (" + available->where +
-                       "): " + keys + "; nothing was written");
-  if (total > available->bytes / 4 * 3)
-    return what + " needs about " + mebibytes(total) + " of memory on rank 0, close to the " +
-           mebibytes(available->bytes) + " available (" + available->where + "); if it runs out, " +
-           keys;
-  return "";
-}
-
-std::size_t descriptors_for_runs(std::size_t runs) {
-  return open_descriptors() + runs + kDescriptorsBesideRunLocks;
-}
-
-void reserve_descriptors(std::size_t runs) {
-  const std::size_t needed = descriptors_for_runs(runs);
-  struct rlimit limit {};
-  if (::getrlimit(RLIMIT_NOFILE, &limit) != 0) return;  // unknown: the opens will say
-  const auto fits = [needed](rlim_t l) { return l == RLIM_INFINITY || l >= needed; };
-  if (fits(limit.rlim_cur)) return;
-  if (fits(limit.rlim_max)) {
-    // The soft limit is this process's to raise up to the hard one: no need to ask the user.
-    limit.rlim_cur = static_cast<rlim_t>(needed);
-    if (::setrlimit(RLIMIT_NOFILE, &limit) == 0) return;
-  }
-  throw StartupError(
-      std::to_string(runs) + " runs in one job need about " + std::to_string(needed) +
-      " open file descriptors (one run lock each for the whole job, plus " +
-      std::to_string(needed - runs) +
-      " for this process, the archives being written and MPI), "
-      "but the limit is " +
-      std::to_string(limit.rlim_cur) + " (hard limit " +
-      (limit.rlim_max == RLIM_INFINITY ? std::string("unlimited")
-                                       : std::to_string(limit.rlim_max)) +
-      "): raise it (ulimit -n " + std::to_string(needed) +
-      " in the job script) or split the seeds over several jobs; nothing was written");
-}
-
-PreparedRun prepare_run(const Config& config, const RunOptions& options, int ranks) {
-  if (options.resume && options.overwrite)
-    throw StartupError(options.out_path + ": " + options.names.resume +
-                       " (continue this archive) and " + options.names.overwrite +
-                       " (replace it) contradict each other; give one of them");
-  // Every evaluation of the run stays within the work limits: refused here, not as a run of
-  // failed evaluations (or, before the limits, of days per evaluation).
-  try {
-    physics::check_run_work(config);
-  } catch (const physics::WorkLimitError& e) {
-    throw ConfigError(e.what());
-  }
-  PreparedRun run;
-  run.config = config;
-  run.config_text = canonical_text(config);
-  run.config_hash = config_hash(config);
-  run.options = options;
-  const std::string& out = options.out_path;
-  const std::string hash = hash_hex(run.config_hash);
-
-  RunInfo& info = run.info;
-  info.version = kVersion;
-  info.git_commit = kGitCommit;
-  info.physics_revision = physics::kPhysicsRevision;
-  info.seed = config.run.seed;
-  info.ranks = ranks;
-  info.program = options.program;
-  info.host = options.host.empty() ? host_name() : options.host;
-  info.start_time = iso8601_now();
-  info.config_hash = hash;
-  info.experiment_hash = hash_hex(experiment_hash(config));
-  info.experiment = experiment_name(config);
-  info.state = "running";
-
-  std::error_code ec;
-  // Why the archive cannot be written, when a --resume finds it on storage it may not write
-  // (read-only file system, no write permission): a complete, packed archive needs no write
-  // and is reported complete (exit 0, docs/archive.md); anything else fails with this reason.
-  std::optional<std::string> unwritable;
-  try {
-    check_output_path(out);
-  } catch (const ArchiveError& e) {
-    if (!(options.resume && fs::exists(out, ec) && ::access(directory_of(out).c_str(), W_OK) != 0))
-      throw StartupError(e.what());
-    unwritable = e.what();
-  }
-  try {
-    // No lock without write access: no run can write the archive there either.
-    if (!unwritable) run.lock.emplace(out, info.host);
-  } catch (const io::RunLockError& e) {
-    throw StartupError(e.what());
-  }
-  // A start that fails from here on leaves no lock file it created (issue 29: a failed --seeds
-  // job left one per run it had prepared). Returns disarm it: only a throw abandons the lock.
-  struct AbandonOnThrow {
-    std::optional<io::RunLock>& lock;
-    const int exceptions = std::uncaught_exceptions();
-    ~AbandonOnThrow() {
-      if (std::uncaught_exceptions() > exceptions && lock) lock->abandon();
-    }
-  } abandon_on_throw{run.lock};
-  // Only now, under the lock, is "does the archive exist" an answer that stays true.
-  const bool exists = fs::exists(out, ec);
-  std::vector<std::uint8_t> learning_state;  // of a checkpoint within a learning generation
-  if (exists && options.resume) {
-    try {
-      const Archive archive(out);
-      const ArchiveCheck check = check_archive(archive);
-      if (!check.ok())
-        throw StartupError(out + ": cannot resume: the archive fails its integrity checks:\n" +
-                           check.describe(out) + repair_hint(out, check));
-      const RunInfo old = archive.info();
-      // Everything but the run length must be the archive's (the experiment and the seed): the
-      // generations evolve the same whatever the target, so only run.generations may grow.
-      const std::string old_text = archive.config_text();
-      std::string differing;
-      int count = 0;
-      for (const KeyDifference& d : config_differences(old_text, run.config_text)) {
-        if (d.key == "run.generations") continue;
-        differing += std::string(count++ == 0 ? "" : "; ") + d.key + ": archive " +
-                     (d.first.empty() ? "(no such key)" : d.first) + ", this run " +
-                     (d.second.empty() ? "(no such key)" : d.second);
-      }
-      if (count > 0)
-        throw StartupError(
-            out + ": cannot resume: this run's config differs from the archive's in " +
-            std::to_string(count) + (count == 1 ? " key" : " keys") + " (" + differing +
-            "); only run.generations (" + options.names.generations +
-            ") may change on resume: leave out " + options.names.config + " and " +
-            options.names.overrides +
-            " to continue with the archive's config, or give the run another " + options.names.out);
-      run.run_length_changed = old_text != run.config_text;
-      if (old.physics_revision != physics::kPhysicsRevision)
-        throw StartupError(
-            out + ": cannot resume: the archive was simulated with physics revision " +
-            std::to_string(old.physics_revision) + ", this build simulates revision " +
-            std::to_string(physics::kPhysicsRevision) +
-            " (physics/revision.hpp); finish it with a build of its revision or "
-            "start a new run");
-      info.start_time = old.start_time;
-      info.generations_done = old.generations_done;
-      // The lock is ours now: a "running" archive was left by a run that died.
-      run.previous_run = previous_run_note(old, std::nullopt, config.run.generations);
-      if (old.generations_done >= config.run.generations) {
-        if (unwritable && (old.state != "complete" || !archive.self_contained()))
-          throw StartupError(*unwritable +
-                             " (the archive holds every generation, but recording "
-                             "its end needs write access)");
-        // Nothing to evaluate: the archive keeps the config it was written with.
-        run.read_only = unwritable.has_value();
-        run.already_complete = true;
-        run.run_length_changed = false;
-        run.info = old;
-        return run;
-      }
-      if (unwritable) throw StartupError(*unwritable);
-      const std::optional<Checkpoint> cp = archive.checkpoint();
-      if (cp && !cp->learning.empty()) {
-        if (cp->generation != old.generations_done)
-          throw StartupError(out + ": cannot resume: the learning checkpoint is for generation " +
-                             std::to_string(cp->generation) +
-                             ", generations_done = " + std::to_string(old.generations_done));
-        learning_state = cp->learning;
-      }
-      if (old.generations_done > 0) {
-        if (!cp || cp->generation != old.generations_done)
-          throw StartupError(out + ": cannot resume: no checkpoint for generation " +
-                             std::to_string(old.generations_done));
-        run.population.emplace(
-            evo::Population::deserialize(cp->population, config, task_inputs(config)));
-        if (run.population->generation() != cp->generation)
-          throw StartupError(out + ": cannot resume: checkpoint population is at generation " +
-                             std::to_string(run.population->generation()) + ", expected " +
-                             std::to_string(cp->generation));
-        // What the uninterrupted run would remember now: its last archived generation.
-        run.memory.remember(archive.generation(old.generations_done - 1));
-      }
-      run.resumed = true;
-    } catch (const ArchiveError& e) {
-      throw StartupError(std::string("cannot resume: ") + e.what());
-    } catch (const StartupError&) {
-      throw;
-    } catch (const std::exception& e) {
-      throw StartupError(out + ": cannot resume: bad checkpoint: " + e.what());
-    }
-  } else if (exists && !options.overwrite) {
-    throw StartupError(out + " exists: pass " + options.names.resume + " to continue it, " +
-                       options.names.overwrite + " to replace it, or choose another " +
-                       options.names.out);
-  }
-  if (!run.population)
-    run.population.emplace(evo::Population::create(config, task_inputs(config),
-                                                   static_cast<std::uint64_t>(config.run.seed)));
-  if (!learning_state.empty()) {
-    try {
-      run.learning.emplace(GenerationLearning::deserialize(
-          learning_state, config, run.population->params(), run.population->generation()));
-    } catch (const std::exception& e) {
-      throw StartupError(out + ": cannot resume: bad learning checkpoint: " + e.what());
-    }
-  }
-  return run;
-}
-
-namespace {
-
-// The end of a run whose every generation is archived, but whose end was not recorded (killed
-// before it, or a full disk then): state complete, packed.
-void finish_complete_run(PreparedRun& run) {
-  if (run.read_only) return;  // complete and packed: nothing to record (prepare_run checked)
-  const std::string& out = run.options.out_path;
-  try {
-    remove_archive_debris(out);
-    if (run.info.state != "complete" || !Archive(out).self_contained()) {
-      run.info.state = "complete";
-      if (run.info.end_time.empty()) run.info.end_time = iso8601_now();
-      finish_archive(out, run.info, run.options.archive_fault);
-    }
-    remove_archive_debris(out);
-  } catch (const std::exception& e) {
-    throw RunError(std::string("the end of the complete run could not be recorded (the archive "
-                               "holds every generation and is readable as it is): ") +
-                   e.what());
-  }
-}
-
-}  // namespace
 
 RunLoop::RunLoop(PreparedRun& run, int ranks, ProgressReporter& progress)
     : run_(run), progress_(progress), task_(tasks::make_task(run.config)) {
@@ -540,7 +237,7 @@ GenerationScheduler* RunLoop::continue_generation() {
 }
 
 void RunLoop::checkpoint_learning() {
-  const evo::Population& population = *run_.population;
+  const evo::SearchStrategy& population = *run_.population;
   io::update_checkpoint(
       run_.options.out_path, run_.info,
       Checkpoint{population.generation(), population.serialize(), learning_->serialize()},
@@ -573,12 +270,12 @@ void RunLoop::check_failures(const GenerationScheduler& scheduler) const {
 void RunLoop::end_generation() {
   guarded([&] {
     GenerationScheduler& scheduler = *scheduler_;
-    evo::Population& population = *run_.population;
+    evo::SearchStrategy& population = *run_.population;
     const double eval_seconds = seconds_since(t_eval_);
     check_failures(scheduler);
     const GenerationLearning* learning = learning_ ? &*learning_ : nullptr;
     const std::vector<GenomeOutcome> evaluated = evaluated_outcomes(scheduler, learning);
-    const GenerationRecord rec = generation_record(GenerationInputs{
+    GenerationRecord rec = generation_record(GenerationInputs{
         .generation = scheduler.generation(),
         .task = *task_,
         .members = population.members(),
@@ -594,6 +291,9 @@ void RunLoop::end_generation() {
         .reused_units = static_cast<std::int64_t>(plan_.reused()) * task_->units(),
     };
     reproduce(rec);
+    // What the strategy made of the generation (MAP-Elites' cells and map, AFPO's ages) is
+    // archived with it; NEAT's species are the rows' own columns.
+    rec.strategy = population.report();
     commit_generation(
         run_.options.out_path, run_.info, rec, stats_row(rec, work),
         Checkpoint{.generation = population.generation(), .population = population.serialize()},
@@ -607,14 +307,14 @@ void RunLoop::end_generation() {
 }
 
 void RunLoop::reproduce(const GenerationRecord& rec) {
-  evo::Population& population = *run_.population;
+  evo::SearchStrategy& population = *run_.population;
   try {
     // Lamarckian inheritance: the learned controllers are what reproduces (§8.11).
     if (learning_ && run_.config.learning.inheritance == Inheritance::lamarckian)
       for (std::size_t r = 0; r < rec.size(); ++r)
         if (rec.learned_genome[r] != rec.genome[r])
           population.adopt_controller(rec.id[r], evo::decode_genome(rec.learned_genome[r]));
-    population.advance(evaluations(rec));
+    population.tell(evaluations(rec));
   } catch (const std::exception& e) {
     throw RunError("generation " + std::to_string(rec.generation) +
                    ": reproduction failed: " + e.what());

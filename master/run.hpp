@@ -1,7 +1,8 @@
-// The generation loop of a distributed run, MPI-free (docs/model.md §8.1, docs/model.md §8.10):
-//   members = population.members()           (generation g, immigrants included)
+// The generation loop of a distributed run, MPI-free (docs/model.md §8.1, §8.10, §8.12):
+//   members = strategy.ask()                 (generation g, immigrants included)
 //   evaluate every work unit                 (UnitExecutor: in-process or over MPI)
-//   archive generation g, population.advance(results), checkpoint the NEXT population
+//   strategy.tell(results), archive generation g with the strategy's report, checkpoint the
+//   strategy's NEXT state
 //                                            (io/archive.hpp: its segment, then a new root)
 //   at the end (or a stop): pack the archive into one file
 // The MPI master driver (master/mpi_driver.cpp) only supplies an executor that farms the units
@@ -20,7 +21,7 @@
 #include "common/available_memory.hpp"
 #include "common/config.hpp"
 #include "common/eval_types.hpp"
-#include "evo/population.hpp"
+#include "evo/search_strategy.hpp"
 #include "io/archive.hpp"
 #include "io/run_lock.hpp"
 #include "master/learning_rounds.hpp"
@@ -118,7 +119,9 @@ struct PreparedRun {
   std::uint64_t config_hash = 0;
   RunOptions options;
   io::RunInfo info;
-  std::optional<evo::Population> population;
+  // The search strategy (evo/search_strategy.hpp, search.strategy): NEAT's population, the
+  // MAP-Elites map or the AFPO population, with the members of the next generation.
+  std::unique_ptr<evo::SearchStrategy> population;
   bool already_complete = false;
   // --resume of a complete, packed archive on storage this process may not write: nothing is
   // written, no lock is taken.
@@ -143,6 +146,7 @@ struct PreparedRun {
   StatusCounts statuses_this_start{};
 };
 
+// Resource checks (master/run_limits.cpp).
 // Descriptors a job needs beside one run lock per run: this process's configs, the archive
 // files open while one is written, HDF5's probe pipes, stdio (MPI's are counted as open).
 inline constexpr std::size_t kDescriptorsBesideRunLocks = 64;
@@ -172,12 +176,15 @@ std::uint64_t estimate_run_memory(const Config& config);
 std::string check_run_memory(const std::vector<const Config*>& configs,
                              const std::optional<AvailableMemory>& available);
 
-// Start-up: validates the output path, takes the run lock (a second run on the same archive
-// fails here, naming the holder), loads the checkpoint for --resume (the experiment hash and
-// the seed must match the archive's: a finished run can be extended with more generations),
-// creates the population. Throws StartupError (nothing touched) or
-// ConfigError. Writes nothing but the lock file, which a failure removes again if it created it.
+// Start-up (master/run_start.cpp): validates the output path, takes the run lock (a second run on
+// the same archive fails here, naming the holder), loads the checkpoint for --resume (the
+// experiment hash and the seed must match the archive's: a finished run can be extended with more
+// generations), creates the population. Throws StartupError (nothing touched) or ConfigError.
+// Writes nothing but the lock file, which a failure removes again if it created it.
 PreparedRun prepare_run(const Config& config, const RunOptions& options, int ranks);
+// The end of a prepared run whose every generation is archived but whose end was not recorded
+// (killed before it, or a full disk then): state complete, packed. RunError on failure.
+void finish_complete_run(PreparedRun& run);
 // The loop. Creates or updates the archive; throws RunError (the archive then holds the last
 // consistent checkpoint; its state is set to "interrupted" when possible).
 RunOutcome execute_run(PreparedRun& run, UnitExecutor& executor, ProgressReporter& progress);

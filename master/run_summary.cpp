@@ -43,6 +43,22 @@ Champion champion_of(const io::GenerationRecord& r) {
   return c;
 }
 
+// The best elite of a MAP-Elites map (columns cell, id, fitness, generation, ...; the first
+// in cell order on ties); nothing for another table. Elites are robots of status ok.
+std::optional<Champion> best_elite(const StrategyTable& map) {
+  if (map.rows() == 0 || map.columns.size() < 4 || map.columns[1] != "id" ||
+      map.columns[2] != "fitness" || map.columns[3] != "generation")
+    return std::nullopt;
+  const std::size_t k = map.columns.size();
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < map.rows(); ++i)
+    if (map.values[i * k + 2] > map.values[best * k + 2]) best = i;
+  return Champion{.generation = static_cast<std::int64_t>(map.values[best * k + 3]),
+                  .id = static_cast<std::int64_t>(map.values[best * k + 1]),
+                  .fitness = map.values[best * k + 2],
+                  .status = "ok"};
+}
+
 // The parts read generation by generation: statuses, champion, learning.
 void add_generations(const io::Archive& archive, RunSummary& s) {
   StatusMap all_statuses, last_statuses;
@@ -62,7 +78,9 @@ void add_generations(const io::Archive& archive, RunSummary& s) {
       if (g == gens.back() && r.size() > 0) {
         s.champion = champion_of(r);
         s.champion->generation = g;
+        if (const auto elite = best_elite(r.strategy.map)) s.champion = elite;
       }
+      if (!r.strategy.empty()) s.strategy_metrics.push_back({g, r.strategy.metrics});
     }
   } catch (const io::ArchiveError&) {
   }
@@ -99,6 +117,7 @@ RunSummary summarize_run(const std::string& path) {
     const Config config = parse_config(archive.config_text(), path + ":/config");
     generations = config.run.generations;
     s.fitness_unit = tasks::make_task(config)->fitness_unit();
+    s.strategy = to_string(config.search.strategy);
   } catch (const std::exception&) {
   }
   s.state_note = previous_run_note(s.info, s.lock_holder, generations);

@@ -43,8 +43,15 @@ struct LearningTotals {
   double mean_gain() const;  // 0 when no body learned
 };
 
+// A search strategy's metrics of one generation (docs/model.md §8.12; none for NEAT).
+struct StrategyMetrics {
+  std::int64_t generation = 0;
+  std::vector<std::pair<std::string, double>> metrics;  // num_elites, coverage, qd_score, ...
+};
+
 struct RunSummary {
   io::RunInfo info;
+  std::string strategy = "neat";  // search.strategy of the archived config
   ArchiveCheck check;
   // "running" is what a live run and a dead one both leave; the run lock tells them apart:
   // its holder ("pid 4242 on node17"), nothing if the lock is free.
@@ -62,6 +69,9 @@ struct RunSummary {
   std::vector<StatusCount> last_generation_statuses;
   std::optional<Champion> champion;
   std::optional<LearningTotals> learning;  // a learning run's
+  // Per generation, for a strategy other than NEAT. The champion of a MAP-Elites run is the
+  // best elite of the last map (the last generation's rows are only its batch of offspring).
+  std::vector<StrategyMetrics> strategy_metrics;
 };
 
 // Reads the archive at `path` (and its run lock). Throws io::ArchiveError only when the archive

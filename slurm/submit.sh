@@ -14,6 +14,9 @@
 #   the site settings of slurm/site.sh (partition, account, memory, modules, launcher).
 #   slurm/submit.sh --experiments gait-rough-open,gait-rough-closed --seeds 1-10
 #                                        # any experiments (configs/<name>.toml), seeds A-B each
+#   slurm/submit.sh --experiments gait-open,gait-open-map-elites,gait-open-afpo --seeds 1-10
+#                                        # search strategies x seeds (docs/guide.md, "Search
+#                                        # strategies"): NEAT, MAP-Elites, AFPO, 10 seeds each
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 while [ $# -gt 0 ]; do

@@ -1,5 +1,5 @@
-// `softevo export RUN.h5 [--generation G] [--best | --id ID] -o robot.json [--json]`: one
-// archived individual as a `softevo.robot/1` file. The body is re-developed from the archived
+// `softevo export RUN.h5 [--generation G] [--best | --id ID | --cell I,J] -o robot.json [--json]`:
+// one archived individual as a `softevo.robot/1` file. The body is re-developed from the archived
 // genome with the archived config (record inputs, not outputs: docs/architecture.md §1). The
 // default (and --best) is the highest fitness of the generation, the lowest id winning ties
 // (§8.1 step 5: first wins), as for render and replay. The file's `evaluation` block carries the
@@ -20,6 +20,7 @@
 #include "evo/genome.hpp"
 #include "io/archive.hpp"
 #include "tools/commands.hpp"
+#include "tools/elite_cell.hpp"
 #include "worker/evaluate.hpp"
 
 namespace softevo::cli {
@@ -31,6 +32,7 @@ void register_export(CLI::App& app, int& exit_code) {
     std::int64_t generation = -1;
     bool best = false;
     std::int64_t id = -1;
+    std::string cell;
     std::string out;
     bool force = false;
     bool json = false;
@@ -45,15 +47,24 @@ void register_export(CLI::App& app, int& exit_code) {
   auto* id =
       cmd->add_option("--id", a->id, "the individual with this genome id")->check(at_least(0));
   best->excludes(id);
+  auto* cell = cmd->add_option("--cell", a->cell,
+                               "a MAP-Elites run: the elite of this cell of the generation's map "
+                               "(one 0-based bin per descriptor, e.g. 2,3)");
+  cell->excludes(best)->excludes(id);
   cmd->add_option("-o,--output,--out", a->out, "output robot file (.json)")->required();
   cmd->add_flag("--force", a->force, "replace an existing output file");
   cmd->add_flag("--json", a->json, "print one JSON object");
   cmd->callback([&exit_code, a] {
-    a->best = a->id < 0;
     const io::Archive archive(a->path);
     const std::vector<std::int64_t> gens = archive.generations();
     if (gens.empty()) throw io::ArchiveError(a->path + ": no evaluated generation");
-    const std::int64_t g = a->generation >= 0 ? a->generation : gens.back();
+    std::int64_t g = a->generation >= 0 ? a->generation : gens.back();
+    if (!a->cell.empty()) {  // the elite's row: the generation that evaluated it
+      const EliteRow elite = elite_of_cell(archive, a->cell, g);
+      a->id = elite.id;
+      g = elite.generation;
+    }
+    a->best = a->id < 0;
     const io::GenerationRecord rec = archive.generation(g);
     std::size_t row = rec.size();
     for (std::size_t i = 0; i < rec.size(); ++i) {

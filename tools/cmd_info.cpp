@@ -73,6 +73,7 @@ void register_info(CLI::App& app, int& exit_code) {
                                        ? nlohmann::ordered_json(*summary.checkpoint_generation)
                                        : nlohmann::ordered_json();
       j["experiment_hash"] = info.experiment_hash;
+      j["strategy"] = summary.strategy;
       j["fitness_digest"] = summary.fitness_digest;
       j["content_digest"] = summary.content_digest;
       j["status_counts"] = status_json(summary.statuses);
@@ -101,6 +102,11 @@ void register_info(CLI::App& app, int& exit_code) {
                         {"sd", s.sd},
                         {"species_count", static_cast<std::int64_t>(s.species_count)},
                         {"evaluations_per_second", s.evaluations_per_second}});
+      // A strategy other than NEAT: its metrics per generation (docs/model.md §8.12).
+      for (const master::StrategyMetrics& m : summary.strategy_metrics)
+        for (auto& g : gens)
+          if (g["generation"] == m.generation)
+            for (const auto& [name, value] : m.metrics) g[name] = value;
       j["config"] = summary.config_text;
       auto& integrity = j["integrity"];
       integrity["ok"] = check.ok();
@@ -119,6 +125,7 @@ void register_info(CLI::App& app, int& exit_code) {
       std::printf("experiment       %s (hash %s), seed %lld, config hash %s\n",
                   shown(info.experiment).c_str(), shown(info.experiment_hash).c_str(),
                   static_cast<long long>(info.seed), shown(info.config_hash).c_str());
+      std::printf("search strategy  %s\n", summary.strategy.c_str());
       std::printf("state            %s, %lld generations done%s\n", shown(info.state).c_str(),
                   static_cast<long long>(info.generations_done),
                   holder ? (" (written now by " + shown(*holder) + ")").c_str() : "");
@@ -177,6 +184,17 @@ void register_info(CLI::App& app, int& exit_code) {
         std::printf("%10lld %14.6g %14.6g %14.6g %8lld %10.3g\n",
                     static_cast<long long>(s.generation), s.best, s.mean, s.sd,
                     static_cast<long long>(s.species_count), s.evaluations_per_second);
+      if (!summary.strategy_metrics.empty()) {
+        std::printf("\n%10s", "generation");
+        for (const auto& [name, value] : summary.strategy_metrics.front().metrics)
+          std::printf(" %14s", name.c_str());
+        std::printf("\n");
+        for (const master::StrategyMetrics& m : summary.strategy_metrics) {
+          std::printf("%10lld", static_cast<long long>(m.generation));
+          for (const auto& [name, value] : m.metrics) std::printf(" %14.6g", value);
+          std::printf("\n");
+        }
+      }
       if (*verbose)
         std::printf("\n# resolved config\n%s",
                     printable(summary.config_text, Newlines::keep).c_str());

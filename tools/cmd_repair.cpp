@@ -13,7 +13,7 @@
 #include "common/config.hpp"
 #include "common/printable.hpp"
 #include "common/safe_write.hpp"
-#include "evo/population.hpp"
+#include "evo/search_strategy.hpp"
 #include "io/archive.hpp"
 #include "master/archive_check.hpp"
 #include "tasks/task.hpp"
@@ -30,7 +30,7 @@ std::vector<evo::Evaluation> evaluations_of(const io::GenerationRecord& r) {
   return e;
 }
 
-std::vector<std::int64_t> sorted_member_ids(const evo::Population& population) {
+std::vector<std::int64_t> sorted_member_ids(const evo::SearchStrategy& population) {
   std::vector<std::int64_t> ids;
   for (const evo::Individual& m : population.members()) ids.push_back(m.id);
   std::sort(ids.begin(), ids.end());
@@ -45,9 +45,11 @@ std::int64_t write_repaired(const io::Archive& in, std::int64_t keep, const std:
   io::RunInfo info = in.info();
   info.generations_done = 0;
   info.state = "interrupted";
-  evo::Population population =
-      evo::Population::create(config, tasks::make_task(config)->controller_inputs(),
-                              static_cast<std::uint64_t>(config.run.seed));
+  // The run's search strategy (NEAT's population, the MAP-Elites map, AFPO), replayed.
+  const std::unique_ptr<evo::SearchStrategy> strategy =
+      evo::make_strategy(config, tasks::make_task(config)->controller_inputs(),
+                         static_cast<std::uint64_t>(config.run.seed));
+  evo::SearchStrategy& population = *strategy;
   AtomicOutput output(out_path, Overwrite::refuse);
   // Written as a run writes (segments beside the temporary), then packed into the one file
   // that is renamed into place.
@@ -69,7 +71,7 @@ std::int64_t write_repaired(const io::Archive& in, std::int64_t keep, const std:
                    static_cast<long long>(g), static_cast<long long>(g) - 1);
       break;
     }
-    population.advance(evaluations_of(r));
+    population.tell(evaluations_of(r));
     const io::StatsRow stats{
         static_cast<double>(g),
         r.best,

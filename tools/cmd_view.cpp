@@ -19,6 +19,7 @@
 #include "common/round_trip.hpp"
 #include "common/safe_write.hpp"
 #include "tools/commands.hpp"
+#include "tools/elite_cell.hpp"
 #include "view/client_session.hpp"
 #include "view/export_html.hpp"
 #include "view/server.hpp"
@@ -34,6 +35,7 @@ struct ViewArgs {
   std::string input;
   view::ViewRequest request;
   bool best = false;
+  std::string cell;  // a MAP-Elites run: the elite of this cell (tools/elite_cell.hpp)
   int port = 8765;
   std::string bind = "127.0.0.1";
   bool open = false;
@@ -173,8 +175,14 @@ void register_view(CLI::App& app, int& exit_code) {
       ->check(at_least(0));
   auto* id_opt =
       cmd->add_option("--id", args->request.id, "archive: individual id")->check(at_least(0));
-  cmd->add_flag("--best", args->best, "archive: the generation's best individual (default)")
-      ->excludes(id_opt);
+  auto* best_opt =
+      cmd->add_flag("--best", args->best, "archive: the generation's best individual (default)")
+          ->excludes(id_opt);
+  cmd->add_option("--cell", args->cell,
+                  "archive of a MAP-Elites run: the elite of this cell of the generation's map "
+                  "(one 0-based bin per descriptor, e.g. 2,3)")
+      ->excludes(id_opt)
+      ->excludes(best_opt);
   cmd->add_option("--config", args->request.config_file,
                   "robot file: config to simulate with (default: the robot file's run config, "
                   "else the built-in thesis values)");
@@ -219,6 +227,12 @@ void register_view(CLI::App& app, int& exit_code) {
     if (args->request.seconds &&
         !(*args->request.seconds >= 0.0 && *args->request.seconds <= 3600.0))
       throw std::invalid_argument("view: --seconds must be within [0, 3600]");
+    if (!args->cell.empty()) {
+      const EliteRow elite =
+          elite_of_cell(io::Archive(args->input), args->cell, args->request.generation);
+      args->request.generation = elite.generation;
+      args->request.id = elite.id;
+    }
     exit_code = run_view(*args);
   });
 }

@@ -24,7 +24,9 @@ class Generation:
 
     generation: its number (0-based); generations: the run's total; best, mean, sd: fitness of
     its individuals [fitness_unit: cm for gait and directed, rad for rotate]; species: species
-    count; individuals: how many were archived; status_counts: {status name: count};
+    count; strategy_metrics: {name: value} of a search strategy other than NEAT (MAP-Elites
+    num_elites, coverage, qd_score, ...; docs/model.md §8.12), empty for NEAT; individuals: how
+    many were archived; status_counts: {status name: count};
     eval_wall_seconds: wall time of its evaluation [s]; best_id: the id of
     the best individual; best_robot: it as a Robot (its archived genome developed with the
     run's config, as the run evaluated it, with the run's evaluation settings as `softevo
@@ -38,6 +40,7 @@ class Generation:
     mean: float
     sd: float
     species: int
+    strategy_metrics: dict
     individuals: int
     status_counts: dict
     eval_wall_seconds: float
@@ -54,11 +57,19 @@ class Generation:
         return d
 
 
-def _resolve(config, overrides, generations, population, seed):
+# search.strategy's names (docs/model.md §8.12).
+STRATEGIES = ("neat", "map_elites", "afpo")
+
+
+def _resolve(config, overrides, generations, population, seed, strategy=None):
     """(Config, name for the default archive) from a path or a Config, with the shorthands."""
     from . import _override_list, _existing_file  # the package's helpers
 
     extra = _override_list(overrides)
+    if strategy is not None:
+        if strategy not in STRATEGIES:
+            raise ValueError(f"strategy must be one of {', '.join(STRATEGIES)}, got {strategy!r}")
+        extra.append(f"search.strategy={strategy}")
     for key, value in (("run.generations", generations), ("neat.pop_size", population),
                        ("run.seed", seed)):
         if value is not None:
@@ -88,11 +99,12 @@ class Evolution:
                  *, generations: int | None = None, population: int | None = None,
                  seed: int | None = None,
                  overrides: Mapping[str, object] | Iterable[str] | None = None,
-                 resume: bool = False, overwrite: bool = False, progress: bool = True):
+                 resume: bool = False, overwrite: bool = False, progress: bool = True,
+                 strategy: str | None = None):
         if not isinstance(progress, bool):
             raise TypeError(f"progress must be True or False, got {progress!r}")
         self.progress = progress
-        self.config, name = _resolve(config, overrides, generations, population, seed)
+        self.config, name = _resolve(config, overrides, generations, population, seed, strategy)
         if workers is None:
             workers = _softevo._available_cores()
         if (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1
@@ -168,14 +180,17 @@ def evolve(config, workers: int | None = None, out: str | os.PathLike | None = N
            generations: int | None = None, population: int | None = None,
            seed: int | None = None,
            overrides: Mapping[str, object] | Iterable[str] | None = None,
-           resume: bool = False, overwrite: bool = False, progress: bool = True) -> Run:
+           resume: bool = False, overwrite: bool = False, progress: bool = True,
+           strategy: str | None = None) -> Run:
     """Evolve robots: the run softevo-mpi and `softevo evolve` make of the same config, in this
     process on `workers` threads (default: every core this process may use).
 
     config: a config file path or a softevo.Config. out: the run archive (default
     runs/<config name>-<seed, 2 digits>.h5, as the command line; its folder is created).
     generations, population, seed: shorthands for run.generations, neat.pop_size, run.seed;
-    overrides: further keys as for load_config. resume: continue `out` from its last
+    overrides: further keys as for load_config. strategy: the search strategy, "neat" (the
+    config's default), "map_elites" or "afpo" (search.strategy; their keys go in overrides,
+    e.g. {"map_elites.bins": [5, 5]}). resume: continue `out` from its last
     checkpoint (a finished run may be extended with a larger `generations`); overwrite:
     replace an existing `out`. callback(generation) is called after each archived generation
     with a softevo.Generation; returning False stops the run there (interrupted, resumable).
@@ -189,7 +204,7 @@ def evolve(config, workers: int | None = None, out: str | os.PathLike | None = N
     """
     with Evolution(config, workers, out, generations=generations, population=population,
                    seed=seed, overrides=overrides, resume=resume, overwrite=overwrite,
-                   progress=progress) as evo:
+                   progress=progress, strategy=strategy) as evo:
         for gen in evo:
             if callback is not None and callback(gen) is False:
                 break

@@ -9,7 +9,7 @@ import numpy as np
 
 from . import _softevo
 
-_FIXED_COLUMNS = ("generation", "id", "parent1", "parent2", "species", "status_code",
+_FIXED_COLUMNS = ("generation", "id", "parent1", "parent2", "status_code",
                   "fitness", "voxels", "chambers", "wall_seconds", "worker_rank")
 
 
@@ -128,7 +128,9 @@ class Run:
     def individuals(self):
         """One row per individual of every generation (generations ascending, ids ascending).
 
-        Columns: generation, id, parent1, parent2 (-1: none), species, status (name),
+        Columns: generation, id, parent1, parent2 (-1: none), species (NEAT; another search
+        strategy has its own columns there: MAP-Elites cell, placed and its descriptors, AFPO
+        age, pareto_rank and survived, docs/model.md §8.12), status (name),
         status_code, fitness, voxels, chambers, wall_seconds, worker_rank, reused_from (-1:
         simulated in its generation, else the id whose result the row repeats), then the archived
         components (the task's named components of every work unit; for a task with several
@@ -145,8 +147,17 @@ class Run:
         names = {int(code): _softevo.status_name(int(code)) for code in np.unique(codes)}
         columns["status"] = np.array([names[int(x)] for x in codes], dtype=object)
         columns["reused_from"] = c["reused_from"]
-        order = ["generation", "id", "parent1", "parent2", "species", "status", "status_code",
-                 "fitness", "voxels", "chambers", "wall_seconds", "worker_rank", "reused_from"]
+        order = ["generation", "id", "parent1", "parent2"]
+        if "species" in c:  # NEAT's own column (docs/model.md §8.4)
+            columns["species"] = c["species"]
+            order.append("species")
+        # Another search strategy's columns in its place (docs/model.md §8.12): MAP-Elites cell,
+        # placed and the descriptors, AFPO age, pareto_rank and survived.
+        for name, values in c["strategy_columns"].items():
+            columns[name] = values
+            order.append(name)
+        order += ["status", "status_code", "fitness", "voxels", "chambers", "wall_seconds",
+                  "worker_rank", "reused_from"]
         if "fitness_before" in c:  # controller learning (docs/model.md §8.11)
             columns["fitness_before"] = c["fitness_before"]
             columns["learn_evaluations"] = c["learn_evaluations"]
@@ -169,6 +180,46 @@ class Run:
         c = self._archive.stats_columns()
         return _table(c, ["generation", "best", "mean", "sd", "species_count",
                           "evaluations_per_second"])
+
+    @property
+    def strategy(self) -> str:
+        """The run's search strategy: 'neat', 'map_elites' or 'afpo' (docs/model.md §8.12)."""
+        return dict(self.config).get("search.strategy", "neat")
+
+    def map(self, generation: int | None = None):
+        """The MAP-Elites map after `generation` (default: the last) as a table, one row per
+        elite in ascending cell order: cell, one bin column per descriptor (bin_<name>, the
+        cell's coordinates), id, fitness, generation (in which the elite was evaluated) and the
+        descriptor values. `run.genome(id)` is the elite's robot. A DataFrame, or a numpy
+        structured array without pandas. ValueError for a run of another strategy."""
+        if self.strategy != "map_elites":
+            raise ValueError(f"{self.path}: a run of search strategy {self.strategy!r} has no "
+                             "map (search.strategy = 'map_elites' has one)")
+        m = self._archive.strategy_generation(generation)["map"]
+        config = dict(self.config)
+        names = list(config["map_elites.descriptors"])
+        bins = [int(b) for b in config["map_elites.bins"]]
+        cells = m["cell"].astype(np.int64)
+        coordinates = np.unravel_index(cells, bins) if len(cells) else [cells] * len(bins)
+        columns = {"cell": cells, "id": m["id"].astype(np.int64), "fitness": m["fitness"],
+                   "generation": m["generation"].astype(np.int64)}
+        order = ["cell"]
+        for name, coordinate in zip(names, coordinates):
+            columns[f"bin_{name}"] = np.asarray(coordinate, dtype=np.int64)
+            order.append(f"bin_{name}")
+        order += ["id", "fitness", "generation"]
+        for name in names:
+            columns[name] = m[name]
+            order.append(name)
+        return _table(columns, order)
+
+    def strategy_stats(self):
+        """Per-generation metrics of a strategy other than NEAT (docs/model.md §8.12):
+        MAP-Elites num_elites, coverage, qd_score (offset map_elites.qd_offset), max_fitness,
+        mean_fitness; AFPO max_fitness, mean_fitness, pareto_front, mean_age. A DataFrame, or a
+        numpy structured array without pandas; no rows for NEAT."""
+        c = self._archive.strategy_metric_columns()
+        return _table(c, list(c.keys()))
 
     def genome(self, id: int, generation: int | None = None) -> _softevo.Robot:
         """Individual `id` as a Robot: its archived genome (in a run with controller learning
@@ -193,7 +244,7 @@ class Run:
     def lineage(self, id: int, generation: int | None = None) -> list[dict]:
         """The line of ancestors of individual `id`, newest first, following parent1 (the
         fitter parent of a crossover, the only one after mutation) back to the initial
-        population. Each entry: generation, id, fitness, status, voxels, chambers, species,
+        population. Each entry: generation, id, fitness, status, voxels, chambers, species (NEAT),
         parent1, parent2, and a note where an id was carried over as an elite or a parent is
         not archived. `generation` defaults to the latest one the individual is in."""
         c = self._all_columns()
@@ -220,9 +271,10 @@ class Run:
                 "generation": g, "id": ind, "fitness": float(c["fitness"][row]),
                 "status": _softevo.status_name(int(c["status_code"][row])),
                 "voxels": int(c["voxels"][row]), "chambers": int(c["chambers"][row]),
-                "species": int(c["species"][row]), "parent1": int(c["parent1"][row]),
-                "parent2": int(c["parent2"][row]),
+                "parent1": int(c["parent1"][row]), "parent2": int(c["parent2"][row]),
             }
+            if "species" in c:  # NEAT's
+                entry["species"] = int(c["species"][row])
             first = int(gens[where[ind][0]])
             if first < g:
                 entry["note"] = f"same id evaluated since generation {first} (carried over as an elite)"

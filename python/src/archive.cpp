@@ -4,8 +4,10 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -84,9 +86,26 @@ py::dict individual_columns(const io::Archive& archive) {
   std::vector<double> fitness_before;
   std::vector<std::int64_t> learn_evaluations, reused_from;
   std::vector<std::vector<double>> learning_curve;
+  // A search strategy other than NEAT (docs/model.md §8.12): its per-row columns in place of
+  // the species, when every generation has the same ones.
+  std::string strategy;
+  std::vector<std::string> strategy_names;
+  std::vector<std::vector<double>> strategy_values;
+  bool strategy_rows = true;
   for (const std::int64_t g : archive.generations()) {
     const io::GenerationRecord r = archive.generation(g);
     r.check();
+    if (generation.empty()) {
+      strategy = r.strategy.strategy;
+      strategy_names = r.strategy.rows.columns;
+      strategy_values.resize(strategy_names.size());
+    }
+    strategy_rows = strategy_rows && r.strategy.strategy == strategy &&
+                    r.strategy.rows.columns == strategy_names;
+    if (strategy_rows)
+      for (std::size_t row = 0; row < r.size(); ++row)
+        for (std::size_t c = 0; c < strategy_names.size(); ++c)
+          strategy_values[c].push_back(r.strategy.rows.values[row * strategy_names.size() + c]);
     if (components.empty()) {
       units = r.units;
       for (int u = 0; u < units; ++u)
@@ -134,7 +153,12 @@ py::dict individual_columns(const io::Archive& archive) {
   d["id"] = array_of(id);
   d["parent1"] = array_of(parent1);
   d["parent2"] = array_of(parent2);
-  d["species"] = array_of(species);
+  if (strategy.empty()) d["species"] = array_of(species);  // NEAT's own column
+  py::dict strategy_columns;
+  if (strategy_rows)
+    for (std::size_t c = 0; c < strategy_names.size(); ++c)
+      strategy_columns[py::str(strategy_names[c])] = array_of(strategy_values[c]);
+  d["strategy_columns"] = strategy_columns;
   d["status_code"] = array_of(status);
   d["fitness"] = array_of(fitness);
   d["voxels"] = array_of(voxels);
@@ -154,6 +178,61 @@ py::dict individual_columns(const io::Archive& archive) {
     comps[py::str(component_names[c])] = array_of(components[c]);
   d["components"] = comps;
   d["units"] = units;
+  return d;
+}
+
+// A strategy table (common/strategy_report.hpp) as columns (dict name -> 1-D array).
+py::dict table_columns(const StrategyTable& t) {
+  py::dict d;
+  const std::size_t k = t.columns.size();
+  for (std::size_t c = 0; c < k; ++c) {
+    std::vector<double> column;
+    for (std::size_t r = 0; r < t.rows(); ++r) column.push_back(t.values[r * k + c]);
+    d[py::str(t.columns[c])] = array_of(column);
+  }
+  return d;
+}
+
+// What the search strategy archived of generation `generation` (default: the last): its name
+// ("" for NEAT), per-row columns (with the rows' ids), the MAP-Elites map and the metrics.
+py::dict strategy_generation(const io::Archive& archive, std::optional<std::int64_t> generation) {
+  const std::vector<std::int64_t> gens = archive.generations();
+  if (gens.empty()) throw py::key_error(archive.path() + ": the archive has no generation yet");
+  const std::int64_t g = generation.value_or(gens.back());
+  if (std::find(gens.begin(), gens.end(), g) == gens.end())
+    throw py::key_error(archive.path() + ": no generation " + std::to_string(g));
+  const io::GenerationRecord r = archive.generation(g);
+  py::dict d;
+  d["generation"] = g;
+  d["strategy"] = r.strategy.strategy;
+  py::dict rows = table_columns(r.strategy.rows);
+  if (!r.strategy.empty()) rows["id"] = array_of(r.id);
+  d["rows"] = rows;
+  d["map"] = table_columns(r.strategy.map);
+  py::dict metrics;
+  for (const auto& [name, value] : r.strategy.metrics) metrics[py::str(name)] = value;
+  d["metrics"] = metrics;
+  return d;
+}
+
+// Every generation's strategy metrics as columns (generation first); empty for NEAT.
+py::dict strategy_metric_columns(const io::Archive& archive) {
+  std::vector<std::string> names;
+  std::vector<std::vector<double>> values;
+  std::vector<std::int64_t> generation;
+  for (const std::int64_t g : archive.generations()) {
+    const io::GenerationRecord r = archive.generation(g);
+    if (r.strategy.empty()) continue;
+    if (names.empty())
+      for (const auto& [name, value] : r.strategy.metrics) names.push_back(name);
+    values.resize(names.size());
+    generation.push_back(g);
+    for (std::size_t k = 0; k < names.size(); ++k)
+      values[k].push_back(r.strategy.metric(names[k], std::nan("")));
+  }
+  py::dict d;
+  d["generation"] = array_of(generation);
+  for (std::size_t k = 0; k < names.size(); ++k) d[py::str(names[k])] = array_of(values[k]);
   return d;
 }
 
@@ -219,6 +298,8 @@ void bind_archive(py::module_& m) {
       .def_property_readonly("generations", &io::Archive::generations)
       .def("individual_columns", &individual_columns)
       .def("stats_columns", &stats_columns)
+      .def("strategy_generation", &strategy_generation, "generation"_a = py::none())
+      .def("strategy_metric_columns", &strategy_metric_columns)
       .def("robot", &archived_robot, "id"_a, "generation"_a = py::none())
       .def("fitness_digest", [](const io::Archive& a) { return hash_hex(io::fitness_digest(a)); })
       .def("check", &check_dict);

@@ -173,6 +173,9 @@ class Evolution {
     d["mean"] = r.mean;
     d["sd"] = r.sd;
     d["species"] = r.species_count;
+    py::dict metrics;  // a strategy other than NEAT (docs/model.md §8.12)
+    for (const auto& [name, value] : r.strategy.metrics) metrics[py::str(name)] = value;
+    d["strategy_metrics"] = metrics;
     d["individuals"] = r.size();
     d["status_counts"] = counts;
     d["eval_wall_seconds"] = r.eval_wall_seconds;

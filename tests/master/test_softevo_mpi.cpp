@@ -553,6 +553,39 @@ TEST(SoftevoMpi, ResumeAfterSigkillGivesTheSameArchive) {
   }
 }
 
+// The search strategies other than NEAT (docs/model.md §8.12): the same archive for every rank
+// count, and after a SIGKILL and --resume.
+TEST(SoftevoMpi, SearchStrategyRunsAreIdenticalForAnyRankCountAndAfterSigkill) {
+  TempDir dir;
+  const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);
+  for (const std::string strategy : {"map_elites", "afpo"}) {
+    std::vector<std::string> common = {"--config", cfg,     "--generations",
+                                       "5",        "--set", "search.strategy=" + strategy};
+    if (strategy == "afpo") common.insert(common.end(), {"--set", "afpo.age=body"});
+    std::vector<Digests> d;
+    for (int np = 1; np <= world_size(); ++np) {
+      std::vector<std::string> args = common;
+      args.insert(args.end(), {"--out", dir.file(strategy + "-np" + std::to_string(np) + ".h5")});
+      ASSERT_EQ(run_on(np, args), 0) << strategy << " np=" << np;
+      d.push_back(digests(dir.file(strategy + "-np" + std::to_string(np) + ".h5")));
+    }
+    for (std::size_t i = 1; i < d.size(); ++i) {
+      EXPECT_EQ(d[i].fitness, d[0].fitness) << strategy << ": np=" << i + 1 << " vs np=1";
+      EXPECT_EQ(d[i].content, d[0].content) << strategy << ": np=" << i + 1 << " vs np=1";
+    }
+    const std::string killed = dir.file(strategy + "-killed.h5");
+    std::vector<std::string> cargs = common;
+    cargs.insert(cargs.end(), {"--out", killed});
+    ASSERT_EQ(run_and_kill(dir, cargs, killed, 2), 1);
+    std::vector<std::string> args = common;
+    args.insert(args.end(), {"--out", killed, "--resume"});
+    ASSERT_EQ(run_on(world_size(), args), 0);
+    const Digests b = digests(killed);
+    EXPECT_EQ(b.fitness, d[0].fitness) << strategy;
+    EXPECT_EQ(b.content, d[0].content) << strategy;
+  }
+}
+
 TEST(SoftevoMpi, SigtermAndSigusr1CheckpointAndExitWithRequeueCode) {
   TempDir dir;
   const std::string cfg = write_config(dir, "tiny.toml", kTinyConfig);

@@ -1,0 +1,63 @@
+#include "tools/elite_cell.hpp"
+
+#include <stdexcept>
+#include <vector>
+
+#include "common/config.hpp"
+#include "common/map_grid.hpp"
+
+namespace softevo::cli {
+
+EliteRow elite_of_cell(const io::Archive& archive, const std::string& cell_text,
+                       std::optional<std::int64_t> generation) {
+  const Config config = parse_config(archive.config_text(), archive.path() + ":/config");
+  if (config.search.strategy != SearchKind::map_elites)
+    throw std::invalid_argument(
+        std::string("--cell ") + cell_text + ": the run's search strategy is \"" +
+        to_string(config.search.strategy) + "\"; only a \"map_elites\" run has cells (use --id)");
+  const MapGrid grid = map_grid(config, archive.path() + ":/config");
+  std::vector<std::int64_t> bins;
+  std::string axes;
+  for (const MapAxis& a : grid.axes)
+    axes += (axes.empty() ? "" : ",") + a.name + " 0.." + std::to_string(a.bins - 1);
+  const std::string usage = "--cell " + cell_text + ": give one bin per descriptor (" + axes + ")";
+  std::size_t start = 0;
+  while (start <= cell_text.size()) {
+    const std::size_t comma = cell_text.find(',', start);
+    const std::string part =
+        cell_text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    std::size_t used = 0;
+    long long v = -1;
+    try {
+      v = std::stoll(part, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (part.empty() || used != part.size()) throw std::invalid_argument(usage);
+    bins.push_back(v);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  std::int64_t cell = 0;
+  try {
+    cell = grid.cell_of_bins(bins);
+  } catch (const std::invalid_argument&) {
+    throw std::invalid_argument(usage);
+  }
+  const std::vector<std::int64_t> gens = archive.generations();
+  if (gens.empty()) throw io::ArchiveError(archive.path() + ": no evaluated generation");
+  const std::int64_t g = generation.value_or(gens.back());
+  const StrategyTable& map = archive.generation(g).strategy.map;
+  const std::size_t k = map.columns.size();
+  for (std::size_t r = 0; r < map.rows(); ++r)
+    if (static_cast<std::int64_t>(map.values[r * k]) == cell)
+      return EliteRow{.generation = static_cast<std::int64_t>(map.values[r * k + 3]),
+                      .id = static_cast<std::int64_t>(map.values[r * k + 1]),
+                      .cell = cell};
+  throw std::invalid_argument("--cell " + cell_text +
+                              ": the cell is empty in the map after "
+                              "generation " +
+                              std::to_string(g));
+}
+
+}  // namespace softevo::cli

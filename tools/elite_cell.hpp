@@ -1,0 +1,25 @@
+// `--cell i,j[,k]` of `softevo export` and `softevo view`: the elite of one cell of a MAP-Elites
+// map (docs/model.md §8.12.2), as the generation and id of its archived row.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "io/archive.hpp"
+
+namespace softevo::cli {
+
+struct EliteRow {
+  std::int64_t generation = 0;  // the generation in which the elite was evaluated
+  std::int64_t id = 0;
+  std::int64_t cell = 0;
+};
+
+// The elite of cell `cell_text` ("2,3": one bin index per descriptor, 0-based) in the map after
+// generation `generation` (default: the last). Throws std::invalid_argument naming --cell for a
+// run of another strategy, malformed text, a bin out of range or an empty cell.
+EliteRow elite_of_cell(const io::Archive& archive, const std::string& cell_text,
+                       std::optional<std::int64_t> generation);
+
+}  // namespace softevo::cli
