@@ -5,6 +5,7 @@
 #   TESTS  GoogleTest             the test suite
 #   PNG    libpng                 `softevo render` to .png (without it: .mp4 only, via ffmpeg)
 #   GIF    giflib                 `softevo render` to an animated .gif
+#   3MF    lib3mf 1.x             `softevo fabricate` to .3mf and `fabricate --check`
 #   MPI    MPI (C++ bindings off) softevo-mpi and the MPI tests
 #   HDF5   HDF5 C                 io (run archive, trace), the master, softevo-mpi, the softevo CLI
 #   PYTHON Python 3 + pybind11    the `softevo` Python package (python/; also needs HDF5)
@@ -20,6 +21,7 @@ option(SOFTEVO_FETCH_MISSING
 option(SOFTEVO_REQUIRE_TESTS "fail at configure time unless GoogleTest is found" OFF)
 option(SOFTEVO_REQUIRE_PNG "fail at configure time unless libpng is found" OFF)
 option(SOFTEVO_REQUIRE_GIF "fail at configure time unless giflib is found" OFF)
+option(SOFTEVO_REQUIRE_3MF "fail at configure time unless lib3mf (1.x C interface) is found" OFF)
 option(SOFTEVO_REQUIRE_MPI "fail at configure time unless MPI is found" OFF)
 option(SOFTEVO_REQUIRE_HDF5 "fail at configure time unless HDF5 (C) is found" OFF)
 option(SOFTEVO_REQUIRE_PYTHON
@@ -52,6 +54,19 @@ softevo_optional(NAME PNG FOUND PNG_FOUND HOW "install libpng-dev (Debian) or se
 
 find_package(GIF 5 QUIET)
 softevo_optional(NAME GIF FOUND GIF_FOUND HOW "install libgif-dev (Debian) or set GIF_DIR")
+
+# lib3mf 1.x (Debian lib3mf-dev): its C interface header and library, as an imported target.
+find_path(SOFTEVO_LIB3MF_INCLUDE_DIR Model/COM/NMR_DLLInterfaces.h PATH_SUFFIXES lib3mf)
+find_library(SOFTEVO_LIB3MF_LIBRARY 3MF)
+if(SOFTEVO_LIB3MF_INCLUDE_DIR AND SOFTEVO_LIB3MF_LIBRARY)
+  set(softevo_lib3mf_found ON)
+  add_library(softevo::lib3mf UNKNOWN IMPORTED)
+  set_target_properties(softevo::lib3mf PROPERTIES IMPORTED_LOCATION ${SOFTEVO_LIB3MF_LIBRARY})
+  target_include_directories(softevo::lib3mf SYSTEM INTERFACE ${SOFTEVO_LIB3MF_INCLUDE_DIR})
+else()
+  set(softevo_lib3mf_found OFF)
+endif()
+softevo_optional(NAME 3MF FOUND softevo_lib3mf_found HOW "install lib3mf-dev (Debian)")
 
 find_package(MPI QUIET COMPONENTS CXX)
 softevo_optional(NAME MPI FOUND MPI_FOUND
@@ -235,6 +250,7 @@ function(softevo_print_summary)
   message(STATUS "  GoogleTest    ${SOFTEVO_ENABLE_TESTS}")
   message(STATUS "  libpng        ${SOFTEVO_ENABLE_PNG}")
   message(STATUS "  giflib        ${SOFTEVO_ENABLE_GIF}")
+  message(STATUS "  lib3mf        ${SOFTEVO_ENABLE_3MF}")
   message(STATUS "  MPI           ${SOFTEVO_ENABLE_MPI}")
   message(STATUS "  HDF5 C        ${SOFTEVO_ENABLE_HDF5}")
   message(STATUS "  viewer        ${SOFTEVO_ENABLE_VIEW} (Boost.Beast, zlib)")

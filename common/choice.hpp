@@ -1,7 +1,9 @@
 // Config choices as types: each string-valued config key with a fixed set of values (integrator,
 // terrain kind, ...) is an enum, parsed once at the config boundary (common/config.cpp) and
-// compared as an enum everywhere else. A choice enum declares its config names, in enum order,
-// by specialising ChoiceNames; to_string and choice_from_string work for every such enum.
+// compared as an enum everywhere else. Other enums with names (statuses, SIMD widths, CPPN
+// activations) use the same: one table of names instead of a switch per enum. A choice enum
+// declares its config names, in enum order, by specialising ChoiceNames; to_string and
+// choice_from_string work for every such enum.
 #pragma once
 
 #include <array>
@@ -22,9 +24,11 @@ concept ConfigChoice = requires {
   ChoiceNames<E>::names;
 };
 
+// A value outside the enum (a corrupt byte cast to it) is "unknown", never read past the names.
 template <ConfigChoice E>
 constexpr const char* to_string(E value) {
-  return ChoiceNames<E>::names[static_cast<std::size_t>(value)];
+  const auto index = static_cast<std::size_t>(value);
+  return index < ChoiceNames<E>::names.size() ? ChoiceNames<E>::names[index] : "unknown";
 }
 
 template <ConfigChoice E>

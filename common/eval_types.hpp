@@ -2,9 +2,12 @@
 // encodes them) and produced by the single-process `softevo eval`.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
+
+#include "common/choice.hpp"
 
 namespace softevo {
 
@@ -18,8 +21,12 @@ enum class EvalStatus : std::uint8_t {
   invalid_body = 6,     // body not valid or not actuatable (never simulated)
 };
 
-const char* to_string(EvalStatus status);  // "ok", "killed: flipped", ...
-bool is_killed(EvalStatus status);         // anything but ok scores like a killed robot
+template <>
+struct ChoiceNames<EvalStatus> {
+  static constexpr std::array<const char*, 7> names = {
+      "ok", "killed: flipped", "killed: exploded", "diverged", "failed", "timeout", "invalid body"};
+};
+bool is_killed(EvalStatus status);  // anything but ok scores like a killed robot
 
 // Score of one work unit: its fitness, its status and the values of the task's named
 // components (names and units: tasks::Task::component_names(), values in that order; all 0 for

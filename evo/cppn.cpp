@@ -10,27 +10,14 @@ namespace softevo::evo {
 
 namespace {
 
-constexpr std::pair<Activation, const char*> kActivationNames[] = {
-    {Activation::sigmoid, "sigmoid"}, {Activation::sin, "sin"},   {Activation::abs, "abs"},
-    {Activation::square, "square"},   {Activation::exp, "exp"},   {Activation::clamped, "clamped"},
-    {Activation::gauss, "gauss"},     {Activation::tanh, "tanh"},
-};
-
 double clamp(double v, double lo, double hi) {
   return std::max(lo, std::min(hi, v));
 }
 
 }  // namespace
 
-const char* to_string(Activation a) {
-  for (const auto& [act, name] : kActivationNames)
-    if (act == a) return name;
-  return "unknown";
-}
-
 Activation activation_from_string(const std::string& name) {
-  for (const auto& [act, n] : kActivationNames)
-    if (name == n) return act;
+  if (const auto a = choice_from_string<Activation>(name)) return *a;
   throw std::invalid_argument("unknown CPPN activation function '" + name +
                               "' (expected sigmoid, sin, abs, square, exp, clamped, gauss, tanh)");
 }

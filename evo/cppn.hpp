@@ -2,11 +2,13 @@
 // semantics (docs/model.md §6.1). Used by body development (§6) and by the NEAT operators.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "common/choice.hpp"
 #include "common/robot.hpp"
 
 namespace softevo::evo {
@@ -15,7 +17,13 @@ namespace softevo::evo {
 // thesis' activation_options but is accepted for tests and generic NEAT runs.
 enum class Activation : std::uint8_t { sigmoid, sin, abs, square, exp, clamped, gauss, tanh };
 
-const char* to_string(Activation a);
+}  // namespace softevo::evo
+template <>
+struct softevo::ChoiceNames<softevo::evo::Activation> {
+  static constexpr std::array<const char*, 8> names = {"sigmoid", "sin",     "abs",   "square",
+                                                       "exp",     "clamped", "gauss", "tanh"};
+};
+namespace softevo::evo {
 // Throws std::invalid_argument naming the bad value.
 Activation activation_from_string(const std::string& name);
 // neat-python 0.92 definitions with their clamps (§6.1); z is the pre-activation.

@@ -176,7 +176,7 @@ physics::Terrain ground_of(const io::Trace& trace) {
   const io::Trace::Terrain& g = *trace.terrain;
   for (auto kind : {physics::TerrainKind::rows, physics::TerrainKind::bumps,
                     physics::TerrainKind::steps, physics::TerrainKind::slope})
-    if (g.kind == physics::to_string(kind)) t.kind = kind;
+    if (g.kind == softevo::to_string(kind)) t.kind = kind;
   if (t.kind == physics::TerrainKind::flat) return t;  // a kind this build does not know
   t.params.kind = t.kind;
   t.params.seed = std::strtoull(g.seed.c_str(), nullptr, 16);

@@ -36,7 +36,7 @@ namespace {
 std::optional<io::Trace::Terrain> trace_terrain(const physics::Terrain& t) {
   if (t.kind == physics::TerrainKind::flat) return std::nullopt;
   io::Trace::Terrain g;
-  g.kind = physics::to_string(t.kind);
+  g.kind = softevo::to_string(t.kind);
   g.seed = hash_hex(t.params.seed);
   g.shape = t.params.shape;
   g.bumps_start_x = t.start_x;

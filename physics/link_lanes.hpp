@@ -175,6 +175,108 @@ template <class L, bool kLarge>
   }
 }
 
+// The formulas of one link update (§2.3-2.6), shared by the link pass of one robot (update_links:
+// lanes = links) and the batched step (physics/batch_kernels.hpp: lanes = evaluations of one
+// body). Each lane performs the reference's scalar operations in their order.
+
+// §2.3 large-angle mode: the rotation q1 of the link frame onto +X and its rotation vector a1, P's
+// orientation q2 turned by it, pos2 = (|d| - L, 0, 0).
+template <class L>
+[[gnu::always_inline]] inline void large_angle_frame(const VL<L>& d, DV<L> l, QL<L>& q1, VL<L>& a1,
+                                                     QL<L>& q2, VL<L>& pos2) {
+  const DV<L> zero = splat<L>(0.0);
+  const DV<L> len = L::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);  // |d|
+  frame_to_pos_x_lanes<L>(d, len, q1, a1);
+  QL<L> q12;
+  mul_c(q1.w, q1.x, q1.y, q1.z, q2.w, q2.x, q2.y, q2.z, q12.w, q12.x, q12.y, q12.z);
+  q2 = q12;
+  pos2 = {len - l, zero, zero};
+}
+
+// Force and moment on ends N and P in the link frame (§2.4-2.5).
+template <class L>
+struct LinkLoadsL {
+  VL<L> fn, fp, mn, mp;
+};
+// §2.4: sigma = E_L strain (linear material, float);
+//   F_N = (sigma A, b1 y - b2 (t1z + t2z), b1 z + b2 (t1y + t2y)), F_P = -F_N
+template <class L>
+[[gnu::always_inline]] inline LinkLoadsL<L> elastic_link_loads(const LinkConstL<L>& c, DV<L> strain,
+                                                               const VL<L>& pos2, const VL<L>& a1,
+                                                               const VL<L>& a2) {
+  using D = DV<L>;
+  const D stress = L::round_to_float(c.e_area * strain);
+  const D b1 = c.b1;
+  const D b2 = c.b2;
+  const D b3 = c.b3;
+  const D a2c = c.a2;
+  LinkLoadsL<L> r;
+  r.fn = {L::round_to_float(stress * c.area), b1 * pos2.y - b2 * (a1.z + a2.z),
+          b1 * pos2.z + b2 * (a1.y + a2.y)};
+  r.fp = {-r.fn.x, -r.fn.y, -r.fn.z};
+  r.mn = {a2c * (a2.x - a1.x), -b2 * pos2.z - b3 * (2.0 * a1.y + a2.y),
+          b2 * pos2.y - b3 * (2.0 * a1.z + a2.z)};
+  r.mp = {a2c * (a1.x - a2.x), -b2 * pos2.z - b3 * (a1.y + 2.0 * a2.y),
+          b2 * pos2.y - b3 * (a1.z + 2.0 * a2.z)};
+  return r;
+}
+// §2.5 internal damping from the change since the previous link update (old_*), with the end
+// voxels' damping multipliers cn, cp: the elastic loads e plus the damping terms.
+template <class L>
+[[gnu::always_inline]] inline LinkLoadsL<L> damped_link_loads(
+    const LinkConstL<L>& c, DV<L> cn, DV<L> cp, const LinkLoadsL<L>& e, const VL<L>& pos2,
+    const VL<L>& a1, const VL<L>& a2, const VL<L>& old_pos2, const VL<L>& old_a1,
+    const VL<L>& old_a2) {
+  using D = DV<L>;
+  const D dpx = 0.5 * (pos2.x - old_pos2.x), dpy = 0.5 * (pos2.y - old_pos2.y),
+          dpz = 0.5 * (pos2.z - old_pos2.z);
+  const D d1x = 0.5 * (a1.x - old_a1.x), d1y = 0.5 * (a1.y - old_a1.y),
+          d1z = 0.5 * (a1.z - old_a1.z);
+  const D d2x = 0.5 * (a2.x - old_a2.x), d2y = 0.5 * (a2.y - old_a2.y),
+          d2z = 0.5 * (a2.z - old_a2.z);
+  const D sq_a1 = c.sq_a1;
+  const D sq_a2 = c.sq_a2xip;
+  const D sq_b1 = c.sq_b1;
+  const D sq_b2 = c.sq_b2xfmp;
+  const D sq_b3 = c.sq_b3xip;
+  const D vx = sq_a1 * dpx, vy = sq_b1 * dpy - sq_b2 * (d1z + d2z),
+          vz = sq_b1 * dpz + sq_b2 * (d1y + d2y);
+  const D hn = 0.5 * cn, hp = 0.5 * cp;
+  LinkLoadsL<L> r;
+  r.fn = {e.fn.x + cn * vx, e.fn.y + cn * vy, e.fn.z + cn * vz};
+  r.fp = {e.fp.x - cp * vx, e.fp.y - cp * vy, e.fp.z - cp * vz};
+  r.mn = {e.mn.x - hn * (-sq_a2 * (d2x - d1x)),
+          e.mn.y - hn * (sq_b2 * dpz + sq_b3 * (2.0 * d1y + d2y)),
+          e.mn.z - hn * (-sq_b2 * dpy + sq_b3 * (2.0 * d1z + d2z))};
+  r.mp = {e.mp.x - hp * (sq_a2 * (d2x - d1x)),
+          e.mp.y - hp * (sq_b2 * dpz + sq_b3 * (d1y + 2.0 * d2y)),
+          e.mp.z - hp * (-sq_b2 * dpy + sq_b3 * (d1z + 2.0 * d2z))};
+  return r;
+}
+// Lane by lane: a where `on`, else b.
+template <class L>
+[[gnu::always_inline]] inline VL<L> select(MV<L> on, const VL<L>& a, const VL<L>& b) {
+  return {select<L>(on, a.x, b.x), select<L>(on, a.y, b.y), select<L>(on, a.z, b.z)};
+}
+template <class L>
+[[gnu::always_inline]] inline QL<L> select(MV<L> on, const QL<L>& a, const QL<L>& b) {
+  return {select<L>(on, a.w, b.w), select<L>(on, a.x, b.x), select<L>(on, a.y, b.y),
+          select<L>(on, a.z, b.z)};
+}
+template <class L>
+[[gnu::always_inline]] inline LinkLoadsL<L> select(MV<L> on, const LinkLoadsL<L>& a,
+                                                   const LinkLoadsL<L>& b) {
+  return {select<L>(on, a.fn, b.fn), select<L>(on, a.fp, b.fp), select<L>(on, a.mn, b.mn),
+          select<L>(on, a.mp, b.mp)};
+}
+// v turned by the conjugate of q (§2.6: a link-frame load into an end voxel's frame).
+template <class L>
+[[gnu::always_inline]] inline VL<L> rotate_by_conj(const QL<L>& q, const VL<L>& v) {
+  VL<L> r;
+  rotate_c(q.w, -q.x, -q.y, -q.z, v.x, v.y, v.z, r.x, r.y, r.z);
+  return r;
+}
+
 // §2.3-2.6 for the lanes `done` (bit k = lane k) of links ids[0..W) of axis A with frame f, in
 // large-angle (kLarge) or small-angle mode: the new link state and, with forces
 // (computes_forces(K)), the end loads, a strain > 100 ORed into `diverged`. With kContig the ids
@@ -189,7 +291,6 @@ template <class L, Axis A, LinkPass K, bool kLarge, bool kSwitched, bool kContig
                                                 bool& diverged) {
   constexpr int W = L::W;
   using D = DV<L>;
-  using M = MV<L>;
   constexpr bool kStoresState = stores_link_state(K) || kSwitched;
   constexpr bool kMarksValid = marks_velocity_valid(K) || kSwitched;
   const VL<L>& d = f.d;
@@ -199,12 +300,7 @@ template <class L, Axis A, LinkPass K, bool kLarge, bool kSwitched, bool kContig
   VL<L> pos2, a1;
   QL<L> q1;  // large-angle mode: rotation of the link frame onto +X
   if constexpr (kLarge) {
-    const D len = L::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);  // |d|
-    frame_to_pos_x_lanes<L>(d, len, q1, a1);
-    QL<L> q12;
-    mul_c(q1.w, q1.x, q1.y, q1.z, q2.w, q2.x, q2.y, q2.z, q12.w, q12.x, q12.y, q12.z);
-    q2 = q12;
-    pos2 = {len - l, zero, zero};
+    large_angle_frame<L>(d, l, q1, a1, q2, pos2);
   } else {
     pos2 = {d.x - l, d.y, d.z};
     a1 = {zero, zero, zero};  // rotvec(identity)
@@ -217,20 +313,7 @@ template <class L, Axis A, LinkPass K, bool kLarge, bool kSwitched, bool kContig
   if constexpr (computes_forces(K)) {
     if (L::bits(strain > splat<L>(kStrainDiverged)) & done) diverged = true;
     const LinkConstL<L> c = gather_link_const<L, kContig>(m, ids);
-    // §2.4: sigma = E_L strain (linear material, float);
-    //   F_N = (sigma A, b1 y - b2 (t1z + t2z), b1 z + b2 (t1y + t2y)), F_P = -F_N
-    const D stress = L::round_to_float(c.e_area * strain);
-    const D b1 = c.b1;
-    const D b2 = c.b2;
-    const D b3 = c.b3;
-    const D a2c = c.a2;
-    VL<L> fn{L::round_to_float(stress * c.area), b1 * pos2.y - b2 * (a1.z + a2.z),
-             b1 * pos2.z + b2 * (a1.y + a2.y)};
-    VL<L> fp{-fn.x, -fn.y, -fn.z};
-    VL<L> mn{a2c * (a2.x - a1.x), -b2 * pos2.z - b3 * (2.0 * a1.y + a2.y),
-             b2 * pos2.y - b3 * (2.0 * a1.z + a2.z)};
-    VL<L> mp{a2c * (a1.x - a2.x), -b2 * pos2.z - b3 * (a1.y + 2.0 * a2.y),
-             b2 * pos2.y - b3 * (a1.z + 2.0 * a2.z)};
+    LinkLoadsL<L> loads = elastic_link_loads<L>(c, strain, pos2, a1, a2);
 
     // §2.5 internal damping from the change since the previous link update, in the lanes with a
     // valid local velocity (skipped after a mode switch and at the first update)
@@ -246,19 +329,6 @@ template <class L, Axis A, LinkPass K, bool kLarge, bool kSwitched, bool kContig
       VL<L> old_a1{zero, zero, zero};  // small-angle links: see link_group
       if constexpr (kLarge) old_a1 = gather<L, kContig>(st.link_angle1v, ids);
       const VL<L> old_a2 = gather<L, kContig>(st.link_angle2v, ids);
-      const D dpx = 0.5 * (pos2.x - old_pos2.x), dpy = 0.5 * (pos2.y - old_pos2.y),
-              dpz = 0.5 * (pos2.z - old_pos2.z);
-      const D d1x = 0.5 * (a1.x - old_a1.x), d1y = 0.5 * (a1.y - old_a1.y),
-              d1z = 0.5 * (a1.z - old_a1.z);
-      const D d2x = 0.5 * (a2.x - old_a2.x), d2y = 0.5 * (a2.y - old_a2.y),
-              d2z = 0.5 * (a2.z - old_a2.z);
-      const D sq_a1 = c.sq_a1;
-      const D sq_a2 = c.sq_a2xip;
-      const D sq_b1 = c.sq_b1;
-      const D sq_b2 = c.sq_b2xfmp;
-      const D sq_b3 = c.sq_b3xip;
-      const D vx = sq_a1 * dpx, vy = sq_b1 * dpy - sq_b2 * (d1z + d2z),
-              vz = sq_b1 * dpz + sq_b2 * (d1y + d2y);
       D cn, cp;
       if constexpr (kContig) {
         cn = load_lanes<L>(&sc.link_damping_neg[ids[0]]);
@@ -267,46 +337,23 @@ template <class L, Axis A, LinkPass K, bool kLarge, bool kSwitched, bool kContig
         cn = make_lanes<L>([&](int k) { return sc.link_damping_neg[ids[k]]; });
         cp = make_lanes<L>([&](int k) { return sc.link_damping_pos[ids[k]]; });
       }
-      const D hn = 0.5 * cn, hp = 0.5 * cp;
-      const VL<L> fn_d{fn.x + cn * vx, fn.y + cn * vy, fn.z + cn * vz};
-      const VL<L> fp_d{fp.x - cp * vx, fp.y - cp * vy, fp.z - cp * vz};
-      const VL<L> mn_d{mn.x - hn * (-sq_a2 * (d2x - d1x)),
-                       mn.y - hn * (sq_b2 * dpz + sq_b3 * (2.0 * d1y + d2y)),
-                       mn.z - hn * (-sq_b2 * dpy + sq_b3 * (2.0 * d1z + d2z))};
-      const VL<L> mp_d{mp.x - hp * (sq_a2 * (d2x - d1x)),
-                       mp.y - hp * (sq_b2 * dpz + sq_b3 * (d1y + 2.0 * d2y)),
-                       mp.z - hp * (-sq_b2 * dpy + sq_b3 * (d1z + 2.0 * d2z))};
+      const LinkLoadsL<L> damped =
+          damped_link_loads<L>(c, cn, cp, loads, pos2, a1, a2, old_pos2, old_a1, old_a2);
       if (valid == kAllLanes<L>) {  // every lane (the usual case)
-        fn = fn_d;
-        fp = fp_d;
-        mn = mn_d;
-        mp = mp_d;
+        loads = damped;
       } else {
-        const M on = mask_of<L>(valid);
-        fn = {select<L>(on, fn_d.x, fn.x), select<L>(on, fn_d.y, fn.y),
-              select<L>(on, fn_d.z, fn.z)};
-        fp = {select<L>(on, fp_d.x, fp.x), select<L>(on, fp_d.y, fp.y),
-              select<L>(on, fp_d.z, fp.z)};
-        mn = {select<L>(on, mn_d.x, mn.x), select<L>(on, mn_d.y, mn.y),
-              select<L>(on, mn_d.z, mn.z)};
-        mp = {select<L>(on, mp_d.x, mp.x), select<L>(on, mp_d.y, mp.y),
-              select<L>(on, mp_d.z, mp.z)};
+        loads = select<L>(mask_of<L>(valid), damped, loads);
       }
     }
     // §2.6: in small-angle mode F_N and M_N are already in N's frame, in large-angle mode they
     // rotate by q1*; F_P, M_P rotate by q2*
     if constexpr (kLarge) {
-      VL<L> fnl, mnl;
-      rotate_c(q1.w, -q1.x, -q1.y, -q1.z, fn.x, fn.y, fn.z, fnl.x, fnl.y, fnl.z);
-      rotate_c(q1.w, -q1.x, -q1.y, -q1.z, mn.x, mn.y, mn.z, mnl.x, mnl.y, mnl.z);
-      fn = fnl;
-      mn = mnl;
+      loads.fn = rotate_by_conj<L>(q1, loads.fn);
+      loads.mn = rotate_by_conj<L>(q1, loads.mn);
     }
-    VL<L> fpl, mpl;
-    rotate_c(q2.w, -q2.x, -q2.y, -q2.z, fp.x, fp.y, fp.z, fpl.x, fpl.y, fpl.z);
-    rotate_c(q2.w, -q2.x, -q2.y, -q2.z, mp.x, mp.y, mp.z, mpl.x, mpl.y, mpl.z);
-    const VL<L> fn_g = from_x_lanes<A, L>(fn), mn_g = from_x_lanes<A, L>(mn);
-    const VL<L> fp_g = from_x_lanes<A, L>(fpl), mp_g = from_x_lanes<A, L>(mpl);
+    const VL<L> fn_g = from_x_lanes<A, L>(loads.fn), mn_g = from_x_lanes<A, L>(loads.mn);
+    const VL<L> fp_g = from_x_lanes<A, L>(rotate_by_conj<L>(q2, loads.fp));
+    const VL<L> mp_g = from_x_lanes<A, L>(rotate_by_conj<L>(q2, loads.mp));
     // end loads of the lanes in `done`: (force, moment) of end N, then of end P; consecutive
     // links have consecutive records (2 ends x 6 doubles each)
     static_assert(sizeof(Scratch::EndLoad) == 6 * sizeof(double));

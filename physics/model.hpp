@@ -43,7 +43,13 @@ enum class Simd : std::uint8_t {
   scalar = 4,  // 1 lane, any CPU: no instruction-set extension
   neon = 5,    // 2 lanes, every AArch64 CPU
 };
-const char* to_string(Simd simd);
+}  // namespace softevo::physics
+template <>
+struct softevo::ChoiceNames<softevo::physics::Simd> {
+  static constexpr std::array<const char*, 6> names = {"best",   "sse2",   "avx2",
+                                                       "avx512", "scalar", "neon"};
+};
+namespace softevo::physics {
 // The width named by to_string (best, sse2, avx2, avx512, scalar, neon), also one this build does
 // not contain; nullopt for any other name.
 std::optional<Simd> parse_simd(std::string_view name);

@@ -16,18 +16,6 @@
 
 namespace softevo::physics {
 
-const char* to_string(StepStatus status) {
-  switch (status) {
-    case StepStatus::ok:
-      return "ok";
-    case StepStatus::diverged:
-      return "diverged";
-    case StepStatus::non_finite:
-      return "non_finite";
-  }
-  return "unknown";
-}
-
 Scratch make_scratch(const Model& model) {
   Scratch sc;
   const std::size_t nl = model.link_count, nv = model.voxel_count;
@@ -49,24 +37,6 @@ Scratch make_scratch(const Model& model) {
   sc.grid_bucket_begin.assign(buckets + 1, 0);
   sc.candidates.assign(ns, 0);
   return sc;
-}
-
-const char* to_string(Simd simd) {
-  switch (simd) {
-    case Simd::best:
-      return "best";
-    case Simd::sse2:
-      return "sse2";
-    case Simd::avx2:
-      return "avx2";
-    case Simd::avx512:
-      return "avx512";
-    case Simd::scalar:
-      return "scalar";
-    case Simd::neon:
-      return "neon";
-  }
-  return "unknown";
 }
 
 std::optional<Simd> parse_simd(std::string_view name) {

@@ -8,11 +8,13 @@
 //  - symplectic: upstream Voxelyze single-pass symplectic Euler (§2.9) with the same forces.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <span>
 #include <vector>
 
+#include "common/choice.hpp"
 #include "physics/model.hpp"
 #include "physics/state.hpp"
 
@@ -24,7 +26,12 @@ enum class StepStatus : std::uint8_t {
   non_finite = 2,  // a NaN/inf appeared in the state (the reference would abort, §2.6/§2.15)
 };
 
-const char* to_string(StepStatus status);
+}  // namespace softevo::physics
+template <>
+struct softevo::ChoiceNames<softevo::physics::StepStatus> {
+  static constexpr std::array<const char*, 3> names = {"ok", "diverged", "non_finite"};
+};
+namespace softevo::physics {
 
 // Per-step buffers derived from State each step; allocated once by make_scratch(), never
 // reallocated by step() (except the documented pair-capacity growth, see State::col_pairs).

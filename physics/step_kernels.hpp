@@ -29,6 +29,7 @@
 // floor.hpp); the chamber meshes (mesh_lanes.hpp).
 #pragma once
 
+#include "physics/batch_kernels.hpp"
 #include "physics/link_lanes.hpp"
 #include "physics/mesh_lanes.hpp"
 #include "physics/step_kernels_table.hpp"
@@ -37,8 +38,9 @@
 namespace softevo::physics {
 namespace {
 
-// The exported table of this translation unit's passes.
-template <class L>
+// The exported table of this translation unit's passes: L for one robot (lanes = links or
+// voxels), LB for the batched step (lanes = evaluations; physics/batch_kernels.hpp).
+template <class L, class LB = L>
 constexpr StepKernels make_step_kernels(Simd simd) {
   return StepKernels{simd,
                      L::W,
@@ -48,7 +50,9 @@ constexpr StepKernels make_step_kernels(Simd simd) {
                      &fork_voxel_passes<L>,
                      &symplectic_voxel_pass<L>,
                      &chamber_volume_lanes<L>,
-                     &pressure_forces_lanes<L>};
+                     &pressure_forces_lanes<L>,
+                     {LB::W, &batch_link_pass<LB, LinkPass::forces>, &batch_voxel_passes<LB>},
+                     {L::W, &batch_link_pass<L, LinkPass::forces>, &batch_voxel_passes<L>}};
 }
 
 }  // namespace

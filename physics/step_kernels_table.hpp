@@ -5,6 +5,7 @@
 
 #include <span>
 
+#include "physics/batch.hpp"
 #include "physics/model.hpp"
 #include "physics/pneumatics.hpp"
 #include "physics/state.hpp"
@@ -31,6 +32,17 @@ struct StepKernels {
   // (PneumaticsScratch::triangle_force)
   void (*pressure_forces)(const PneumaticsModel&, int chamber, float gauge,
                           std::span<const Vec3> positions, PneumaticsScratch&);
+  // The batched step (physics/batch.hpp) at two lane widths, the widest of this instruction set
+  // and the one-robot passes' (equal except at avx512: 8 and 4): evaluations per vector, the
+  // pneuvox step's first link pass (forces only; the lanes with a strain > 100 as bits) and its
+  // voxel passes with the mid-step link pass (§2.12 steps 3-9; the non-finite lanes as bits).
+  struct Batch {
+    int lanes;
+    int (*forces_pass)(const Model&, BatchState&, BatchScratch&);
+    int (*voxel_passes)(const Model&, BatchState&, BatchScratch&);
+  };
+  Batch batch_wide;
+  Batch batch_narrow;
 };
 
 // The table of a width (`best` resolved to the widest this CPU runs; a width this build does not

@@ -34,22 +34,6 @@ constexpr double kRadiansPerDegree = 0x1.921fb54442d18p+1 / 180.0;
 
 }  // namespace
 
-const char* to_string(TerrainKind kind) {
-  switch (kind) {
-    case TerrainKind::flat:
-      return "flat";
-    case TerrainKind::rows:
-      return "rows";
-    case TerrainKind::bumps:
-      return "bumps";
-    case TerrainKind::steps:
-      return "steps";
-    case TerrainKind::slope:
-      return "slope";
-  }
-  return "unknown";
-}
-
 std::array<int, kRowCount> reference_row_cells(int lattice_x, std::uint32_t seed) {
   std::mt19937 gen(seed);
   std::array<int, kRowCount> cells{};

@@ -34,7 +34,12 @@ enum class TerrainKind : std::uint8_t {
   steps = 3,  // height field: a staircase rising along +x
   slope = 4,  // height field: an inclined plane in front of the robot
 };
-const char* to_string(TerrainKind kind);  // "flat", "rows", "bumps", "steps", "slope"
+}  // namespace softevo::physics
+template <>
+struct softevo::ChoiceNames<softevo::physics::TerrainKind> {
+  static constexpr std::array<const char*, 5> names = {"flat", "rows", "bumps", "steps", "slope"};
+};
+namespace softevo::physics {
 // The ground of the config's terrain.kind and terrain.heightfield (docs/model.md §2.8a).
 constexpr TerrainKind terrain_kind(GroundKind ground, HeightfieldKind heightfield) {
   switch (ground) {

@@ -109,28 +109,40 @@ template <class L>
           make_lanes<L>([&](int k) { return s[k].myz[1]; })};
 }
 
-// §2.12 step 5, part 1 of the fork's step for W free voxels v[0..W), one per lane (the floor
-// force of §2.8 and the large-rotation branch of quat_from_rotvec per lane in scalar code).
-// Returns each voxel's angular momentum about the CoG before (la) and after (lb) the part.
+// The formulas of the fork's two parts (§2.12 steps 5 and 8), shared by the voxel passes of one
+// robot (lanes = voxels) and the batched step (physics/batch_kernels.hpp: lanes = evaluations of
+// one body). What the floor contact reads and writes one lane at a time comes from `lane`:
+// lane.voxel_const(k), lane.static_friction(k) (a reference to the flag), and for part 2
+// lane.fric(k) and lane.old_pos(k) (part 1's friction force and start position).
+
+// Part 1 of W voxels from their state at the start of the step (`start`), the sums of their link
+// loads (local frame), external force (rounded to float), collision force and the CoG: the new
+// state (pos, mom, am, q), the force part 2 applies (part2) and the friction force (fric); the
+// voxels' angular momentum about the CoG before (la) and after (lb) the part.
 template <class L>
-inline void fork_part1_group(const Model& m, State& st, Scratch& sc, std::span<const Vec3> ext,
-                             const int* v, const Vec3& cog, VL<L>& la, VL<L>& lb) {
+struct Part1L {
+  VL<L> pos, mom, am;
+  QL<L> q;
+  VL<L> part2, fric, la, lb;
+};
+template <class L, class Lane>
+[[gnu::always_inline]] inline Part1L<L> fork_part1_lanes(const Model& m, const VoxelLanes<L>& start,
+                                                         const VL<L>& lsum, const VL<L>& msum,
+                                                         const VL<L>& ext_f, const VL<L>& col_f,
+                                                         const VL<L>& cog, Lane&& lane) {
   constexpr int W = L::W;
   using D = DV<L>;
   const double dt = m.dt_f;
-  const VoxelLanes<L> start = load_voxels<L>(m, st, v);
   VL<L> pos = start.pos, mom = start.mom, am = start.am;
-  const QL<L> q = start.q;
+  const QL<L>& q = start.q;
   const VoxelConstL<L>& c = start.c;
-  const D cgx = splat<L>(cog.x()), cgy = splat<L>(cog.y()), cgz = splat<L>(cog.z());
+  Part1L<L> r;
   {
-    const D rx = pos.x - cgx, ry = pos.y - cgy, rz = pos.z - cgz;  // cross(pos - cog, mom) + am
-    la = {(ry * mom.z - rz * mom.y) + am.x, (rz * mom.x - rx * mom.z) + am.y,
-          (rx * mom.y - ry * mom.x) + am.z};
+    const D rx = pos.x - cog.x, ry = pos.y - cog.y,
+            rz = pos.z - cog.z;  // cross(pos - cog, mom) + am
+    r.la = {(ry * mom.z - rz * mom.y) + am.x, (rz * mom.x - rx * mom.z) + am.y,
+            (rx * mom.y - ry * mom.x) + am.z};
   }
-  store_run<L>(pos, sc.old_pos, v[0]);
-  VL<L> lsum, msum;
-  gather_links_lanes<L>(m, sc, v, lsum, msum);
   const D inv_mass = c.inv_mass;
   const VL<L> vel{mom.x * inv_mass, mom.y * inv_mass, mom.z * inv_mass};
   VL<L> rl;
@@ -138,12 +150,7 @@ inline void fork_part1_group(const Model& m, State& st, Scratch& sc, std::span<c
   const D c_glob = c.c_glob;
   const VL<L> link_f{rl.x - vel.x * c_glob, rl.y - vel.y * c_glob, rl.z - vel.z * c_glob};
   const D zero = splat<L>(0.0);
-  VL<L> ext_f{zero, zero, zero};
-  if (!ext.empty()) {  // the reference's External stores float
-    ext_f = load_external_force<L>(ext, v[0]);
-  }
   const VL<L> grav_f{zero, zero, c.gravity_force};
-  const VL<L> col_f = load_run<L>(sc.collision_force, v[0]);
   VL<L> fric{zero, zero, zero};
   if (m.floor) {
     FloorContact fc[W];
@@ -152,12 +159,12 @@ inline void fork_part1_group(const Model& m, State& st, Scratch& sc, std::span<c
                      ((link_f.y + ext_f.y) + grav_f.y) + col_f.y,
                      ((link_f.z + ext_f.z) + grav_f.z) + col_f.z};
     for (int k = 0; k < W; ++k) {
-      std::uint8_t& sf = st.static_friction[v[k]];
+      std::uint8_t& sf = lane.static_friction(k);
       if (!(contact >> k & 1)) {
         sf = 0;  // floor_force without contact
         continue;
       }
-      const Vec3 fr = floor_force(m.voxel_const[v[k]], fc[k], Vec3(vel.x[k], vel.y[k], vel.z[k]),
+      const Vec3 fr = floor_force(lane.voxel_const(k), fc[k], Vec3(vel.x[k], vel.y[k], vel.z[k]),
                                   Vec3(fsum.x[k], fsum.y[k], fsum.z[k]), sf);
       set_lane<L>(fric, k, fr);
     }
@@ -175,53 +182,102 @@ inline void fork_part1_group(const Model& m, State& st, Scratch& sc, std::span<c
   const D dt_i = L::round_to_float(dt * inv_i);  // float dt * (1/I)
   const QL<L> dq =
       quat_from_rotvec_lanes<L>({cur_m.x * dt * dt_i, cur_m.y * dt * dt_i, cur_m.z * dt * dt_i});
-  QL<L> qn;
-  mul_c(dq.w, dq.x, dq.y, dq.z, q.w, q.x, q.y, q.z, qn.w, qn.x, qn.y, qn.z);
+  mul_c(dq.w, dq.x, dq.y, dq.z, q.w, q.x, q.y, q.z, r.q.w, r.q.x, r.q.y, r.q.z);
   am = {am.x + cur_m.x * dt, am.y + cur_m.y * dt, am.z + cur_m.z * dt};
-  store_voxels<L>(pos, mom, am, qn, st, v);
-  store_run<L>(VL<L>{(grav_f.x + col_f.x) + fric.x, (grav_f.y + col_f.y) + fric.y,
-                     (grav_f.z + col_f.z) + fric.z},
-               sc.part2_force, v[0]);
-  store_run<L>(fric, sc.fric, v[0]);
+  r.part2 = {(grav_f.x + col_f.x) + fric.x, (grav_f.y + col_f.y) + fric.y,
+             (grav_f.z + col_f.z) + fric.z};
+  r.fric = fric;
   {
-    const D rx = pos.x - cgx, ry = pos.y - cgy, rz = pos.z - cgz;
-    lb = {(ry * mom.z - rz * mom.y) + am.x, (rz * mom.x - rx * mom.z) + am.y,
-          (rx * mom.y - ry * mom.x) + am.z};
+    const D rx = pos.x - cog.x, ry = pos.y - cog.y, rz = pos.z - cog.z;
+    r.lb = {(ry * mom.z - rz * mom.y) + am.x, (rz * mom.x - rx * mom.z) + am.y,
+            (rx * mom.y - ry * mom.x) + am.z};
   }
+  r.pos = pos;
+  r.mom = mom;
+  r.am = am;
+  return r;
+}
+
+// The lane access of the passes of one robot: lane k = voxel v[k].
+struct VoxelLaneAccess {
+  const Model& m;
+  State& st;
+  Scratch& sc;
+  const int* v;
+  const VoxelConst& voxel_const(int k) const { return m.voxel_const[v[k]]; }
+  std::uint8_t& static_friction(int k) const { return st.static_friction[v[k]]; }
+  const Vec3& fric(int k) const { return sc.fric[v[k]]; }
+  const Vec3& old_pos(int k) const { return sc.old_pos[v[k]]; }
+};
+
+// §2.12 step 5, part 1 of the fork's step for W free voxels v[0..W), one per lane (the floor
+// force of §2.8 and the large-rotation branch of quat_from_rotvec per lane in scalar code).
+// Returns each voxel's angular momentum about the CoG before (la) and after (lb) the part.
+template <class L>
+inline void fork_part1_group(const Model& m, State& st, Scratch& sc, std::span<const Vec3> ext,
+                             const int* v, const Vec3& cog, VL<L>& la, VL<L>& lb) {
+  const VoxelLanes<L> start = load_voxels<L>(m, st, v);
+  store_run<L>(start.pos, sc.old_pos, v[0]);
+  VL<L> lsum, msum;
+  gather_links_lanes<L>(m, sc, v, lsum, msum);
+  const DV<L> zero = splat<L>(0.0);
+  VL<L> ext_f{zero, zero, zero};
+  if (!ext.empty()) {  // the reference's External stores float
+    ext_f = load_external_force<L>(ext, v[0]);
+  }
+  const VL<L> col_f = load_run<L>(sc.collision_force, v[0]);
+  const VL<L> cg{splat<L>(cog.x()), splat<L>(cog.y()), splat<L>(cog.z())};
+  const Part1L<L> r =
+      fork_part1_lanes<L>(m, start, lsum, msum, ext_f, col_f, cg, VoxelLaneAccess{m, st, sc, v});
+  store_voxels<L>(r.pos, r.mom, r.am, r.q, st, v);
+  store_run<L>(r.part2, sc.part2_force, v[0]);
+  store_run<L>(r.fric, sc.fric, v[0]);
+  la = r.la;
+  lb = r.lb;
 }
 
 // The end of a voxel update (§2.9, §2.12 step 8): the orientation turned by the new angular
-// momentum, q <- quat_from_rotvec(angMom (1/I) dt) q, the new state stored, and its sum added to
-// `check` (NaN / inf anywhere makes it non-finite, checked once after the pass; finite values
-// beyond ~1e307 that overflow the sum are reported as non-finite too).
+// momentum, q <- quat_from_rotvec(angMom (1/I) dt) q, and the sum of the new state (added to a
+// finiteness check: NaN / inf anywhere makes it non-finite; finite values beyond ~1e307 that
+// overflow the sum are reported as non-finite too).
+template <class L>
+[[gnu::always_inline]] inline QL<L> turned(const VL<L>& pos, const VL<L>& mom, const VL<L>& am,
+                                           const QL<L>& q, DV<L> inv_i, double dt, DV<L>& sum) {
+  const QL<L> dq =
+      quat_from_rotvec_lanes<L>({am.x * inv_i * dt, am.y * inv_i * dt, am.z * inv_i * dt});
+  QL<L> qn;
+  mul_c(dq.w, dq.x, dq.y, dq.z, q.w, q.x, q.y, q.z, qn.w, qn.x, qn.y, qn.z);
+  sum = pos.x + pos.y + pos.z + mom.x + mom.y + mom.z + am.x + am.y + am.z + qn.w;
+  return qn;
+}
+// turned(), the new state stored, and its sum added to `check` lane by lane.
 template <class L>
 [[gnu::always_inline]] inline void turn_and_store(const VL<L>& pos, const VL<L>& mom,
                                                   const VL<L>& am, const QL<L>& q, DV<L> inv_i,
                                                   double dt, State& st, const int* v,
                                                   double& check) {
-  const QL<L> dq =
-      quat_from_rotvec_lanes<L>({am.x * inv_i * dt, am.y * inv_i * dt, am.z * inv_i * dt});
-  QL<L> qn;
-  mul_c(dq.w, dq.x, dq.y, dq.z, q.w, q.x, q.y, q.z, qn.w, qn.x, qn.y, qn.z);
+  DV<L> sum;
+  const QL<L> qn = turned<L>(pos, mom, am, q, inv_i, dt, sum);
   store_voxels<L>(pos, mom, am, qn, st, v);
-  const DV<L> sum = pos.x + pos.y + pos.z + mom.x + mom.y + mom.z + am.x + am.y + am.z + qn.w;
   for (int k = 0; k < L::W; ++k) check += sum[k];
 }
 
-// §2.12 step 8, part 2 of the fork's step for W free voxels v[0..W), one per lane; adds the
-// voxels' state to `check` (turn_and_store).
+// Part 2 of W voxels from their state after part 1 (`start`) and part 1's force f2, with the
+// correction moment times dt (me_dt): the new state; its sum (turned()) in `sum`.
 template <class L>
-inline void fork_part2_group(const Model& m, State& st, Scratch& sc, const int* v, float me_x,
-                             float me_y, float me_z, double& check) {
+struct Part2L {
+  VL<L> pos, mom, am;
+  QL<L> q;
+};
+template <class L, class Lane>
+[[gnu::always_inline]] inline Part2L<L> fork_part2_lanes(const Model& m, const VoxelLanes<L>& start,
+                                                         const VL<L>& f2, const VL<L>& me_dt,
+                                                         Lane&& lane, DV<L>& sum) {
   constexpr int W = L::W;
   using D = DV<L>;
   const double dt = m.dt_f;
-  const VoxelLanes<L> start = load_voxels<L>(m, st, v);
   VL<L> pos = start.pos, mom = start.mom, am = start.am;
-  const QL<L> q = start.q;
-  const VoxelConstL<L>& c = start.c;
-  const VL<L> f2 = load_run<L>(sc.part2_force, v[0]);
-  const D inv_mass = c.inv_mass;
+  const D inv_mass = start.c.inv_mass;
   const D dt_m = L::round_to_float(dt * inv_mass);  // float dt * (1/m)
   pos = {pos.x + f2.x * dt * dt_m, pos.y + f2.y * dt * dt_m, pos.z + f2.z * dt * dt_m};
   pos = {pos.x + mom.x * dt_m, pos.y + mom.y * dt_m, pos.z + mom.z * dt_m};
@@ -231,20 +287,37 @@ inline void fork_part2_group(const Model& m, State& st, Scratch& sc, const int* 
     const int contact = ground_contacts<L>(m, pos, fc);
     for (int k = 0; k < W; ++k) {
       if (!(contact >> k & 1)) {
-        st.static_friction[v[k]] = 0;
+        lane.static_friction(k) = 0;
         continue;
       }
       Vec3 pk(pos.x[k], pos.y[k], pos.z[k]), mk(mom.x[k], mom.y[k], mom.z[k]);
-      fork_static_capture(m.voxel_const[v[k]], fc[k], sc.fric[v[k]], sc.old_pos[v[k]], pk, mk,
-                          st.static_friction[v[k]]);
+      fork_static_capture(lane.voxel_const(k), fc[k], lane.fric(k), lane.old_pos(k), pk, mk,
+                          lane.static_friction(k));
       set_lane<L>(pos, k, pk);
       set_lane<L>(mom, k, mk);
     }
   }
-  am = {am.x + splat<L>(static_cast<double>(me_x) * dt),
-        am.y + splat<L>(static_cast<double>(me_y) * dt),
-        am.z + splat<L>(static_cast<double>(me_z) * dt)};
-  turn_and_store<L>(pos, mom, am, q, c.inv_inertia, dt, st, v, check);
+  am = {am.x + me_dt.x, am.y + me_dt.y, am.z + me_dt.z};
+  Part2L<L> r{pos, mom, am, {}};
+  r.q = turned<L>(pos, mom, am, start.q, start.c.inv_inertia, dt, sum);
+  return r;
+}
+
+// §2.12 step 8, part 2 of the fork's step for W free voxels v[0..W), one per lane; adds the
+// voxels' state to `check` (turned()).
+template <class L>
+inline void fork_part2_group(const Model& m, State& st, Scratch& sc, const int* v, float me_x,
+                             float me_y, float me_z, double& check) {
+  const double dt = m.dt_f;
+  const VoxelLanes<L> start = load_voxels<L>(m, st, v);
+  const VL<L> f2 = load_run<L>(sc.part2_force, v[0]);
+  const VL<L> me_dt{splat<L>(static_cast<double>(me_x) * dt),
+                    splat<L>(static_cast<double>(me_y) * dt),
+                    splat<L>(static_cast<double>(me_z) * dt)};
+  DV<L> sum;
+  const Part2L<L> r = fork_part2_lanes<L>(m, start, f2, me_dt, VoxelLaneAccess{m, st, sc, v}, sum);
+  store_voxels<L>(r.pos, r.mom, r.am, r.q, st, v);
+  for (int k = 0; k < L::W; ++k) check += sum[k];
 }
 
 // One free voxel through the same formulas one lane wide (LanesScalar): the last voxels of a pass

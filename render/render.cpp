@@ -1,6 +1,7 @@
 // Software rasteriser for `softevo render` (see render.hpp for the approach).
 #include "render/render.hpp"
 #include "render/font.hpp"
+#include "scene/cells.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -42,39 +43,8 @@ struct Fragment {
   std::int32_t next;  // index of the next fragment of the same pixel, -1 = end
 };
 
-// Lattice lookup of a body: which item sits in a cell. Items 0..V-1 are structural voxels,
-// V..V+C-1 chamber cells; -1 = empty (or outside the lattice).
-class CellIndex {
- public:
-  explicit CellIndex(const Body& body) {
-    Eigen::Vector3i hi(0, 0, 0);
-    for (const auto& c : body.voxel_cells) hi = hi.cwiseMax(c);
-    for (const auto& c : body.chamber_cells) hi = hi.cwiseMax(c);
-    dims_ = hi + Eigen::Vector3i::Ones();
-    items_.assign(static_cast<std::size_t>(dims_.prod()), -1);
-    const int v = static_cast<int>(body.voxel_cells.size());
-    for (int i = 0; i < v; ++i) items_[index(body.voxel_cells[i])] = i;
-    for (int j = 0; j < static_cast<int>(body.chamber_cells.size()); ++j) {
-      items_[index(body.chamber_cells[j])] = v + j;
-    }
-  }
-  int at(const Eigen::Vector3i& c) const {
-    if ((c.array() < 0).any() || (c.array() >= dims_.array()).any()) return -1;
-    return items_[index(c)];
-  }
-
- private:
-  std::size_t index(const Eigen::Vector3i& c) const {
-    return (static_cast<std::size_t>(c.x()) * dims_.y() + c.y()) * dims_.z() + c.z();
-  }
-  Eigen::Vector3i dims_;
-  std::vector<int> items_;
-};
-
-// Face directions in the link order of docs/model.md §2.1: X+, X-, Y+, Y-, Z+, Z-.
-const std::array<Eigen::Vector3i, 6> kFaceSteps = {
-    Eigen::Vector3i(1, 0, 0),  Eigen::Vector3i(-1, 0, 0), Eigen::Vector3i(0, 1, 0),
-    Eigen::Vector3i(0, -1, 0), Eigen::Vector3i(0, 0, 1),  Eigen::Vector3i(0, 0, -1)};
+using scene::CellIndex;
+using scene::kFaceSteps;
 
 // Chamber cells have no voxel in the simulation: place each one where its face neighbours
 // (wall voxels, then already placed chamber cells, pass by pass) say it should be:
@@ -337,6 +307,20 @@ void raster_quad(Raster& r, const std::array<Eigen::Vector3d, 4>& q, Colour base
   for (int k = 0; k < 4; ++k) s[k] = r.project(q[k]);
   raster_triangle(r, {s[0], s[1], s[2]}, lit, alpha, {true, false, true}, {false, false, false});
   raster_triangle(r, {s[0], s[2], s[3]}, lit, alpha, {true, true, false}, {false, false, true});
+}
+
+// A box of half sizes `half` [m] about `centre`, turned by `rot` (SceneOptions::insets): its six
+// faces as quads.
+void raster_box(Raster& r, const Eigen::Vector3d& centre, const Eigen::Matrix3d& rot,
+                const Eigen::Vector3d& half, Colour colour, float alpha) {
+  for (int axis = 0; axis < 3; ++axis) {
+    const Eigen::Vector3d a = rot.col((axis + 1) % 3) * half[(axis + 1) % 3];
+    const Eigen::Vector3d b = rot.col((axis + 2) % 3) * half[(axis + 2) % 3];
+    for (double sign : {1.0, -1.0}) {
+      const Eigen::Vector3d c = centre + sign * rot.col(axis) * half[axis];
+      raster_quad(r, {c - a - b, c + a - b, c + a + b, c - a + b}, colour, alpha);
+    }
+  }
 }
 
 // Grid spacing [m] for the floor: the finest of 1, 5, 10, 50 cm that is at least 8 output
@@ -713,6 +697,11 @@ Image render_poses(const Body& body, const std::vector<Pose>& poses, const Camer
       const float g = static_cast<float>(0.26 - 0.16 * inflation);
       raster_quad(r, corners, Colour{g, g, g * 1.1F},
                   static_cast<float>(options.chamber_alpha) * fade);
+    }
+    for (const SceneOptions::Inset& inset : options.insets) {
+      const Eigen::Matrix3d rot = pose.orientation[inset.voxel].normalized().toRotationMatrix();
+      raster_box(r, pose.position[inset.voxel] + rot * inset.centre, rot, 0.5 * inset.size,
+                 to_colour(inset.colour), fade);
     }
   }
 

@@ -116,6 +116,15 @@ struct SceneOptions {
   // A scale bar in cm (bottom left) and the stiffness colour bar of the materials (bottom
   // right), as a figure in a paper needs them (`softevo render` draws them).
   bool legend = false;
+  // Boxes drawn opaque inside voxels, moving with them (`softevo render --cutaway`: the inlet
+  // channels of docs/fabrication.md): centre relative to the voxel's centre and size [m], in
+  // the voxel's frame.
+  struct Inset {
+    int voxel = 0;
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero(), size = Eigen::Vector3d::Zero();
+    std::array<std::uint8_t, 3> colour{};
+  };
+  std::vector<Inset> insets;
 };
 
 // The memory render_poses takes for a width x height image at `supersample` (clamped to 1-4):

@@ -35,6 +35,8 @@ PACKAGES=(
   python3-dev pybind11-dev python3-pybind11  # the softevo Python package (python/, pybind11)
   python3-pytest python3-pandas      # its tests; run.individuals() as a pandas DataFrame
   libboost-dev zlib1g-dev            # softevo view: Boost.Beast (HTTP, WebSocket), zlib (--export-html)
+  lib3mf-dev                         # softevo fabricate: 3MF writing and --check (lib3mf 1.x)
+  python3-stl admesh                 # its tests: independent STL readers (numpy-stl, admesh)
 )
 
 # Open MPI refuses to run as root without these; harmless for other users.
@@ -60,7 +62,7 @@ install_dependencies() {
 }
 
 REQUIRE_ALL=(-DSOFTEVO_REQUIRE_TESTS=ON -DSOFTEVO_REQUIRE_PNG=ON -DSOFTEVO_REQUIRE_GIF=ON -DSOFTEVO_REQUIRE_MPI=ON
-  -DSOFTEVO_REQUIRE_HDF5=ON -DSOFTEVO_REQUIRE_VIEW=ON)
+  -DSOFTEVO_REQUIRE_HDF5=ON -DSOFTEVO_REQUIRE_VIEW=ON -DSOFTEVO_REQUIRE_3MF=ON)
 
 # The page of `softevo view` (view/web): three.js (and, for the browser test, puppeteer-core)
 # from the npm registry at the versions of view/web/package-lock.json. Node.js and npm come from

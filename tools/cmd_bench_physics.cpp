@@ -7,6 +7,13 @@
 // the core's clock is measured (bench_common.hpp) before and after the scenes, and each figure
 // is also given in cycles per voxel-step at the mean of the two readings, the unit in which
 // docs/scaling.md compares the step with the core's arithmetic bound.
+//
+// --batch measures the batched step (physics/batch.hpp, issue 40): K evaluations of one body in
+// the lanes of one step, K = 1, 4, 5, 8, 10, 16, each figure in microseconds per voxel-step per
+// evaluation (and its gain over K = 1, which is the one-robot step itself). The lanes start from
+// different states of one body: a block's states every 20 steps from rest, or (--robot FILE) the
+// robot's own evaluation every 3 control frames from frame 10 (worker/evaluation_states.hpp); no
+// external force.
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -21,11 +28,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/robot.hpp"
+#include "physics/batch.hpp"
 #include "physics/model.hpp"
 #include "physics/scenes.hpp"
 #include "physics/step.hpp"
 #include "tools/bench_common.hpp"
 #include "tools/commands.hpp"
+#include "worker/evaluation_states.hpp"
 
 namespace softevo::cli {
 
@@ -74,9 +84,11 @@ std::optional<Scene> parse_block_scene(const std::string& text) {
 struct BenchRow {
   std::string scene, integrator, simd;
   int voxels = 0, links = 0, steps = 0, failed_steps = 0;
+  int lanes = 1;  // evaluations per step (--batch)
   double cpu_seconds = 0.0, wall_seconds = 0.0;
+  // per evaluation
   double us_per_voxel_step() const {
-    return cpu_seconds * 1e6 / (static_cast<double>(steps) * voxels);
+    return cpu_seconds * 1e6 / (static_cast<double>(steps) * voxels * lanes);
   }
   double cycles_per_voxel_step(double clock_hz) const {
     return us_per_voxel_step() * 1e-6 * clock_hz;
@@ -96,19 +108,39 @@ struct CoreClock {
 };
 
 void print_header(bool with_cycles) {
-  std::printf("%-14s %-10s %-6s %6s %6s %12s %14s %10s %8s", "scene", "integrator", "simd",
-              "voxels", "links", "us/vox-step", "steps/second", "wall/cpu", "failed");
+  std::printf("%-14s %-10s %-6s %5s %6s %6s %12s %14s %10s %8s", "scene", "integrator", "simd",
+              "lanes", "voxels", "links", "us/vox-step", "steps/second", "wall/cpu", "failed");
   std::printf(with_cycles ? " %12s\n" : "\n", "cycles/v-s");
 }
 
 // One table row, with cycles per voxel-step at clock_hz when given.
 void print_row(const BenchRow& r, std::optional<double> clock_hz) {
-  std::printf("%-14s %-10s %-6s %6d %6d %12.4f %14.1f %10.2f %8d", r.scene.c_str(),
-              r.integrator.c_str(), r.simd.c_str(), r.voxels, r.links, r.us_per_voxel_step(),
-              r.steps / r.cpu_seconds, r.wall_seconds / r.cpu_seconds, r.failed_steps);
+  std::printf("%-14s %-10s %-6s %5d %6d %6d %12.4f %14.1f %10.2f %8d", r.scene.c_str(),
+              r.integrator.c_str(), r.simd.c_str(), r.lanes, r.voxels, r.links,
+              r.us_per_voxel_step(), r.steps / r.cpu_seconds, r.wall_seconds / r.cpu_seconds,
+              r.failed_steps);
   if (clock_hz) std::printf(" %12.1f", r.cycles_per_voxel_step(*clock_hz));
   std::printf("\n");
   std::fflush(stdout);
+}
+
+// The fastest of `runs` runs into row (CPU seconds, wall seconds, failed steps): prepare() sets a
+// run up outside the clock and returns the run, a callable that steps and returns its failed
+// steps.
+template <class Prepare>
+void keep_best_run(BenchRow& row, int runs, Prepare&& prepare) {
+  row.cpu_seconds = 1e300;
+  for (int r = 0; r < runs; ++r) {
+    auto run = prepare();
+    const double c0 = thread_cpu_seconds(), w0 = wall_seconds();
+    const int failed = run();
+    const double cpu = thread_cpu_seconds() - c0, wall = wall_seconds() - w0;
+    if (cpu < row.cpu_seconds) {
+      row.cpu_seconds = cpu;
+      row.wall_seconds = wall;
+      row.failed_steps = failed;
+    }
+  }
 }
 
 BenchRow bench_one(const Scene& scene, Integrator integrator, physics::Simd simd, int steps,
@@ -119,23 +151,69 @@ BenchRow bench_one(const Scene& scene, Integrator integrator, physics::Simd simd
   options.simd = simd;
   const physics::Model model =
       physics::build_model(physics::solid_block(scene.x, scene.y, scene.z, 1.0e5), cfg, options);
-  BenchRow row{scene.name,        to_string(integrator), physics::to_string(model.simd),
+  BenchRow row{scene.name,        to_string(integrator), softevo::to_string(model.simd),
                model.voxel_count, model.link_count,      steps};
-  row.cpu_seconds = 1e300;
-  for (int r = 0; r < runs; ++r) {
-    physics::State state = physics::initial_state(model);
-    physics::Scratch scratch = physics::make_scratch(model);
-    int failed = 0;
-    const double c0 = thread_cpu_seconds(), w0 = wall_seconds();
-    for (int i = 0; i < steps; ++i)
-      failed += physics::step(model, state, scratch) != physics::StepStatus::ok;
-    const double cpu = thread_cpu_seconds() - c0, wall = wall_seconds() - w0;
-    if (cpu < row.cpu_seconds) {
-      row.cpu_seconds = cpu;
-      row.wall_seconds = wall;
-      row.failed_steps = failed;
-    }
+  keep_best_run(row, runs, [&] {
+    return [&model, steps, state = physics::initial_state(model),
+            scratch = physics::make_scratch(model)]() mutable {
+      int failed = 0;
+      for (int i = 0; i < steps; ++i)
+        failed += physics::step(model, state, scratch) != physics::StepStatus::ok;
+      return failed;
+    };
+  });
+  return row;
+}
+
+// The lane counts of --batch.
+constexpr int kBatchLanes[] = {1, 4, 5, 8, 10, 16};
+
+// The starting states of --batch: kMaxBatchLanes states of one body (see the header).
+struct BatchScene {
+  std::string name;
+  physics::Model model;
+  std::vector<physics::State> states;
+};
+BatchScene block_batch_scene(const Scene& scene) {
+  BatchScene b{
+      scene.name,
+      physics::build_model(physics::solid_block(scene.x, scene.y, scene.z, 1.0e5), PhysicsConfig{}),
+      {}};
+  physics::State s = physics::initial_state(b.model);
+  physics::Scratch sc = physics::make_scratch(b.model);
+  for (int k = 0; k < physics::kMaxBatchLanes; ++k) {
+    b.states.push_back(s);
+    for (int i = 0; i < 20; ++i) physics::step(b.model, s, sc);
   }
+  return b;
+}
+
+// K lanes of `scene` stepped together: the best of `runs` runs of `steps` steps.
+BenchRow bench_batch(const BatchScene& scene, physics::Simd simd, int lanes, int steps, int runs) {
+  physics::Model model = scene.model;
+  model.simd = simd;
+  const std::vector<physics::State> states(scene.states.begin(), scene.states.begin() + lanes);
+  BenchRow row{scene.name,
+               to_string(model.integrator),
+               physics::to_string(model.simd),
+               model.voxel_count,
+               model.link_count,
+               steps};
+  row.lanes = lanes;
+  std::vector<physics::StepStatus> status(static_cast<std::size_t>(lanes));
+  keep_best_run(row, runs, [&] {
+    physics::BatchState batch = physics::make_batch_state(model, states);
+    physics::BatchScratch scratch = physics::make_batch_scratch(model, batch);
+    return
+        [&model, &status, steps, batch = std::move(batch), scratch = std::move(scratch)]() mutable {
+          int failed = 0;
+          for (int i = 0; i < steps; ++i) {
+            physics::step_batch(model, batch, scratch, {}, status);
+            for (physics::StepStatus st : status) failed += st != physics::StepStatus::ok;
+          }
+          return failed;
+        };
+  });
   return row;
 }
 
@@ -150,7 +228,15 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
   auto runs = std::make_shared<int>(3);
   auto only = std::make_shared<std::string>();
   auto cycles = std::make_shared<bool>(false);
+  auto batch = std::make_shared<bool>(false);
+  auto robot_file = std::make_shared<std::string>();
   cmd->add_flag("--json", *json, "print a JSON list of result objects");
+  cmd->add_flag("--batch", *batch,
+                "the batched step: 1, 4, 5, 8, 10 and 16 evaluations of one body per step, "
+                "microseconds per voxel-step per evaluation (pneuvox)");
+  cmd->add_option("--robot", *robot_file,
+                  "with --batch: also this robot file's body, its lanes from its own evaluation")
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--cycles", *cycles,
                 "measure the core's clock (a chain of dependent register additions, cross-checked "
                 "with the OS's figure) and add cycles per voxel-step");
@@ -166,7 +252,7 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
   for (const std::string& name : simd_choices) simd_help += " " + name;
   simd_help += " (default best; results are bit-identical, only the speed differs)";
   cmd->add_option("--simd", *simd_name, simd_help)->check(CLI::IsMember(simd_choices));
-  cmd->callback([&exit_code, json, steps, runs, only, simd_name, cycles] {
+  cmd->callback([&exit_code, json, steps, runs, only, simd_name, cycles, batch, robot_file] {
     std::vector<physics::Simd> widths;
     if (*simd_name == "all") {
       for (physics::Simd s : physics::simd_widths())
@@ -179,7 +265,7 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
       if (!physics::simd_supported(s)) {
         std::fprintf(stderr,
                      "softevo bench physics: --simd %s is not supported by this CPU or build\n",
-                     physics::to_string(s));
+                     softevo::to_string(s));
         exit_code = kExitUsage;
         return;
       }
@@ -224,13 +310,45 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
     }
     // Without --cycles each row is printed as it is measured; with it, once the clock is known.
     if (!*json && !*cycles) print_header(false);
+    if (!robot_file->empty() && !*batch) {
+      std::fprintf(stderr, "softevo bench physics: --robot needs --batch\n");
+      exit_code = kExitUsage;
+      return;
+    }
     std::vector<BenchRow> rows;
-    for (const Scene& scene : scenes) {
-      for (Integrator integrator : {Integrator::pneuvox, Integrator::symplectic})
-        for (physics::Simd simd : widths) {
-          rows.push_back(bench_one(scene, integrator, simd, *steps, *runs));
-          if (!*json && !*cycles) print_row(rows.back(), std::nullopt);
+    if (*batch) {
+      std::vector<BatchScene> batch_scenes;
+      for (const Scene& scene : scenes) batch_scenes.push_back(block_batch_scene(scene));
+      if (!robot_file->empty()) {
+        try {
+          const RobotFile robot = read_robot_file(*robot_file);
+          worker::EvaluationStates e =
+              worker::evaluation_states(robot, physics::kMaxBatchLanes, 10, 3);
+          if (static_cast<int>(e.states.size()) < physics::kMaxBatchLanes)
+            throw std::invalid_argument("its evaluation ends before frame " +
+                                        std::to_string(10 + 3 * (physics::kMaxBatchLanes - 1)));
+          batch_scenes.push_back({robot.name, std::move(e.model), std::move(e.states)});
+        } catch (const std::exception& e) {
+          std::fprintf(stderr, "softevo bench physics: --robot %s: %s\n", robot_file->c_str(),
+                       e.what());
+          exit_code = kExitUsage;
+          return;
         }
+      }
+      for (const BatchScene& scene : batch_scenes)
+        for (physics::Simd simd : widths)
+          for (int lanes : kBatchLanes) {
+            rows.push_back(bench_batch(scene, simd, lanes, *steps, *runs));
+            if (!*json && !*cycles) print_row(rows.back(), std::nullopt);
+          }
+    } else {
+      for (const Scene& scene : scenes) {
+        for (Integrator integrator : {Integrator::pneuvox, Integrator::symplectic})
+          for (physics::Simd simd : widths) {
+            rows.push_back(bench_one(scene, integrator, simd, *steps, *runs));
+            if (!*json && !*cycles) print_row(rows.back(), std::nullopt);
+          }
+      }
     }
     if (clock) {
       clock->after_hz = measure_core_clock_hz().value();
@@ -264,6 +382,7 @@ void register_bench_physics(CLI::App& app, int& exit_code) {
                        {"voxels", r.voxels},
                        {"links", r.links},
                        {"steps", r.steps},
+                       {"lanes", r.lanes},
                        {"runs", *runs},
                        {"us_per_voxel_step", us},
                        {"steps_per_second", sps},

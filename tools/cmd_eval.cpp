@@ -155,7 +155,7 @@ int run_eval(const EvalArgs& a) {
     j["fitness"] = json_number(result.fitness);
     j["status"] = to_string(result.status);
     j["killed"] = is_killed(result.status);
-    j["config_source"] = worker::to_string(worker::robot_config_source(robot, settings));
+    j["config_source"] = softevo::to_string(worker::robot_config_source(robot, settings));
     j["config"] = config_source;
     j["config_hash"] = hash_hex(config_hash(config));
     if (archived) {
@@ -184,7 +184,7 @@ int run_eval(const EvalArgs& a) {
     j["chambers"] = result.chambers;
     j["wall_seconds"] = json_number(result.wall_seconds);
     j["cpu_seconds"] = json_number(cpu_seconds);
-    j["simd"] = physics::to_string(simd_used);
+    j["simd"] = softevo::to_string(simd_used);
     j["message"] = result.message;
     std::printf("%s\n", j.dump().c_str());
   } else {
@@ -214,7 +214,7 @@ int run_eval(const EvalArgs& a) {
                 static_cast<long long>(result.steps));
     std::printf("body         %d voxels, %d chambers\n", result.voxels, result.chambers);
     std::printf("time         %.3f s wall, %.3f s CPU (physics SIMD width %s)\n",
-                result.wall_seconds, cpu_seconds, physics::to_string(simd_used));
+                result.wall_seconds, cpu_seconds, softevo::to_string(simd_used));
     if (!a.trace.empty())
       std::printf("trace        %s (%d frames)\n", a.trace.c_str(), trace.frames());
   }

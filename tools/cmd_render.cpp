@@ -20,6 +20,7 @@
 #include "common/config.hpp"
 #include "common/robot.hpp"
 #include "common/safe_write.hpp"
+#include "fabricate/fabricate.hpp"
 #include "motion/robot_source.hpp"
 #include "render/compose.hpp"
 #include "render/gif.hpp"
@@ -37,6 +38,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using render::Image;
+
+// The inlet channels in a cutaway: the viewer's yellow (view/web/app.js, 0xffc21a).
+constexpr std::array<std::uint8_t, 3> kChannelColour = {0xff, 0xc2, 0x1a};
 using render::View;
 
 struct RenderArgs {
@@ -59,10 +63,11 @@ struct RenderArgs {
   bool best = false;
   std::string config_file;  // robot files: config to simulate with
   std::vector<std::string> overrides;
-  std::string robot_file;    // traces: body for the chamber cells
-  bool static_pose = false;  // robot/archive: draw the rest pose, never simulate
-  bool force = false;        // replace an existing output file
-  bool json = false;         // one JSON object instead of the line
+  std::string robot_file;              // traces: body for the chamber cells
+  bool static_pose = false;            // robot/archive: draw the rest pose, never simulate
+  std::optional<std::string> cutaway;  // "" = default section, "y=K" = rows y >= K kept
+  bool force = false;                  // replace an existing output file
+  bool json = false;                   // one JSON object instead of the line
 };
 
 std::string lower(std::string s) {
@@ -175,7 +180,27 @@ int run_render(const RenderArgs& args) {
   } else {
     request.shown_times = [at = args.at](double) { return std::vector<double>{at}; };
   }
-  const Motion motion = load_motion(args.input, request);
+  Motion motion = load_motion(args.input, request);
+  // --cutaway: the cells in front of the section go, the inlet channels behind it are drawn
+  // (docs/rendering.md "Cutaway", docs/fabrication.md).
+  std::vector<render::SceneOptions::Inset> channels;
+  if (args.cutaway) {
+    std::optional<int> cut_y;
+    if (!args.cutaway->empty()) {
+      char* end = nullptr;
+      const long y =
+          args.cutaway->rfind("y=", 0) == 0 ? std::strtol(args.cutaway->c_str() + 2, &end, 10) : -1;
+      if (!end || *end != '\0' || end == args.cutaway->c_str() + 2)
+        throw std::invalid_argument("render: --cutaway " + *args.cutaway +
+                                    " is not y=ROW (the first lattice row kept)");
+      cut_y = static_cast<int>(y);
+    }
+    fabricate::Cutaway cut = fabricate::cut_away(motion.body, motion.poses, cut_y);
+    motion.body = std::move(cut.body);
+    motion.poses = std::move(cut.poses);
+    for (const fabricate::ChannelPiece& p : cut.channels)
+      channels.push_back({p.voxel, p.centre, p.size, kChannelColour});
+  }
   if (request.needs_motion && motion.poses.size() < 2 && !args.static_pose) {
     throw std::runtime_error("render " + args.input + ": no motion to show (single pose)");
   }
@@ -199,6 +224,12 @@ int run_render(const RenderArgs& args) {
                                 "input), so it has no target direction");
 
   render::SceneOptions scene;
+  if (args.cutaway) {
+    // Fainter walls and cavities, so that the channels behind them show.
+    scene.insets = channels;
+    scene.body_alpha = 0.3;
+    scene.chamber_alpha = 0.6;
+  }
   scene.supersample = args.supersample;
   scene.legend = true;
   scene.floor_z = -0.5 * motion.body.voxel_size;
@@ -323,6 +354,12 @@ void register_render(CLI::App& app, int& exit_code) {
   cmd->add_option("--robot", args->robot_file,
                   "trace: robot file giving the chamber cells when the trace has none");
   cmd->add_flag("--static", args->static_pose, "draw the start pose, never simulate");
+  cmd->add_option("--cutaway", args->cutaway,
+                  "section through the body: the lattice rows in front of y=ROW removed (default "
+                  "row: the one with the most chamber cells), the chambers' cavities and inlet "
+                  "channels shown (docs/fabrication.md)")
+      ->expected(0, 1)
+      ->type_name("[y=ROW]");
   cmd->add_flag("--force", args->force, "replace an existing output file");
   cmd->add_flag("--json", args->json, "print one JSON object describing what was written");
   cmd->callback([&exit_code, args] { exit_code = run_render(*args); });

@@ -128,7 +128,8 @@ int run_view(const ViewArgs& args) {
   // Escaped: a robot name may carry terminal control sequences (title, clear screen).
   if (!args.json)
     std::printf("softevo view: %s (%s %s) at %s\n", printable(input.name).c_str(),
-                view::to_string(input.kind), printable(args.input).c_str(), server.url().c_str());
+                softevo::to_string(input.kind), printable(args.input).c_str(),
+                server.url().c_str());
   if (!server.loopback_only())
     std::fprintf(stderr,
                  "softevo view: warning: --bind %s is reachable from other machines: anyone who "
@@ -145,7 +146,7 @@ int run_view(const ViewArgs& args) {
     j["port"] = server.port();
     j["input"] = args.input;
     j["name"] = input.name;
-    j["kind"] = view::to_string(input.kind);
+    j["kind"] = softevo::to_string(input.kind);
     j["loopback_only"] = server.loopback_only();
     std::printf("%s\n", j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
   } else {

@@ -93,6 +93,7 @@ void register_champions(CLI::App& app, int& exit_code);
 void register_bench_eval(CLI::App& app, int& exit_code);
 void register_info(CLI::App& app, int& exit_code);
 void register_export(CLI::App& app, int& exit_code);
+void register_fabricate(CLI::App& app, int& exit_code);
 void register_repair(CLI::App& app, int& exit_code);
 void register_evolve(CLI::App& app, int& exit_code);
 // Registered only in a build with the viewer (SOFTEVO_ENABLE_VIEW).

@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
   softevo::cli::register_bench_eval(app, exit_code);
   softevo::cli::register_info(app, exit_code);
   softevo::cli::register_export(app, exit_code);
+  softevo::cli::register_fabricate(app, exit_code);
   softevo::cli::register_repair(app, exit_code);
 #ifdef SOFTEVO_HAVE_VIEW
   softevo::cli::register_view(app, exit_code);

@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "fabricate/fabricate.hpp"
 #include "view/bytes.hpp"
 #include "view/export_html.hpp"
 
@@ -58,6 +59,31 @@ json terrain_json(const TerrainGrid& g) {
           {"nx", g.nx},     {"ny", g.ny}, {"z", base64(bytes)}};
 }
 
+// The fabrication geometry the page's "fabrication" box shows (docs/fabrication.md): each
+// chamber's inlet channel as one box per wall voxel it passes through, in that voxel's frame
+// (centre relative to the voxel's centre, size [m]), so that it moves with the voxel. A body
+// fabricate refuses gets {"error": message} instead.
+json fabrication_json(const scene::Body& body) {
+  json j;
+  try {
+    fabricate::Options inlets_only;
+    inlets_only.meshes = false;
+    const fabricate::Fabrication fab = fabricate::fabricate(body, {}, inlets_only);
+    json channels = json::array();
+    for (const fabricate::ChannelPiece& p : fabricate::channel_pieces(fab, body)) {
+      channels.push_back({{"chamber", p.chamber},
+                          {"voxel", p.voxel},
+                          {"centre", {p.centre.x(), p.centre.y(), p.centre.z()}},
+                          {"size", {p.size.x(), p.size.y(), p.size.z()}}});
+    }
+    j["channels"] = channels;
+    j["channel_diameter"] = fab.options.channel_diameter;
+  } catch (const fabricate::FabricateError& e) {
+    j["error"] = e.what();
+  }
+  return j;
+}
+
 }  // namespace
 
 ClientSession::ClientSession(const ViewInput& input, ClientOptions options)
@@ -93,6 +119,7 @@ json ClientSession::hello_json(const TerrainGrid& ground) const {
     for (const auto& c : *list) cells.insert(cells.end(), {c.x(), c.y(), c.z()});
   j["cells"] = cells;
   j["chamber_index"] = body.chamber_index;
+  j["fabrication"] = fabrication_json(body);
   j["planned_records"] = session_->planned_records();
   j["control_rate"] = session_->control_rate();
   j["component_names"] = session_->component_names();

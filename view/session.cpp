@@ -25,18 +25,6 @@ namespace softevo::view {
 
 namespace fs = std::filesystem;
 
-const char* to_string(InputKind kind) {
-  switch (kind) {
-    case InputKind::robot:
-      return "robot";
-    case InputKind::archive:
-      return "archive";
-    case InputKind::trace:
-      return "trace";
-  }
-  return "?";
-}
-
 namespace {
 
 constexpr const char* kSteeringFormat = "softevo.steering/1";
@@ -299,7 +287,7 @@ TerrainGrid terrain_grid(const Session& session, double margin) {
         "is not finite: no ground can be drawn under it");
   lo_x -= margin, lo_y -= margin, hi_x += margin, hi_y += margin;
   const double s = session.input().body.voxel_size;
-  g.kind = physics::to_string(terrain.kind);
+  g.kind = softevo::to_string(terrain.kind);
   // Two samples of the side are spent on snapping both ends outwards to the lattice.
   g.step = std::max(s, std::max(hi_x - lo_x, hi_y - lo_y) / (kTerrainGridMaxSide - 3));
   const double first_i = std::floor(lo_x / g.step), first_j = std::floor(lo_y / g.step);

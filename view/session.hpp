@@ -42,7 +42,12 @@ struct ViewRequest {
 };
 
 enum class InputKind { robot, archive, trace };
-const char* to_string(InputKind kind);
+}  // namespace softevo::view
+template <>
+struct softevo::ChoiceNames<softevo::view::InputKind> {
+  static constexpr std::array<const char*, 3> names = {"robot", "archive", "trace"};
+};
+namespace softevo::view {
 
 // The loaded input. Live inputs carry the robot and the resolved config; a trace carries its
 // frames.
@@ -163,7 +168,7 @@ class Session {
 // a voxel below the height a voxel centre rests at, as `softevo render` draws it) on a square
 // lattice of points, x fastest. Empty (nx = 0) for the flat floor.
 struct TerrainGrid {
-  std::string kind;       // physics::to_string of the terrain kind
+  std::string kind;       // to_string of the terrain kind
   double x0 = 0, y0 = 0;  // first sample [m]
   double step = 0;        // grid spacing [m]
   int nx = 0, ny = 0;     // samples along x, y

@@ -143,20 +143,6 @@ RobotConfigSource robot_config_source(const RobotFile& robot, const RobotEvalSet
   return RobotConfigSource::built_in;
 }
 
-const char* to_string(RobotConfigSource source) {
-  switch (source) {
-    case RobotConfigSource::config_file:
-      return "file";
-    case RobotConfigSource::config_text:
-      return "text";
-    case RobotConfigSource::robot_file:
-      return "robot";
-    case RobotConfigSource::built_in:
-      return "defaults";
-  }
-  return "defaults";
-}
-
 std::string describe_config_source(const RobotFile& robot, const RobotEvalSettings& settings) {
   std::string text;
   switch (robot_config_source(robot, settings)) {

@@ -23,6 +23,7 @@
 // controller's are not fed.
 #pragma once
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -152,8 +153,13 @@ struct RobotEvalSettings {
 // Where the config of a robot evaluation comes from (the order of RobotEvalSettings).
 enum class RobotConfigSource : std::uint8_t { config_file, config_text, robot_file, built_in };
 RobotConfigSource robot_config_source(const RobotFile& robot, const RobotEvalSettings& settings);
+}  // namespace softevo::worker
 // "robot" (its evaluation block), "file", "text" or "defaults": the JSON spelling.
-const char* to_string(RobotConfigSource source);
+template <>
+struct softevo::ChoiceNames<softevo::worker::RobotConfigSource> {
+  static constexpr std::array<const char*, 4> names = {"file", "text", "robot", "defaults"};
+};
+namespace softevo::worker {
 // One line for people: "the robot file's run config (hash ..., from RUN.h5 generation G id I)",
 // "--config FILE", ... with the --set overrides counted.
 std::string describe_config_source(const RobotFile& robot, const RobotEvalSettings& settings);

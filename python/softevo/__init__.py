@@ -17,12 +17,12 @@ The numbers are the C++ numbers, bit for bit: every function calls the same code
     for gen in softevo.evolution("configs/quickstart.toml", workers=2):   # evolve robots
         print(gen.generation, gen.best, gen.fitness_unit)
 
-Robots: load_robot, Robot.save, develop.  Configs: load_config, default_config, parse_config,
-Config (a read-only Mapping).
+Robots: load_robot, Robot.save, Robot.fabricate, develop.  Configs: load_config, default_config,
+parse_config, Config (a read-only Mapping).
 Evaluation: evaluate, evaluate_many, EvalResult.  Stepping: Simulation, Controller,
 softevo.env.SoftRobotEnv.  Evolution: evolve, evolution, Generation.  Archives: open_run.
-Errors: RobotFileError and ConfigError (ValueError), ArchiveError and OutputFileError (OSError),
-RunError (RuntimeError).  softevo.__version__: the version.
+Errors: RobotFileError, ConfigError and FabricateError (ValueError), ArchiveError and
+OutputFileError (OSError), RunError (RuntimeError).  softevo.__version__: the version.
 """
 
 from __future__ import annotations
@@ -64,6 +64,7 @@ from ._softevo import (  # noqa: F401  (re-exported)
     ConfigError,
     Controller,
     EvalResult,
+    FabricateError,
     OutputFileError,
     Robot,
     RobotFileError,
@@ -80,8 +81,8 @@ __version__ = _build_info.VERSION
 
 __all__ = [
     "ArchiveError", "ArchiveIntegrityWarning", "Config", "ConfigError", "Controller", "EvalResult",
-    "Evolution", "Generation", "OutputFileError", "Robot", "RobotFileError", "Run", "RunError",
-    "Simulation",
+    "Evolution", "FabricateError", "Generation", "OutputFileError", "Robot", "RobotFileError",
+    "Run", "RunError", "Simulation",
     "TASKS", "__version__", "default_config", "develop", "evaluate", "evaluate_many", "evolution",
     "evolve", "load_config", "load_robot", "open_run", "parse_config", "status_name",
 ]
@@ -148,6 +149,41 @@ def _robot_save(self: Robot, path: str | os.PathLike, overwrite: bool = False) -
 
 Robot._save = Robot.save
 Robot.save = _robot_save
+
+
+def _robot_fabricate(self: Robot, path: str | os.PathLike | None = None, *,
+                     format: str = "", scale: float = 1.0, channel_diameter: float = 1.5,
+                     slices: str | os.PathLike | None = None,
+                     dpi: str | Sequence[float] = (600, 300),
+                     layer_um: float = 30.0, mold: str | os.PathLike | None = None,
+                     wall: float = 3.0, split: str | float | None = None,
+                     force: bool = False) -> dict:
+    """Export the robot for 3-D printing and silicone casting, as `softevo fabricate` does
+    (docs/fabrication.md), with the same options in the same units:
+
+    path: OUT.3mf (one object per material group) or OUT.stl (OUT-<group>.stl each), or None;
+    format: "3mf" or "stl" (default: by the extension); scale: printed voxel edge = voxel_size
+    x scale; channel_diameter: inlet channel side [mm]; slices: directory of material-per-pixel
+    PNG layers, dpi (X, Y) and layer_um [um] their pitch; mold: directory of the two-part mold
+    and its cores, wall [mm] of mold material, split: "z=HEIGHT" or HEIGHT [mm above the body's
+    bottom] (default: the widest section); force: replace existing files.
+
+    Returns a dict: files written, slices (count), voxels, chambers, groups (name, voxels,
+    triangles, volume_mm3), channel_volume_mm3, split_z_mm, summary. FabricateError (a
+    ValueError) names the option or chamber on bad input; nothing is written then.
+    """
+    if not isinstance(dpi, str):
+        dpi = ",".join(repr(float(v)) for v in dpi)
+    if split is not None and not isinstance(split, str):
+        split = f"z={float(split)!r}"
+    return self._fabricate(os.fspath(path) if path is not None else "", format, float(scale),
+                           float(channel_diameter),
+                           os.fspath(slices) if slices is not None else "", dpi,
+                           float(layer_um), os.fspath(mold) if mold is not None else "",
+                           float(wall), split or "", bool(force))
+
+
+Robot.fabricate = _robot_fabricate
 
 
 class _ConfigMapping(collections.abc.Mapping):

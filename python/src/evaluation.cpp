@@ -40,7 +40,7 @@ namespace {
 struct Result {
   EvalResult result;
   std::string task;
-  std::string config_source;  // worker::to_string(RobotConfigSource): robot, text or defaults
+  std::string config_source;  // softevo::to_string(RobotConfigSource): robot, text or defaults
   std::vector<tasks::ComponentName> names;
 };
 
@@ -125,7 +125,7 @@ Result evaluate_robot(const RobotFile& robot, const std::optional<Config>& confi
   opts.ablate_sensors = a.sensors;
   Result r;
   r.task = to_string(resolved.task.kind);
-  r.config_source = worker::to_string(worker::robot_config_source(robot, settings));
+  r.config_source = softevo::to_string(worker::robot_config_source(robot, settings));
   r.names = t->component_names();
   // Ctrl-C: Python runs its SIGINT handler only when the interpreter gets control, which a
   // long evaluation without the GIL withholds (issue 29: 14 s). The evaluation asks at most

@@ -17,6 +17,7 @@
 #include "evo/cppn.hpp"
 #include "evo/development.hpp"
 #include "evo/genome.hpp"
+#include "fabricate/fabricate.hpp"
 #include "io/archive.hpp"
 #include "python/src/bindings.hpp"
 #include "worker/evaluate.hpp"
@@ -103,6 +104,45 @@ RobotFile develop_genome(const py::bytes& encoded, const Config& config) {
   return worker::robot_file_of(config, evo::decode_genome(data), "");
 }
 
+// Robot.fabricate (softevo/__init__.py checks the keyword names and the units are the CLI's).
+py::dict fabricate_robot(const RobotFile& robot, const std::string& output,
+                         const std::string& format, double scale, double channel_diameter_mm,
+                         const std::string& slices, const std::string& dpi, double layer_um,
+                         const std::string& mold, double wall_mm, const std::string& split,
+                         bool force) {
+  fabricate::Request request;
+  request.output = output;
+  request.format = format;
+  request.slices = slices;
+  request.mold = mold;
+  request.overwrite = force ? Overwrite::replace : Overwrite::refuse;
+  fabricate::Options& o = request.options;
+  o.scale = scale;
+  o.channel_diameter = channel_diameter_mm * 1e-3;
+  o.wall = wall_mm * 1e-3;
+  o.layer = layer_um * 1e-6;
+  fabricate::parse_dpi(dpi, o);
+  if (!split.empty()) fabricate::parse_split(split, o);
+  const fabricate::Written w =
+      fabricate::fabricate_robot(robot, fabricate::provenance_of(robot), request);
+  py::dict d;
+  d["files"] = w.files;
+  d["slices"] = w.slices;
+  d["voxels"] = w.fabrication.voxel_count;
+  d["chambers"] = w.fabrication.inlets.size();
+  py::list groups;
+  for (const auto& g : w.fabrication.groups) {
+    groups.append(py::dict("name"_a = g.name, "voxels"_a = g.voxels,
+                           "triangles"_a = g.mesh.triangles.size(),
+                           "volume_mm3"_a = g.mesh.volume() * 1e9));
+  }
+  d["groups"] = groups;
+  d["channel_volume_mm3"] = w.fabrication.channel_volume * 1e9;
+  d["split_z_mm"] = w.mold ? py::object(py::float_(w.mold->split_z * 1e3)) : py::none();
+  d["summary"] = w.fabrication.summary();
+  return d;
+}
+
 }  // namespace
 
 void bind_errors(py::module_& m) {
@@ -114,6 +154,9 @@ void bind_errors(py::module_& m) {
       "A missing, foreign or malformed run archive (names the file and the object).";
   py::register_exception<OutputFileError>(m, "OutputFileError", PyExc_OSError).attr("__doc__") =
       "An output file that may not be written (symlink, special file, existing file).";
+  py::register_exception<fabricate::FabricateError>(m, "FabricateError", PyExc_ValueError)
+      .attr("__doc__") =
+      "A robot or option that Robot.fabricate refuses (names the option or the chamber).";
 }
 
 void bind_robots(py::module_& m) {
@@ -134,6 +177,8 @@ Load one with softevo.load_robot(path); run.genome(id) gives one from a run arch
           "load", [](const std::filesystem::path& path) { return read_robot_file(path.string()); },
           "path"_a, "Read a robot file (see softevo.load_robot).")
       .def("to_json", &robot_to_json, "The robot as softevo.robot/1 JSON text.")
+      .def("_fabricate", &fabricate_robot, "output"_a, "format"_a, "scale"_a, "channel_diameter"_a,
+           "slices"_a, "dpi"_a, "layer_um"_a, "mold"_a, "wall"_a, "split"_a, "force"_a)
       .def(
           "save",
           [](const RobotFile& r, const std::filesystem::path& path, bool overwrite) {

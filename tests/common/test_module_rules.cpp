@@ -1,7 +1,7 @@
 // Architecture rules (docs/architecture.md §1) that the compiler cannot see: physics/ and evo/
 // never include MPI or HDF5, evo/ never includes physics/, physics/ never includes evo/; only
 // mpi/ includes or calls MPI; master/ and worker/ never include each other; motion/ never
-// includes render/, and scene/ only common/.
+// includes render/, scene/ only common/, and fabricate/ only scene/, render/ and common/.
 // The CMake target links enforce the same rules at link time.
 #include <gtest/gtest.h>
 
@@ -205,6 +205,19 @@ TEST(ModuleRules, MotionNeverSeesTheRendererAndSceneOnlyCommon) {
     if (module != "scene") others += (others.empty() ? "" : "|") + module;
   const auto s = forbidden_includes("scene", std::regex("^(" + others + ")/"));
   EXPECT_TRUE(s.empty()) << describe(s);
+}
+
+TEST(ModuleRules, FabricateSeesOnlySceneRenderAndCommon) {
+  // fabricate/ works on scene::Body (docs/architecture.md §1): the stiffness colours and PNG
+  // writing of render/ and common/; never physics, evo, worker, io, motion, MPI or HDF5.
+  std::string others;
+  for (const auto& module : modules_except("common"))
+    if (module != "scene" && module != "render" && module != "fabricate")
+      others += (others.empty() ? "" : "|") + module;
+  const auto f = forbidden_includes("fabricate", std::regex("^(" + others + ")/"));
+  EXPECT_TRUE(f.empty()) << describe(f);
+  const auto h = forbidden_includes("fabricate", kMpiOrHdf5);
+  EXPECT_TRUE(h.empty()) << describe(h);
 }
 
 TEST(ModuleRules, DetectorFindsAPlantedViolation) {

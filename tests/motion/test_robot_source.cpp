@@ -164,7 +164,7 @@ TEST_F(RobotSource, ATracesTerrainAttributesRebuildTheEvaluationsGround) {
     const physics::Terrain built =
         physics::make_terrain(worker::terrain_params(config, {}, 0), robot.body.lattice,
                               static_cast<double>(static_cast<float>(robot.body.voxel_size)));
-    const std::string kind = physics::to_string(built.kind);
+    const std::string kind = softevo::to_string(built.kind);
     ASSERT_NE(kind, "flat");
     const auto task = tasks::make_task(config);
     TraceRecorder recorder;

@@ -59,7 +59,7 @@ TEST(ChampionBits, ShortEvaluationsGiveThePinnedFitnessBits) {
     ASSERT_EQ(r.status, EvalStatus::ok) << p.robot << ": " << r.message;
     const std::uint64_t bits = std::bit_cast<std::uint64_t>(r.fitness);
     std::printf("%s %.2f s (%s): fitness %.17g = 0x%016llx\n", p.robot, p.seconds,
-                physics::to_string(physics::best_simd()), r.fitness,
+                softevo::to_string(physics::best_simd()), r.fitness,
                 static_cast<unsigned long long>(bits));
     EXPECT_EQ(bits, p.bits) << p.robot;
   }

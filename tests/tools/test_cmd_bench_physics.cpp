@@ -2,7 +2,9 @@
 // voxel-step, and with --cycles the measured clock (before, after and their mean) and the same
 // figure in cycles per voxel-step at that clock; the table then has the cycles column and names
 // the clock. --scene blockXxYxZ runs a solid block of that size; a scene that is neither named nor
-// such a block, or a block out of range, is a usage error that says why.
+// such a block, or a block out of range, is a usage error that says why. --batch gives a row per
+// number of lanes (1, 4, 5, 8, 10, 16) with microseconds per voxel-step per evaluation; --robot
+// adds a robot's body and needs --batch.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -71,6 +73,40 @@ TEST_F(CmdBenchPhysics, AnUnknownSceneOrABlockOutOfRangeIsAUsageError) {
     EXPECT_EQ(r.code, 2) << scene << ": " << r.output;
     EXPECT_NE(r.output.find("at most 100000 voxels"), std::string::npos) << r.output;
   }
+}
+
+TEST_F(CmdBenchPhysics, TheBatchedSceneHasARowPerLaneCountPerEvaluation) {
+  const auto r = run_command(binary("softevo") + kSmallRun + " --batch --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json rows = nlohmann::json::parse(r.output.substr(r.output.find('[')));
+  ASSERT_EQ(rows.size(), 6u) << "one row per lane count";
+  const int lanes[] = {1, 4, 5, 8, 10, 16};
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const nlohmann::json& row = rows[i];
+    EXPECT_EQ(row["lanes"], lanes[i]);
+    EXPECT_EQ(row["integrator"], "pneuvox");
+    EXPECT_EQ(row["failed_steps"], 0);
+    const double cpu = row["cpu_seconds"].get<double>();
+    EXPECT_DOUBLE_EQ(row["us_per_voxel_step"].get<double>(), cpu * 1e6 / (20.0 * 64 * lanes[i]));
+  }
+}
+
+TEST_F(CmdBenchPhysics, ARobotWithoutBatchIsAUsageError) {
+  const auto r =
+      run_command(binary("softevo") + kSmallRun + " --robot robots/gait-open-walker.robot.json");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("--robot needs --batch"), std::string::npos) << r.output;
+}
+
+TEST_F(CmdBenchPhysics, ARobotsBodyIsABatchedScene) {
+  const auto r = run_command(binary("softevo") +
+                             " bench physics --scene block4x4x4 --steps 2 --runs 1 --simd scalar "
+                             "--batch --json --robot robots/gait-open-walker.robot.json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json rows = nlohmann::json::parse(r.output.substr(r.output.find('[')));
+  ASSERT_EQ(rows.size(), 12u) << "the block's 6 rows, then the robot's";
+  EXPECT_EQ(rows[6]["scene"], "gait-open_seed3_gen4_id90");  // the robot file's name
+  EXPECT_EQ(rows[11]["lanes"], 16);
 }
 
 #if defined(__x86_64__) || defined(__aarch64__)

@@ -193,6 +193,35 @@ TEST_F(CmdRender, BadInputsFailWithUsageExitCode) {
             2);
 }
 
+// --cutaway: the rows in front of the section go and the chambers' inlet channels (the viewer's
+// yellow, 0xffc21a) are drawn; the same picture without it shows no channel. A row outside the
+// lattice or a malformed value is a usage error.
+TEST_F(CmdRender, CutawayShowsTheInletChannels) {
+  const char* src = std::getenv("SOFTEVO_SOURCE_DIR");
+  const std::string robot =
+      (fs::path(src ? src : ".") / "robots" / "gait-closed-walker.robot.json").string();
+  auto channel_pixels = [](const render::Image& img) {
+    long n = 0;
+    for (int y = 0; y < img.height; ++y)
+      for (int x = 0; x < img.width; ++x) {
+        const auto p = img.pixel(x, y);
+        n += p[0] > 170 && p[1] > 120 && p[2] < 110 && p[0] - p[2] > 100;
+      }
+    return n;
+  };
+  const std::string cut = (dir_ / "cut.png").string(), whole = (dir_ / "whole.png").string();
+  const std::string render =
+      softevo_binary() + " render " + robot + " --view iso --width 1600 --height 1200 ";
+  ASSERT_EQ(run(render + "--cutaway -o " + cut), 0);
+  ASSERT_EQ(run(render + "--static -o " + whole), 0);
+  const long with = channel_pixels(render::read_png(cut));
+  EXPECT_GT(with, 50);
+  EXPECT_EQ(channel_pixels(render::read_png(whole)), 0);
+  ASSERT_EQ(run(render + "--cutaway y=0 -o " + (dir_ / "cut0.png").string()), 0);
+  EXPECT_EQ(run(render + "--cutaway y=99 -o " + (dir_ / "x.png").string()), 2);
+  EXPECT_EQ(run(render + "--cutaway 3 -o " + (dir_ / "x.png").string()), 2);
+}
+
 // Issue 39: a trace with inf positions made `view --export-html` say only "vector::reserve" (and
 // the live server exit when a page connected). A trace is checked on reading: `render` and
 // `view` name the file, the value and the rule, and exit 2.

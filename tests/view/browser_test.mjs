@@ -84,7 +84,7 @@ function canvasMeasure(page, measure) {
 // Robot pixels of a screenshot taken from the page's canvas: colour classes of the voxels.
 async function robotPixels(page) {
   return canvasMeasure(page, (d) => {
-    let blue = 0, red = 0, dark = 0, coloured = 0;
+    let blue = 0, red = 0, dark = 0, coloured = 0, yellow = 0;
     for (let i = 0; i < d.length; i += 4) {
       const r = d[i], gg = d[i + 1], b = d[i + 2];
       const sat = Math.max(r, gg, b) - Math.min(r, gg, b);
@@ -92,8 +92,9 @@ async function robotPixels(page) {
       if (b > r + 40) blue++;
       if (r > b + 40 && r > gg + 20) red++;
       if (r + gg + b < 200) dark++;
+      if (r > 170 && gg > 120 && b < 110 && r - b > 100) yellow++;  // inlet channels, 0xffc21a
     }
-    return { blue, red, dark, coloured, total: d.length / 4 };
+    return { blue, red, dark, coloured, yellow, total: d.length / 4 };
   });
 }
 
@@ -164,6 +165,16 @@ async function chamberPixels(page) {
   });
 }
 
+// The page's "fabrication" box ticked (or unticked) and the scene drawn again.
+async function toggleFabrication(page) {
+  await page.evaluate(async () => {
+    const r0 = window.softevo.renders;
+    document.getElementById('fabrication').click();
+    while (window.softevo.renders === r0) await new Promise((r) => requestAnimationFrame(r));
+  });
+  return page.evaluate(() => ({ ...window.softevo.fabrication }));
+}
+
 // An exported page (file://), paused at scrubber position `at` (a number, or 'max': the end).
 async function pausedExport(html, name, at) {
   const page = await browser.newPage();
@@ -231,6 +242,13 @@ try {
   check(px.coloured > 2000 && px.blue + px.red > 1500, 'the robot is drawn in stiffness colours');
   const darkened = await chamberPixels(page);
   check(darkened > 1000, `dark chambers show through (${darkened} pixels darker than without them)`);
+  const fabOn = await toggleFabrication(page);
+  const channelPx = (await robotPixels(page)).yellow;
+  if (shots) await page.screenshot({ path: path.join(shots, 'gait-fabrication.png') });
+  const fabOff = await toggleFabrication(page);
+  check(fabOn.shown && fabOn.channels > 0 && !fabOff.shown,
+    `the fabrication box shows ${fabOn.channels} channel segments and hides them again`);
+  check(channelPx > 20 + px.yellow, `the inlet channels are drawn (${channelPx} channel-coloured pixels, ${px.yellow} without)`);
   if (shots) await page.screenshot({ path: path.join(shots, 'gait-side.png') });
   await send(page, { type: 'play' });
   // WebM recording of the canvas (MediaRecorder): a second of video.

@@ -4,8 +4,10 @@
 // directory and tells the page only the file names.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -63,6 +65,28 @@ TEST(ViewClientSession, StartsWithTheHelloAndTheFirstFrame) {
   EXPECT_EQ(hello["fitness_unit"], "cm");
   EXPECT_EQ(hello["component_units"], json::array({"deg", "cm", "cm", "rad", "cm"}));
   EXPECT_EQ(frames_in(out), 1);
+}
+
+TEST(ViewClientSession, TheHelloCarriesEachChambersInletChannelForTheFabricationView) {
+  const view::ViewInput in = test::block_input(TaskKind::gait, 0.2);
+  view::ClientSession c(in, {});
+  const json fab = texts(c.start()).at(0)["fabrication"];
+  ASSERT_TRUE(fab.contains("channels")) << fab.dump();
+  std::set<int> chambers;
+  const double s = in.body.voxel_size;
+  for (const json& seg : fab["channels"]) {
+    chambers.insert(seg["chamber"].get<int>());
+    // A wall voxel of the body, and a box inside its cube: 1.5 mm square, a voxel long.
+    const int v = seg["voxel"];
+    ASSERT_TRUE(v >= 0 && v < static_cast<int>(in.body.voxel_cells.size()));
+    std::vector<double> size = seg["size"];
+    std::sort(size.begin(), size.end());
+    EXPECT_NEAR(size[0], 1.5e-3, 1e-12);
+    EXPECT_NEAR(size[1], 1.5e-3, 1e-12);
+    EXPECT_NEAR(size[2], s, 1e-12);
+    for (double x : seg["centre"].get<std::vector<double>>()) EXPECT_LE(std::abs(x), s / 2);
+  }
+  EXPECT_EQ(static_cast<int>(chambers.size()), in.body.chamber_count);
 }
 
 TEST(ViewClientSession, MalformedMessagesAreAnsweredAndChangeNothing) {

@@ -76,7 +76,7 @@ TEST(EvalDeterminism, SyntheticClosedLoopRobotInTwoProcesses) {
 std::vector<std::string> wide_widths() {
   std::vector<std::string> widths;
   for (auto simd : {softevo::physics::Simd::avx2, softevo::physics::Simd::avx512})
-    if (softevo::physics::simd_supported(simd)) widths.push_back(softevo::physics::to_string(simd));
+    if (softevo::physics::simd_supported(simd)) widths.push_back(softevo::to_string(simd));
   return widths;
 }
 

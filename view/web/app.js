@@ -36,7 +36,7 @@ scene.add(sun);
 
 let hello = null;
 let surface = null;  // the body's lattice: corners, neighbours, faces (buildSurface)
-let voxelMesh = null, chamberMesh = null, floorGroup = null, targetLine = null, pathLine = null;
+let voxelMesh = null, chamberMesh = null, channelMesh = null, floorGroup = null, targetLine = null, pathLine = null;
 let start = new THREE.Vector3();  // centroid of the first frame [m]
 let floorZ = -0.005;
 let lastCentroid = null;
@@ -243,6 +243,19 @@ function setup(h) {
     chamberMesh.visible = $('chambers').checked;
     scene.add(chamberMesh);
   }
+  // The fabrication view (docs/fabrication.md): the inlet channels softevo fabricate cuts, one
+  // box per wall voxel they pass through, in that voxel's frame; the body fades to show them.
+  if (channelMesh) scene.remove(channelMesh);
+  channelMesh = null;
+  const segments = (h.fabrication && h.fabrication.channels) || [];
+  if (segments.length > 0) {
+    channelMesh = new THREE.InstancedMesh(new THREE.BoxGeometry(1, 1, 1),
+      new THREE.MeshBasicMaterial({ color: 0xffc21a }), segments.length);
+    channelMesh.renderOrder = 0;
+    channelMesh.frustumCulled = false;
+    scene.add(channelMesh);
+  }
+  showFabrication();
   const n = h.planned_records;
   pathLine && scene.remove(pathLine);
   const pathGeo = new THREE.BufferGeometry();
@@ -409,6 +422,19 @@ function setView(name) {
   camera.position.set(c.x + o[0], c.y + o[1], c.z + o[2]);
   controls.update();
 }
+// The fabrication box: channels shown, the body see-through, the chambers shown as cavities.
+function showFabrication() {
+  const on = $('fabrication').checked;
+  if (channelMesh) channelMesh.visible = on;
+  // Fainter skin and cavities while on (as render --cutaway draws them), the usual 0.5 and 0.9 off.
+  if (voxelMesh) voxelMesh.material.opacity = on ? 0.15 : 0.5;
+  if (chamberMesh) chamberMesh.material.opacity = on ? 0.6 : 0.9;
+  if (on && chamberMesh) chamberMesh.visible = true;
+  if (!on && chamberMesh) chamberMesh.visible = $('chambers').checked;
+  probe.fabrication = { shown: on, channels: channelMesh ? channelMesh.count : 0,
+    error: hello && hello.fabrication ? hello.fabrication.error || null : null };
+}
+$('fabrication').addEventListener('change', () => { showFabrication(); changed(); });
 // The chambers can be hidden to see the body alone (and shown again).
 $('chambers').addEventListener('change', () => { if (chamberMesh) chamberMesh.visible = $('chambers').checked; changed(); });
 document.querySelectorAll('[data-view]').forEach((b) => b.addEventListener('click', () => setView(b.dataset.view)));
@@ -429,6 +455,19 @@ function showFrame(f) {
   }
   surfacePositions(surface, f, hello.voxel_size);
   placeQuads(voxelMesh, surface.skin, surface.vertices);
+  if (channelMesh) {
+    // Each channel piece in its wall voxel's frame (hello.fabrication.channels).
+    const at = new THREE.Vector3(), turn = new THREE.Quaternion(), place = new THREE.Matrix4();
+    hello.fabrication.channels.forEach((seg, k) => {
+      const i = seg.voxel;
+      at.set(f.positions[3 * i], f.positions[3 * i + 1], f.positions[3 * i + 2]);
+      turn.set(f.quats[4 * i + 1], f.quats[4 * i + 2], f.quats[4 * i + 3], f.quats[4 * i]).normalize();
+      at.add(new THREE.Vector3(...seg.centre).applyQuaternion(turn));
+      place.compose(at, turn, new THREE.Vector3(...seg.size));
+      channelMesh.setMatrixAt(k, place);
+    });
+    channelMesh.instanceMatrix.needsUpdate = true;
+  }
   if (chamberMesh) {
     placeQuads(chamberMesh, surface.walls, surface.vertices);
     // Darker the more inflated (1.0 -> 1.2 bar), as the still renderer does.
