@@ -195,7 +195,7 @@ BenchRow bench_batch(const BatchScene& scene, physics::Simd simd, int lanes, int
   const std::vector<physics::State> states(scene.states.begin(), scene.states.begin() + lanes);
   BenchRow row{scene.name,
                to_string(model.integrator),
-               physics::to_string(model.simd),
+               softevo::to_string(model.simd),
                model.voxel_count,
                model.link_count,
                steps};

@@ -78,7 +78,7 @@ inline void expect_lanes_equal_steps_alone(physics::Model model,
     for (int k = 0; k < lanes; ++k) {
       if (s < static_cast<int>(alone_status[k].size())) {
         EXPECT_EQ(status[k], alone_status[k][s])
-            << what << " " << physics::to_string(simd) << " K=" << lanes << " lane " << k
+            << what << " " << softevo::to_string(simd) << " K=" << lanes << " lane " << k
             << " step " << s;
       }
     }
@@ -87,7 +87,7 @@ inline void expect_lanes_equal_steps_alone(physics::Model model,
   for (int k = 0; k < lanes; ++k) {
     physics::get_lane(batch, k, out);
     EXPECT_EQ(physics::state_hash(out), physics::state_hash(alone[k]))
-        << what << " " << physics::to_string(simd) << " K=" << lanes << " lane " << k;
+        << what << " " << softevo::to_string(simd) << " K=" << lanes << " lane " << k;
   }
 }
 
