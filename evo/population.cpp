@@ -98,7 +98,8 @@ void Population::advance(const std::vector<Evaluation>& results) {
   *this = std::move(next);
 }
 
-void Population::advance_impl(const std::vector<Evaluation>& results) {
+std::unordered_map<std::int64_t, const Evaluation*> evaluations_by_id(
+    const std::vector<Evaluation>& results) {
   std::unordered_map<std::int64_t, const Evaluation*> by_id;
   for (const Evaluation& e : results) {
     if (!std::isfinite(e.fitness))
@@ -107,6 +108,11 @@ void Population::advance_impl(const std::vector<Evaluation>& results) {
     if (!by_id.emplace(e.id, &e).second)
       throw std::invalid_argument("evaluation of genome " + std::to_string(e.id) + " given twice");
   }
+  return by_id;
+}
+
+void Population::advance_impl(const std::vector<Evaluation>& results) {
+  const std::unordered_map<std::int64_t, const Evaluation*> by_id = evaluations_by_id(results);
   std::vector<ScoredIndividual> scored;
   scored.reserve(members_.size() + species_.size());
   std::unordered_set<std::int64_t> member_ids;

@@ -18,6 +18,7 @@
 #include <functional>
 #include <optional>
 #include <span>
+#include <unordered_map>
 #include <vector>
 
 #include "common/config.hpp"
@@ -35,6 +36,10 @@ struct Evaluation {
   double fitness;  // used for selection as is (a killed robot is expected to score 0)
   bool killed;
 };
+// `results` by genome id; std::invalid_argument for a non-finite fitness or an id given twice.
+// Every strategy checks a generation's evaluations through it.
+std::unordered_map<std::int64_t, const Evaluation*> evaluations_by_id(
+    const std::vector<Evaluation>& results);
 
 // Does a genome give a usable individual (§8.3)? Empty = every genome is viable.
 using Viability = std::function<bool(const Genome&)>;

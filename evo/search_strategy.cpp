@@ -67,14 +67,7 @@ std::unique_ptr<SearchStrategy> restore_strategy(std::span<const std::uint8_t> b
 std::vector<Evaluation> match_results(const std::vector<Individual>& members,
                                       const std::vector<Evaluation>& results,
                                       std::int64_t generation) {
-  std::unordered_map<std::int64_t, const Evaluation*> by_id;
-  for (const Evaluation& e : results) {
-    if (!std::isfinite(e.fitness))
-      throw std::invalid_argument("evaluation of genome " + std::to_string(e.id) +
-                                  ": fitness is not finite");
-    if (!by_id.emplace(e.id, &e).second)
-      throw std::invalid_argument("evaluation of genome " + std::to_string(e.id) + " given twice");
-  }
+  const std::unordered_map<std::int64_t, const Evaluation*> by_id = evaluations_by_id(results);
   std::vector<Evaluation> out;
   out.reserve(members.size());
   for (const Individual& m : members) {
