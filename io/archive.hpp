@@ -81,7 +81,7 @@ struct RunInfo {
   std::int64_t seed = 0;
   std::int32_t ranks = 1;  // (not part of the run's identity)
   // What ran it last: "softevo-mpi" (ranks are MPI ranks), "softevo evolve" or "softevo.evolve"
-  // (ranks - 1 worker threads); "" in archives written before the attribute (softevo-mpi's).
+  // (ranks - 1 worker threads); read as "softevo-mpi" from archives written before it.
   // Not part of the run's identity.
   std::string program;
   std::string host;         // (not part of the run's identity)

@@ -76,7 +76,9 @@ RunInfo Archive::info() const {
                              : 1;
     r.seed = f.read_attribute<std::int64_t>("seed");
     r.ranks = f.read_attribute<std::int32_t>("ranks");
-    if (f.has_attribute("program")) r.program = f.read_string_attribute("program", kStringBytes);
+    // Archives written before the attribute were softevo-mpi's: the one default, set here.
+    r.program = f.has_attribute("program") ? f.read_string_attribute("program", kStringBytes)
+                                           : "softevo-mpi";
     r.host = f.read_string_attribute("host", kStringBytes);
     r.start_time = f.read_string_attribute("start_time", kStringBytes);
     r.end_time = f.read_string_attribute("end_time", kStringBytes);

@@ -57,7 +57,7 @@ void register_info(CLI::App& app, int& exit_code) {
       j["physics_revision"] = info.physics_revision;
       j["seed"] = info.seed;
       j["ranks"] = info.ranks;
-      j["program"] = info.program.empty() ? "softevo-mpi" : info.program;
+      j["program"] = info.program;
       j["host"] = info.host;
       j["start_time"] = info.start_time;
       j["end_time"] = info.end_time;
@@ -134,10 +134,9 @@ void register_info(CLI::App& app, int& exit_code) {
         std::printf("stopped          %s\n", shown(info.stop_reason).c_str());
       // softevo evolve and softevo.evolve record ranks = worker threads + 1 (the master), as
       // softevo-mpi at that many ranks would have written the same archive.
-      const bool threads = !info.program.empty() && info.program != "softevo-mpi";
+      const bool threads = info.program != "softevo-mpi";
       const int workers = threads ? info.ranks - 1 : info.ranks;
-      std::printf("written by       %s %s (commit %s), %d %s on %s\n",
-                  shown(info.program.empty() ? "softevo-mpi" : info.program).c_str(),
+      std::printf("written by       %s %s (commit %s), %d %s on %s\n", shown(info.program).c_str(),
                   shown(info.version).c_str(), shown(info.git_commit).c_str(), workers,
                   threads ? (workers == 1 ? "worker thread" : "worker threads") : "ranks",
                   shown(info.host).c_str());

@@ -32,7 +32,7 @@ py::dict info_dict(const io::RunInfo& i) {
   d["physics_revision"] = i.physics_revision;
   d["seed"] = i.seed;
   d["ranks"] = i.ranks;
-  d["program"] = i.program.empty() ? "softevo-mpi" : i.program;
+  d["program"] = i.program;
   d["host"] = i.host;
   d["start_time"] = i.start_time;
   d["end_time"] = i.end_time;
