@@ -104,7 +104,7 @@ void archive(const fs::path& path, int generations, int units,
   }
   // Packed into one self-contained file, as a finished run leaves it: a fuzz input is one file
   // (a root alone would only reach the "segment missing" error of its external links).
-  info.state = "complete";
+  info.state = softevo::io::RunState::complete;
   info.end_time = "2026-01-01T00:01:00Z";
   softevo::io::finish_archive(path.string(), info);
 }

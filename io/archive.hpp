@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "common/choice.hpp"
 #include "common/strategy_report.hpp"
 
 namespace softevo::io {
@@ -27,6 +28,17 @@ namespace softevo::io {
 namespace h5 {
 class File;
 }
+
+// Where a run is in its life, the root attribute `state` (docs/archive.md). `running` is also
+// what a run that died without closing leaves; the run lock tells the two apart.
+enum class RunState : std::uint8_t { running, complete, interrupted };
+
+}  // namespace softevo::io
+template <>
+struct softevo::ChoiceNames<softevo::io::RunState> {
+  static constexpr std::array<const char*, 3> names = {"running", "complete", "interrupted"};
+};
+namespace softevo::io {
 
 inline constexpr const char* kArchiveFormat = "softevo.run/1";
 // The component columns of an archive written before the columns were named (no attribute
@@ -91,8 +103,8 @@ struct RunInfo {
   // 16 hex digits, hash_hex(experiment_hash(config)): the config without run length and seed
   // (common/config.hpp). An archive written before the attribute existed reads it from /config.
   std::string experiment_hash;
-  std::string experiment;         // "gait-open" | "gait-closed" | "dir-open" | "dir-closed"
-  std::string state = "running";  // "running" | "complete" | "interrupted"
+  std::string experiment;  // "gait-open" | "gait-closed" | "dir-open" | "dir-closed"
+  RunState state = RunState::running;
   std::int64_t generations_done = 0;
   // Why the run stopped on its own before its end (e.g. run.stop_after_failed_generations); ""
   // otherwise, and while running. Written only when set (older archives have none).

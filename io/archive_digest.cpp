@@ -146,7 +146,7 @@ std::uint64_t content_digest(const Archive& archive) {
   h.i64(info.seed);
   h.str(info.config_hash);
   h.str(info.experiment);
-  h.str(info.state);
+  h.str(to_string(info.state));
   h.i64(info.generations_done);
   h.str(archive.config_text());
   for (std::int64_t gen : archive.generations()) {

@@ -96,7 +96,12 @@ RunInfo Archive::info() const {
     // Optional: the analysis scripts take an archive's experiment from its config without it.
     r.experiment =
         f.has_attribute("experiment") ? f.read_string_attribute("experiment", kStringBytes) : "";
-    r.state = f.read_string_attribute("state", kStringBytes);
+    const std::string state = f.read_string_attribute("state", kStringBytes);
+    const std::optional<RunState> known_state = choice_from_string<RunState>(state);
+    if (!known_state)
+      throw ArchiveError(path_ + ": /: attribute state = '" + state +
+                         "' is not one of running, complete, interrupted");
+    r.state = *known_state;
     r.generations_done = f.read_attribute<std::int64_t>("generations_done");
     if (f.has_attribute("stop_reason"))
       r.stop_reason = f.read_string_attribute("stop_reason", kStringBytes);

@@ -48,7 +48,7 @@ void write_run_info(const h5::File& file, const RunInfo& info) {
   if (!info.experiment_hash.empty())
     file.write_string_attribute("experiment_hash", info.experiment_hash, Charset::utf8);
   file.write_string_attribute("experiment", info.experiment, Charset::utf8);
-  file.write_string_attribute("state", info.state, Charset::utf8);
+  file.write_string_attribute("state", to_string(info.state), Charset::utf8);
   file.write_attribute<std::int64_t>("generations_done", info.generations_done);
   if (!info.stop_reason.empty() || file.has_attribute("stop_reason"))  // "" clears it (--resume)
     file.write_string_attribute("stop_reason", info.stop_reason, Charset::utf8);
@@ -545,7 +545,8 @@ void update_root(const std::string& path, const RunInfo& info,
     c.info = info;
     if (config_text) c.config_text = *config_text;
     if (checkpoint) c.checkpoint = *checkpoint;
-    const bool ends_the_run = info.state != "running" && !config_text && checkpoint == nullptr;
+    const bool ends_the_run =
+        info.state != RunState::running && !config_text && checkpoint == nullptr;
     try {
       write_root(path, c, steps);
     } catch (const std::exception& e) {

@@ -37,6 +37,7 @@ using io::finish_archive;
 using io::GenerationRecord;
 using io::remove_archive_debris;
 using io::RunInfo;
+using io::RunState;
 using io::StatsRow;
 using io::update_run_info;
 
@@ -117,7 +118,7 @@ void RunLoop::open() {
     // wrote before the root that would have named it. We hold the run lock: no one else writes.
     remove_archive_debris(out);
     if (run_.resumed) {
-      info.state = "running";
+      info.state = RunState::running;
       info.end_time.clear();
       info.stop_reason.clear();
       if (run_.run_length_changed)
@@ -359,7 +360,7 @@ RunOutcome RunLoop::close(RunOutcome outcome) {
   const std::string& out = run_.options.out_path;
   RunInfo& info = run_.info;
   guarded([&] {
-    info.state = outcome == RunOutcome::complete ? "complete" : "interrupted";
+    info.state = outcome == RunOutcome::complete ? RunState::complete : RunState::interrupted;
     info.end_time = iso8601_now();
     try {
       finish_archive(out, info, run_.options.archive_fault);
@@ -368,7 +369,8 @@ RunOutcome RunLoop::close(RunOutcome outcome) {
       // pack needs room for a second copy). The state is still worth recording.
       update_run_info(out, info, run_.options.archive_fault);
       state_recorded_ = true;
-      throw RunError(out + ": the run's results are archived (state " + info.state +
+      throw RunError(out + ": the run's results are archived (state " +
+                     std::string(to_string(info.state)) +
                      "), but packing them into one file failed; the archive is readable as it "
                      "is, and --resume packs it: " +
                      e.what());
@@ -386,7 +388,7 @@ void RunLoop::mark_interrupted() noexcept {
   if (!archive_written_ || state_recorded_) return;
   state_recorded_ = true;
   RunInfo& info = run_.info;
-  info.state = "interrupted";
+  info.state = RunState::interrupted;
   try {
     info.end_time = iso8601_now();
     // The segment and temporaries of the update that failed are unreferenced: freeing their

@@ -34,12 +34,12 @@ void print_header(const PreparedRun& r, const DriverOptions& o) {
               r.info.experiment_hash.c_str(),
               o.verbose ? "" : "; -v or `softevo info ARCHIVE` shows every resolved key");
   if (o.verbose) std::printf("%s", r.config_text.c_str());
-  std::printf("# archive %s (%s)\n", r.options.out_path.c_str(),
-              r.already_complete ? (r.info.state == "complete" ? "complete: nothing to do"
-                                                               : "every generation archived: "
-                                                                 "marking it complete")
-              : r.resumed
-                  ? ("resuming at generation " + std::to_string(r.info.generations_done)).c_str()
+  std::printf(
+      "# archive %s (%s)\n", r.options.out_path.c_str(),
+      r.already_complete ? (r.info.state == io::RunState::complete ? "complete: nothing to do"
+                                                                   : "every generation archived: "
+                                                                     "marking it complete")
+      : r.resumed ? ("resuming at generation " + std::to_string(r.info.generations_done)).c_str()
                   : "new run");
   std::fflush(stdout);
   if (r.previous_run) {  // on stderr too: a requeued job's user reads that log first

@@ -25,6 +25,7 @@ using io::Checkpoint;
 using io::finish_archive;
 using io::remove_archive_debris;
 using io::RunInfo;
+using io::RunState;
 
 namespace {
 
@@ -109,7 +110,7 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
   info.config_hash = hash;
   info.experiment_hash = hash_hex(experiment_hash(config));
   info.experiment = experiment_name(config);
-  info.state = "running";
+  info.state = RunState::running;
 
   std::error_code ec;
   // Why the archive cannot be written, when a --resume finds it on storage it may not write
@@ -182,7 +183,7 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
       // The lock is ours now: a "running" archive was left by a run that died.
       run.previous_run = previous_run_note(old, std::nullopt, config.run.generations);
       if (old.generations_done >= config.run.generations) {
-        if (unwritable && (old.state != "complete" || !archive.self_contained()))
+        if (unwritable && (old.state != RunState::complete || !archive.self_contained()))
           throw StartupError(*unwritable +
                              " (the archive holds every generation, but recording "
                              "its end needs write access)");
@@ -248,8 +249,8 @@ void finish_complete_run(PreparedRun& run) {
   const std::string& out = run.options.out_path;
   try {
     remove_archive_debris(out);
-    if (run.info.state != "complete" || !Archive(out).self_contained()) {
-      run.info.state = "complete";
+    if (run.info.state != RunState::complete || !Archive(out).self_contained()) {
+      run.info.state = RunState::complete;
       if (run.info.end_time.empty()) run.info.end_time = iso8601_now();
       finish_archive(out, run.info, run.options.archive_fault);
     }

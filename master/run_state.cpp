@@ -19,11 +19,11 @@ std::optional<std::string> previous_run_note(const io::RunInfo& info,
           ? "after archiving its last generation (" + std::to_string(info.generations_done - 1) +
                 "); --resume marks it complete"
           : "at generation " + done + "; --resume continues from generation " + done;
-  if (info.state == "interrupted")
+  if (info.state == io::RunState::interrupted)
     return "the previous run on this archive was interrupted (it stopped after a signal or an "
            "error, see its log) " +
            at;
-  if (info.state == "running" && !lock_holder)
+  if (info.state == io::RunState::running && !lock_holder)
     return "the previous run on this archive was interrupted (its process died without "
            "closing: killed rank, node failure, ...) " +
            at;

@@ -63,7 +63,7 @@ void register_info(CLI::App& app, int& exit_code) {
       j["end_time"] = info.end_time;
       j["config_hash"] = info.config_hash;
       j["experiment"] = info.experiment;
-      j["state"] = info.state;
+      j["state"] = to_string(info.state);
       j["stop_reason"] = info.stop_reason.empty() ? nlohmann::ordered_json()
                                                   : nlohmann::ordered_json(info.stop_reason);
       j["lock_holder"] = holder ? nlohmann::ordered_json(*holder) : nlohmann::ordered_json();
@@ -126,7 +126,7 @@ void register_info(CLI::App& app, int& exit_code) {
                   shown(info.experiment).c_str(), shown(info.experiment_hash).c_str(),
                   static_cast<long long>(info.seed), shown(info.config_hash).c_str());
       std::printf("search strategy  %s\n", summary.strategy.c_str());
-      std::printf("state            %s, %lld generations done%s\n", shown(info.state).c_str(),
+      std::printf("state            %s, %lld generations done%s\n", to_string(info.state),
                   static_cast<long long>(info.generations_done),
                   holder ? (" (written now by " + shown(*holder) + ")").c_str() : "");
       if (note) std::printf("                 %s\n", note->c_str());

@@ -44,7 +44,7 @@ std::int64_t write_repaired(const io::Archive& in, std::int64_t keep, const std:
   const Config config = parse_config(config_text, in.path() + ":/config");
   io::RunInfo info = in.info();
   info.generations_done = 0;
-  info.state = "interrupted";
+  info.state = io::RunState::interrupted;
   // The run's search strategy (NEAT's population, the MAP-Elites map, AFPO), replayed.
   const std::unique_ptr<evo::SearchStrategy> strategy =
       evo::make_strategy(config, tasks::make_task(config)->controller_inputs(),

@@ -39,7 +39,7 @@ py::dict info_dict(const io::RunInfo& i) {
   d["config_hash"] = i.config_hash;
   d["experiment_hash"] = i.experiment_hash;
   d["experiment"] = i.experiment;
-  d["state"] = i.state;
+  d["state"] = to_string(i.state);
   d["generations_done"] = i.generations_done;
   d["stop_reason"] = i.stop_reason;
   return d;

@@ -81,7 +81,7 @@ class Evolution {
   std::int64_t generations() const { return run_.config.run.generations; }
   std::int64_t generations_done() const { return run_.info.generations_done; }
   bool resumed() const { return run_.resumed; }
-  std::string state() const { return state_; }
+  std::string state() const { return to_string(state_); }
 
   // Evaluates and archives the next generation; its number, or None once every generation is
   // archived (the archive is then marked complete). Raises KeyboardInterrupt after Ctrl-C
@@ -99,7 +99,7 @@ class Evolution {
       // full disk, no pack: it needs room for a second copy); the lock file stays, as a
       // failed run's does. close() has nothing left to do.
       if (loop_) loop_->mark_interrupted();
-      state_ = "interrupted";
+      state_ = io::RunState::interrupted;
       closed_ = true;
       run_.lock.reset();
       throw master::RunError(e.what());
@@ -111,7 +111,7 @@ class Evolution {
     if (run_.already_complete) {
       // execute_run records the end of a run whose generations were all archived before.
       master::execute_run(run_, *executor_, progress_);
-      return finish("complete");
+      return finish(io::RunState::complete);
     }
     if (!loop_) {
       loop_ = std::make_unique<master::RunLoop>(run_, executor_->ranks(), progress_);
@@ -119,7 +119,7 @@ class Evolution {
     }
     if (loop_->finished()) {
       loop_->close(master::RunOutcome::complete);
-      finish("complete");
+      finish(io::RunState::complete);
       // As the command line's exit 1: the archive is complete, but no robot was ok.
       const std::string none_ok = master::no_robot_ok(run_);
       if (!none_ok.empty()) throw master::RunError(none_ok);
@@ -139,7 +139,7 @@ class Evolution {
       }
       if (!done) {
         loop_->close(master::RunOutcome::interrupted);
-        finish("interrupted");
+        finish(io::RunState::interrupted);
         master::clear_stop_request();
         if (interrupted_) throw py::error_already_set();  // the KeyboardInterrupt
         throw master::RunError("the run was stopped");
@@ -212,11 +212,11 @@ class Evolution {
     }
     loop_->close(loop_->finished() ? master::RunOutcome::complete
                                    : master::RunOutcome::interrupted);
-    finish(loop_->finished() ? "complete" : "interrupted");
+    finish(loop_->finished() ? io::RunState::complete : io::RunState::interrupted);
   }
 
  private:
-  std::optional<std::int64_t> finish(const char* state) {
+  std::optional<std::int64_t> finish(io::RunState state) {
     state_ = state;
     closed_ = true;
     // A clean end (complete, or stopped after a checkpoint): the lock file goes with the lock,
@@ -243,7 +243,7 @@ class Evolution {
   master::ProgressReporter progress_;
   std::unique_ptr<master::ThreadExecutor> executor_;
   std::unique_ptr<master::RunLoop> loop_;
-  std::string state_ = "running";
+  io::RunState state_ = io::RunState::running;
   bool closed_ = false;
   std::atomic<bool> interrupted_{false};
 };

@@ -167,7 +167,7 @@ int main(int argc, char** argv) {
                   static_cast<unsigned long long>(cost), static_cast<unsigned long long>(on_disk));
     }
   }
-  info.state = "complete";
+  info.state = RunState::complete;
   const std::uint64_t before_finish = bytes_written();
   finish_archive(path, info);
   const std::uint64_t finish = bytes_written() - before_finish;

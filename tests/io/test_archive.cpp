@@ -2,6 +2,7 @@
 // file byte for byte), digests that see every deterministic field and ignore timing fields,
 // the two forms on disk (a root with segments while running, one file once finished).
 #include "io/archive.hpp"
+#include "io/h5.hpp"
 #include "io/run_lock.hpp"
 
 #include <fcntl.h>
@@ -97,7 +98,7 @@ TEST(Archive, RoundTripsEveryField) {
   EXPECT_EQ(got.seed, 3);
   EXPECT_EQ(got.ranks, 2);
   EXPECT_EQ(got.experiment, "dir-open");
-  EXPECT_EQ(got.state, "running");
+  EXPECT_EQ(got.state, io::RunState::running);
   EXPECT_EQ(got.generations_done, 1);
   EXPECT_EQ(a.config_text(), "[run]\nseed = 3\n");
   EXPECT_EQ(a.generations(), std::vector<std::int64_t>{0});
@@ -153,7 +154,7 @@ TEST(Archive, CheckpointWithinAGenerationHoldsItsLearningStateUntilTheNextGenera
     EXPECT_EQ(content_digest(a), content);
     EXPECT_EQ(fitness_digest(a), fitness);
   }
-  info.state = "interrupted";
+  info.state = io::RunState::interrupted;
   update_run_info(p, info);
   EXPECT_EQ(Archive(p).checkpoint()->learning, (std::vector<std::uint8_t>{7, 8, 9}));
   finish_archive(p, info);
@@ -257,6 +258,29 @@ TEST(Archive, MissingPhysicsRevisionReadsAsRevisionOne) {
   EXPECT_EQ(Archive(p).info().physics_revision, 1);
 }
 
+// The root attribute `state` is one of three names (docs/archive.md); any other value is a
+// damaged archive, refused by name rather than read as some state.
+TEST(Archive, AnUnknownStateIsRefusedNamingIt) {
+  TmpDir d;
+  const std::string p = d.path + "/state.h5";
+  create_archive(p, sample_info(), "[run]\nseed = 3\n");
+  EXPECT_EQ(Archive(p).info().state, RunState::running);
+  {
+    h5::File file = h5::File::open(p, h5::File::Access::read_write);
+    file.write_string_attribute("state", "finished", h5::Charset::utf8);
+  }
+  try {
+    (void)Archive(p).info();
+    FAIL() << "an unknown state was read";
+  } catch (const ArchiveError& e) {
+    EXPECT_NE(std::string(e.what()).find("attribute state = 'finished' is not one of running, "
+                                         "complete, interrupted"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find(p), std::string::npos) << e.what();
+  }
+}
+
 // Archives written before the components were named hold six columns per unit without the
 // attribute "columns": they read as the legacy names, and a malformed one is refused.
 TEST(Archive, ComponentsWithoutNamesReadAsTheLegacySix) {
@@ -338,7 +362,7 @@ TEST(Archive, RootWithSegmentsReadsAsAndPacksIntoOneFile) {
   EXPECT_FALSE(fs::exists(d.path + "/run.h5.d"));
   const Archive a(p);
   EXPECT_TRUE(a.self_contained());
-  EXPECT_EQ(a.info().state, "running");
+  EXPECT_EQ(a.info().state, io::RunState::running);
   EXPECT_EQ(a.generation(1).genome, sample_record(1, 4, 1).genome);
   EXPECT_EQ(a.stored_generation_digest(2), generation_digest(sample_record(2, 4, 1)));
   EXPECT_EQ(content_digest(a), running_content);
@@ -351,7 +375,7 @@ TEST(Archive, AppendingToAPackedArchiveKeepsItsFileAsASegment) {
   const std::string p = d.path + "/run.h5";
   RunInfo info = sample_info();
   write_three_generations(p, info);
-  info.state = "interrupted";
+  info.state = io::RunState::interrupted;
   finish_archive(p, info);
   const std::string packed_bytes = bytes_of(p);
   const GenerationRecord r = sample_record(3, 4, 1);
@@ -408,7 +432,7 @@ TEST(Archive, DebrisOfADeadWriterIsRemoved) {
   for (std::int64_t g = 0; g < 3; ++g) EXPECT_EQ(Archive(p).generation(g).id.size(), 4u);
   // A finished archive references no segment: they all go, the directory with them once empty.
   fs::remove(seg + "notes.txt");
-  info.state = "complete";
+  info.state = io::RunState::complete;
   finish_archive(p, info);
   EXPECT_FALSE(fs::exists(seg));
 }
@@ -519,12 +543,12 @@ TEST(Archive, StopStateRecordedOnAFullDisk) {
   }
   fill_disk(mnt, 0);
   ASSERT_LT(fs::space(mnt).available, 4096u);
-  info.state = "interrupted";
+  info.state = io::RunState::interrupted;
   info.end_time = "2026-01-01T01:00:00Z";
   info.stop_reason = std::string(static_cast<std::size_t>(ArchiveLimits::string_bytes), 'r');
   update_run_info(p, info);
   const Archive a(p);
-  EXPECT_EQ(a.info().state, "interrupted");
+  EXPECT_EQ(a.info().state, io::RunState::interrupted);
   EXPECT_EQ(a.info().stop_reason, info.stop_reason);
   EXPECT_EQ(a.info().generations_done, 3);
   EXPECT_EQ(fitness_digest(a), fitness);

@@ -324,7 +324,7 @@ TEST(ArchiveCheck, RepairKeepsTheConsistentGenerationsInANewFile) {
   {
     const io::Archive a(fixed);
     EXPECT_EQ(a.info().generations_done, 2);
-    EXPECT_EQ(a.info().state, "interrupted");
+    EXPECT_EQ(a.info().state, io::RunState::interrupted);
     EXPECT_TRUE(check_archive(a).ok());
   }
   EXPECT_EQ(softevo("info " + fixed), 0);

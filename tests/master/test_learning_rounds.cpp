@@ -329,7 +329,7 @@ std::size_t evaluations_of_run(const Config& config, const std::string& out, boo
 void expect_archives_equal(const std::string& out, const std::string& ref) {
   EXPECT_EQ(fitness_digest_of(out), fitness_digest_of(ref));
   EXPECT_EQ(io::content_digest(Archive(out)), io::content_digest(Archive(ref)));
-  EXPECT_EQ(Archive(out).info().state, "complete");
+  EXPECT_EQ(Archive(out).info().state, io::RunState::complete);
   ASSERT_TRUE(Archive(out).checkpoint().has_value());
   EXPECT_TRUE(Archive(out).checkpoint()->learning.empty());  // none after the last generation
 }

@@ -206,14 +206,14 @@ TEST(RunArchive, FailureAtEveryWriteOfAGenerationLeavesAResumableArchive) {
         // stays full, in the space reserved for it: issue 29, where the state stayed
         // "running"), and never packs: the pack is a second copy of every generation, and
         // libhdf5 crashed (SIGSEGV in H5Ocopy) when the disk filled during it (issue 29).
-        EXPECT_EQ(info.state, "interrupted");
+        EXPECT_EQ(info.state, io::RunState::interrupted);
         EXPECT_FALSE(a.self_contained());
         ASSERT_TRUE(a.checkpoint().has_value());
         EXPECT_EQ(a.checkpoint()->generation, kept);
       }
       ASSERT_EQ(run_once(config, out, true), RunOutcome::complete);
       EXPECT_EQ(fitness_digest_of(out), expected);
-      EXPECT_EQ(Archive(out).info().state, "complete");
+      EXPECT_EQ(Archive(out).info().state, io::RunState::complete);
       EXPECT_TRUE(Archive(out).self_contained());
       expect_no_debris(dir.path);
     }
@@ -255,7 +255,7 @@ TEST(RunArchive, FailureWhilePackingKeepsEveryGeneration) {
       // Otherwise the final state is recorded in a small root (into the reserved space when
       // the disk stays full: "running" before, issue 29).
       const bool packed = failing == "pack: fsync directory";
-      EXPECT_EQ(a.info().state, "complete");
+      EXPECT_EQ(a.info().state, io::RunState::complete);
       EXPECT_EQ(a.self_contained(), packed);
       EXPECT_EQ(fitness_digest_of(out), fitness_digest_of(ref));
     }
@@ -354,7 +354,7 @@ TEST(RunArchive, KillAtEveryWriteStepLeavesAResumableArchive) {
       ASSERT_EQ(run_once(config, out, true), expected);
       EXPECT_EQ(fitness_digest_of(out), expected_fitness);
       EXPECT_EQ(hash_hex(io::content_digest(Archive(out))), expected_content);
-      EXPECT_EQ(Archive(out).info().state, "complete");
+      EXPECT_EQ(Archive(out).info().state, io::RunState::complete);
       EXPECT_TRUE(Archive(out).self_contained());
       expect_no_debris(dir.path);
     }
@@ -470,7 +470,7 @@ TEST(RunLock, LockOfAKilledProcessDoesNotBlock) {
   ::waitpid(child, &status, 0);
   EXPECT_EQ(io::lock_holder(out), std::nullopt) << "a dead holder still reported";
   EXPECT_NO_THROW(run_once(small_config(), out, true));
-  EXPECT_EQ(Archive(out).info().state, "complete");
+  EXPECT_EQ(Archive(out).info().state, io::RunState::complete);
 }
 
 // SIGTERM while the master evaluates alone: the evaluation in progress is abandoned (what
@@ -501,7 +501,7 @@ TEST(RunArchive, AStopDuringTheLastEvaluationOfAGenerationArchivesNothingOfIt) {
   clear_stop_request();
   run.lock.reset();  // the stopped run's process would end here
   EXPECT_EQ(outcome, RunOutcome::interrupted);
-  EXPECT_EQ(Archive(out).info().state, "interrupted");
+  EXPECT_EQ(Archive(out).info().state, io::RunState::interrupted);
   EXPECT_EQ(Archive(out).info().generations_done, 1);
   ASSERT_EQ(run_once(config, out, true), RunOutcome::complete);
   EXPECT_EQ(fitness_digest_of(out), fitness_digest_of(ref));
@@ -516,7 +516,7 @@ TEST(RunArchive, ResumeClosesARunThatDiedAfterItsLastGeneration) {
   ASSERT_EQ(run_once(config, ref, false), RunOutcome::complete);
   ASSERT_EQ(run_once(config, out, false), RunOutcome::complete);
   io::RunInfo info = Archive(out).info();
-  info.state = "running";  // what the SIGKILL before the closing state change leaves
+  info.state = io::RunState::running;  // what the SIGKILL before the closing state change leaves
   info.end_time.clear();
   io::update_run_info(out, info);
   {
@@ -529,7 +529,7 @@ TEST(RunArchive, ResumeClosesARunThatDiedAfterItsLastGeneration) {
         << *run.previous_run;
   }
   EXPECT_EQ(run_once(config, out, true), RunOutcome::already_complete);
-  EXPECT_EQ(Archive(out).info().state, "complete");
+  EXPECT_EQ(Archive(out).info().state, io::RunState::complete);
   EXPECT_EQ(io::content_digest(Archive(out)), io::content_digest(Archive(ref)));
 }
 
@@ -565,7 +565,7 @@ TEST(RunStop, AGenerationWhoseEvaluationsAllFailStopsTheRun) {
     EXPECT_NE(what.find("run.stop_after_failed_generations"), std::string::npos) << what;
   }
   const io::RunInfo info = Archive(out).info();
-  EXPECT_EQ(info.state, "interrupted");
+  EXPECT_EQ(info.state, io::RunState::interrupted);
   EXPECT_EQ(info.generations_done, 1);
   EXPECT_NE(info.stop_reason.find("the ground cannot be built"), std::string::npos)
       << info.stop_reason;

@@ -12,7 +12,7 @@
 namespace softevo::master {
 namespace {
 
-io::RunInfo info_with(const std::string& state, std::int64_t generations_done) {
+io::RunInfo info_with(io::RunState state, std::int64_t generations_done) {
   io::RunInfo info;
   info.state = state;
   info.generations_done = generations_done;
@@ -20,7 +20,8 @@ io::RunInfo info_with(const std::string& state, std::int64_t generations_done) {
 }
 
 TEST(RunState, ARunningArchiveWithAFreeLockWasLeftByARunThatDied) {
-  const std::optional<std::string> note = previous_run_note(info_with("running", 4), std::nullopt);
+  const std::optional<std::string> note =
+      previous_run_note(info_with(io::RunState::running, 4), std::nullopt);
   ASSERT_TRUE(note.has_value());
   EXPECT_EQ(*note,
             "the previous run on this archive was interrupted (its process died without closing: "
@@ -29,13 +30,15 @@ TEST(RunState, ARunningArchiveWithAFreeLockWasLeftByARunThatDied) {
 }
 
 TEST(RunState, ARunningArchiveWhoseLockIsHeldIsALiveRun) {
-  EXPECT_EQ(previous_run_note(info_with("running", 4), "pid 4242 on node17"), std::nullopt);
+  EXPECT_EQ(previous_run_note(info_with(io::RunState::running, 4), "pid 4242 on node17"),
+            std::nullopt);
 }
 
 TEST(RunState, AnInterruptedArchiveSaysWhereResumeContinues) {
   for (const std::optional<std::string>& holder :
        {std::optional<std::string>(), std::optional<std::string>("pid 1 on a")}) {
-    const std::optional<std::string> note = previous_run_note(info_with("interrupted", 2), holder);
+    const std::optional<std::string> note =
+        previous_run_note(info_with(io::RunState::interrupted, 2), holder);
     ASSERT_TRUE(note.has_value());
     EXPECT_NE(note->find("interrupted (it stopped after a signal or an error, see its log) at "
                          "generation 2; --resume continues from generation 2"),
@@ -45,7 +48,7 @@ TEST(RunState, AnInterruptedArchiveSaysWhereResumeContinues) {
 }
 
 TEST(RunState, ACompleteArchiveHasNoNote) {
-  EXPECT_EQ(previous_run_note(info_with("complete", 10), std::nullopt), std::nullopt);
+  EXPECT_EQ(previous_run_note(info_with(io::RunState::complete, 10), std::nullopt), std::nullopt);
 }
 
 TEST(RunState, ResumeNoteNamesTheKeptGenerations) {

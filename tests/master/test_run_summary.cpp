@@ -25,7 +25,7 @@ TEST(RunSummary, SummarisesACompleteRun) {
   const Config config = small_config();  // 6 members, 4 generations, gait
   ASSERT_EQ(run_once(config, out, false), RunOutcome::complete);
   const RunSummary s = summarize_run(out);
-  EXPECT_EQ(s.info.state, "complete");
+  EXPECT_EQ(s.info.state, io::RunState::complete);
   EXPECT_EQ(s.info.generations_done, 4);
   EXPECT_TRUE(s.check.ok()) << s.check.describe(out);
   EXPECT_FALSE(s.lock_holder);

@@ -160,7 +160,7 @@ Digests digests(const std::string& path) {
     const Archive a(path);
     d.fitness = hash_hex(fitness_digest(a));
     d.content = hash_hex(content_digest(a));
-    d.state = a.info().state;
+    d.state = to_string(a.info().state);
     d.generations_done = a.info().generations_done;
   }
   d.fitness = bcast_string(d.fitness);
@@ -234,7 +234,7 @@ TEST(SoftevoMpi, TinyRunWritesValidArchive) {
   const Archive a(out);
   const RunInfo info = a.info();
   EXPECT_EQ(info.format, "softevo.run/1");
-  EXPECT_EQ(info.state, "complete");
+  EXPECT_EQ(info.state, io::RunState::complete);
   EXPECT_EQ(info.generations_done, 3);
   EXPECT_EQ(info.seed, 7);
   EXPECT_EQ(info.ranks, world_size());
@@ -409,7 +409,7 @@ void expect_same_runs(const std::string& packed_dir, const std::string& alone_di
   for (const std::string& name : names) {
     const std::string packed = packed_dir + "/" + name, alone = alone_dir + "/" + name;
     const Archive p(packed), a(alone);
-    EXPECT_EQ(p.info().state, "complete") << packed;
+    EXPECT_EQ(p.info().state, io::RunState::complete) << packed;
     EXPECT_EQ(hash_hex(fitness_digest(p)), hash_hex(fitness_digest(a))) << packed;
     EXPECT_EQ(hash_hex(content_digest(p)), hash_hex(content_digest(a))) << packed;
     EXPECT_EQ(reused_columns(packed), reused_columns(alone)) << packed;
@@ -529,7 +529,7 @@ TEST(SoftevoMpi, ResumeAfterSigkillGivesTheSameArchive) {
   ASSERT_EQ(run_and_kill(dir, cargs, killed, 2), 1);  // mid-generation 2 (or later)
   if (world_rank() == 0) {
     const RunInfo info = Archive(killed).info();  // still a valid archive
-    EXPECT_EQ(info.state, "running");
+    EXPECT_EQ(info.state, io::RunState::running);
     EXPECT_GE(info.generations_done, 2);
     EXPECT_LT(info.generations_done, 5);
   }
@@ -606,7 +606,7 @@ TEST(SoftevoMpi, SigtermAndSigusr1CheckpointAndExitWithRequeueCode) {
         kill(child, sig);
         EXPECT_EQ(wait_exit(child), kExitRequeue) << file_bytes(dir.file("child.log"));
         const RunInfo info = Archive(out).info();
-        EXPECT_EQ(info.state, "interrupted");
+        EXPECT_EQ(info.state, io::RunState::interrupted);
         EXPECT_LT(info.generations_done, 4);
       } else {
         ADD_FAILURE() << file_bytes(dir.file("child.log"));
@@ -632,7 +632,7 @@ TEST(SoftevoMpi, EveryRankReturnsTheRequeueCodeOfAStoppedRun) {
   EXPECT_EQ(rc, kExitRequeue) << "rank " << world_rank();
   if (world_rank() == 0) {
     const RunInfo info = Archive(out).info();
-    EXPECT_EQ(info.state, "interrupted");
+    EXPECT_EQ(info.state, io::RunState::interrupted);
     EXPECT_LT(info.generations_done, 3);  // stopped before the end
   }
 }
@@ -789,7 +789,7 @@ TEST(SoftevoMpi, AFailingEvaluationDoesNotStopTheRun) {
       EXPECT_EQ(b.status[i], a.status[i]);
     }
   }
-  EXPECT_EQ(Archive(out).info().state, "complete");
+  EXPECT_EQ(Archive(out).info().state, io::RunState::complete);
 }
 
 // A real full disk (a 200 kB tmpfs, full after about 3 of the 6 generations: each takes about
@@ -835,7 +835,7 @@ TEST(SoftevoMpi, FullDiskLosesAtMostTheGenerationInFlight) {
       const pid_t again = spawn_child(cargs, dir.file("resume.log"));
       EXPECT_EQ(wait_exit(again), 0) << file_bytes(dir.file("resume.log"));
       const Archive a(out);
-      EXPECT_EQ(a.info().state, "complete");
+      EXPECT_EQ(a.info().state, io::RunState::complete);
       EXPECT_EQ(hash_hex(fitness_digest(a)), expected.fitness);
       EXPECT_EQ(hash_hex(content_digest(a)), expected.content);
       ::umount2(small.c_str(), MNT_DETACH);

@@ -54,8 +54,8 @@ std::optional<Snapshot> snapshot(const std::string& path) {
   if (!fs::exists(path, ec)) return std::nullopt;
   try {
     const io::Archive a(path);
-    return Snapshot{a.info().state, a.info().generations_done, hash_hex(fitness_digest(a)),
-                    hash_hex(content_digest(a))};
+    return Snapshot{to_string(a.info().state), a.info().generations_done,
+                    hash_hex(fitness_digest(a)), hash_hex(content_digest(a))};
   } catch (const io::ArchiveError&) {
     return std::nullopt;
   }

@@ -122,7 +122,7 @@ TEST(ThreadExecutor, AStopNowDropsTheGenerationInFlightAndResumeCompletesIt) {
   EXPECT_EQ(stop_requested(), StopRequest::now);  // the poll became a stop-now request
   clear_stop_request();
   const io::Archive stopped(out);
-  EXPECT_EQ(stopped.info().state, "interrupted");
+  EXPECT_EQ(stopped.info().state, io::RunState::interrupted);
   EXPECT_EQ(stopped.info().generations_done, 2);
   ASSERT_EQ(run_threads(config, out, 2, true), RunOutcome::complete);
   const Digests a = digests_of(dir.file("ref.h5")), b = digests_of(out);
@@ -147,7 +147,7 @@ TEST(ThreadExecutor, AnEvaluationThatThrowsFailsTheRunNamingItsWorker) {
     EXPECT_NE(std::string(e.what()).find("worker thread"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("config mismatch"), std::string::npos) << e.what();
   }
-  EXPECT_EQ(io::Archive(dir.file("run.h5")).info().state, "interrupted");
+  EXPECT_EQ(io::Archive(dir.file("run.h5")).info().state, io::RunState::interrupted);
 }
 
 TEST(ThreadExecutor, RefusesNoWorkersAndFindsTheCores) {

@@ -39,8 +39,8 @@ struct Digests {
 };
 Digests digests(const std::string& path) {
   const io::Archive a(path);
-  return {hash_hex(io::fitness_digest(a)), hash_hex(io::content_digest(a)), a.info().state,
-          a.info().generations_done, a.info().ranks};
+  return {hash_hex(io::fitness_digest(a)), hash_hex(io::content_digest(a)),
+          to_string(a.info().state), a.info().generations_done, a.info().ranks};
 }
 
 std::string join(const std::vector<std::string>& args) {
