@@ -51,7 +51,7 @@ class AtomicOutput {
  public:
   AtomicOutput(std::string path, Overwrite overwrite);
   // The temporary is `existing`, a file of the caller's in the target's file system (space
-  // reserved in advance: io/archive_writer.cpp), renamed over `path` on commit() and left in
+  // reserved in advance: io/archive_root.cpp), renamed over `path` on commit() and left in
   // place when commit() is never reached.
   AtomicOutput(std::string path, Overwrite overwrite, std::string existing);
   AtomicOutput(const AtomicOutput&) = delete;

@@ -1,7 +1,7 @@
 // The run archive (schema: docs/archive.md) over the RAII layer of io/h5.hpp: its records, their
-// limits and the output check. The writer is archive_writer.cpp, the reader archive_reader.cpp,
-// the digests archive_digest.cpp. Every failure, HDF5 or file system, becomes an ArchiveError
-// naming the file and the object.
+// limits and the output check. The writer is archive_writer.cpp with its parts (listed in
+// archive_writer_internal.hpp), the reader archive_reader.cpp, the digests archive_digest.cpp.
+// Every failure, HDF5 or file system, becomes an ArchiveError naming the file and the object.
 #include "io/archive.hpp"
 
 #include <algorithm>

@@ -1,6 +1,6 @@
 // Internals shared by the run archive's files (io/archive.cpp: records and limits;
-// archive_writer.cpp: the writer's layout, appends, finishing; archive_reader.cpp: the reader;
-// archive_digest.cpp: the digests). Not for use outside io/.
+// archive_writer.cpp and its parts in archive_writer_internal.hpp: the writer;
+// archive_reader.cpp: the reader; archive_digest.cpp: the digests). Not for use outside io/.
 #pragma once
 
 #include <cstddef>

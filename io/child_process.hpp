@@ -1,6 +1,6 @@
 // Work that may crash libhdf5, done in a forked child process so that a crash costs an error,
 // not this process: the open probe (io/open_probe.hpp) and the pack of a finished archive
-// (io/archive_writer.cpp). libhdf5 1.10 crashes (SIGSEGV) on some damaged files and when the
+// (io/archive_pack.cpp). libhdf5 1.10 crashes (SIGSEGV) on some damaged files and when the
 // disk fills during an object copy (issue 29); no check of ours can run inside the library.
 #pragma once
 

@@ -49,7 +49,7 @@ void expect_no_debris(const std::string& dir) {
 }
 
 // A write into the space reserved for the stop's root overwrites blocks allocated in advance:
-// a disk that stays full does not fail it (io/archive_writer.cpp, write_root_into_reserve).
+// a disk that stays full does not fail it (io/archive_root.cpp, write_root_into_reserve).
 bool writes_reserved_space(const std::string& step) {
   return step.rfind("reserved root: ", 0) == 0;
 }
