@@ -65,18 +65,9 @@ std::int64_t offspring_age(AfpoAge rule, std::int64_t parent_age, bool body_chan
   return rule == AfpoAge::body && body_changed ? 0 : parent_age;
 }
 
-Afpo::Afpo(const Config& config, int task_inputs, std::uint64_t seed)
-    : config_(config),
-      params_(evo_params(config, task_inputs)),
-      viable_(robot_viability(config.body)),
-      rng_(seed),
-      innovation_(params_.num_outputs) {}
-
 Afpo Afpo::create(const Config& config, int task_inputs, std::uint64_t seed) {
-  if (config.neat.pop_size < 1) throw std::invalid_argument("neat.pop_size must be >= 1");
   Afpo a(config, task_inputs, seed);
-  a.members_ = random_individuals(static_cast<std::size_t>(config.neat.pop_size), a.params_,
-                                  a.viable_, a.innovation_, a.rng_);
+  a.draw_first_generation();
   a.ages_.assign(a.members_.size(), 0);
   return a;
 }
@@ -85,16 +76,6 @@ bool Afpo::body_changed(const Genome& parent, const Genome& child) const {
   const DevelopedBody p = develop_body(parent.cppn, config_.body);
   const DevelopedBody c = develop_body(child.cppn, config_.body);
   return p.plan.lattice != c.plan.lattice || p.plan.cells != c.plan.cells;
-}
-
-void Afpo::adopt_controller(std::int64_t id, const Genome& learned) {
-  adopt_learned_controller(members_, id, learned, params_.shape);
-}
-
-void Afpo::tell(const std::vector<Evaluation>& results) {
-  Afpo next = *this;  // strong guarantee
-  next.tell_impl(results);
-  *this = std::move(next);
 }
 
 void Afpo::tell_impl(const std::vector<Evaluation>& results) {

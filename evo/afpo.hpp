@@ -31,39 +31,26 @@ std::vector<std::size_t> afpo_survivors(const std::vector<double>& fitness,
 // changed the developed body.
 std::int64_t offspring_age(AfpoAge rule, std::int64_t parent_age, bool body_changed);
 
-class Afpo final : public SearchStrategy {
+class Afpo final : public StrategyBase<Afpo> {
  public:
   static Afpo create(const Config& config, int task_inputs, std::uint64_t seed);
   static Afpo deserialize(std::span<const std::uint8_t> bytes, const Config& config,
                           int task_inputs);
 
-  std::unique_ptr<SearchStrategy> clone() const override { return std::make_unique<Afpo>(*this); }
   SearchKind kind() const override { return SearchKind::afpo; }
-  std::int64_t generation() const override { return generation_; }
-  const EvoParams& params() const override { return params_; }
-  const std::vector<Individual>& ask() const override { return members_; }
-  void adopt_controller(std::int64_t id, const Genome& learned) override;
-  void tell(const std::vector<Evaluation>& results) override;
   std::vector<std::uint8_t> serialize() const override;
-  const StrategyReport& report() const override { return report_; }
 
   // Age of each member, in members() order.
   const std::vector<std::int64_t>& ages() const { return ages_; }
 
  private:
-  Afpo(const Config& config, int task_inputs, std::uint64_t seed);
+  friend StrategyBase<Afpo>;
+  Afpo(const Config& config, int task_inputs, std::uint64_t seed)
+      : StrategyBase(config, task_inputs, seed) {}
   void tell_impl(const std::vector<Evaluation>& results);
   bool body_changed(const Genome& parent, const Genome& child) const;
 
-  Config config_;
-  EvoParams params_;
-  Viability viable_;
-  Rng rng_;
-  InnovationTracker innovation_;
-  std::int64_t generation_ = 0;
-  std::vector<Individual> members_;
   std::vector<std::int64_t> ages_;
-  StrategyReport report_;
 };
 
 }  // namespace softevo::evo

@@ -55,19 +55,9 @@ std::vector<double> body_descriptor_values(const DevelopedBody& body, std::int64
   };
 }
 
-MapElites::MapElites(const Config& config, int task_inputs, std::uint64_t seed)
-    : config_(config),
-      params_(evo_params(config, task_inputs)),
-      viable_(robot_viability(config.body)),
-      grid_(map_grid(config)),
-      rng_(seed),
-      innovation_(params_.num_outputs) {}
-
 MapElites MapElites::create(const Config& config, int task_inputs, std::uint64_t seed) {
-  if (config.neat.pop_size < 1) throw std::invalid_argument("neat.pop_size must be >= 1");
   MapElites me(config, task_inputs, seed);
-  me.members_ = random_individuals(static_cast<std::size_t>(config.neat.pop_size), me.params_,
-                                   me.viable_, me.innovation_, me.rng_);
+  me.draw_first_generation();
   return me;
 }
 
@@ -83,16 +73,6 @@ std::vector<double> MapElites::descriptors(const Genome& genome,
                       ? mean_speed(evaluation.fitness, config_.task.eval_seconds)
                       : all[static_cast<std::size_t>(a.descriptor)]);
   return out;
-}
-
-void MapElites::adopt_controller(std::int64_t id, const Genome& learned) {
-  adopt_learned_controller(members_, id, learned, params_.shape);
-}
-
-void MapElites::tell(const std::vector<Evaluation>& results) {
-  MapElites next = *this;  // strong guarantee
-  next.tell_impl(results);
-  *this = std::move(next);
 }
 
 void MapElites::tell_impl(const std::vector<Evaluation>& results) {

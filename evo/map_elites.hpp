@@ -37,23 +37,14 @@ bool insert_elite(std::vector<Elite>& map, Elite candidate);
 std::vector<double> body_descriptor_values(const DevelopedBody& body, std::int64_t lattice_cells,
                                            double voxel_size);
 
-class MapElites final : public SearchStrategy {
+class MapElites final : public StrategyBase<MapElites> {
  public:
   static MapElites create(const Config& config, int task_inputs, std::uint64_t seed);
   static MapElites deserialize(std::span<const std::uint8_t> bytes, const Config& config,
                                int task_inputs);
 
-  std::unique_ptr<SearchStrategy> clone() const override {
-    return std::make_unique<MapElites>(*this);
-  }
   SearchKind kind() const override { return SearchKind::map_elites; }
-  std::int64_t generation() const override { return generation_; }
-  const EvoParams& params() const override { return params_; }
-  const std::vector<Individual>& ask() const override { return members_; }
-  void adopt_controller(std::int64_t id, const Genome& learned) override;
-  void tell(const std::vector<Evaluation>& results) override;
   std::vector<std::uint8_t> serialize() const override;
-  const StrategyReport& report() const override { return report_; }
 
   const MapGrid& grid() const { return grid_; }
   const std::vector<Elite>& elites() const { return elites_; }  // ascending cell
@@ -61,20 +52,14 @@ class MapElites final : public SearchStrategy {
   std::vector<double> descriptors(const Genome& genome, const Evaluation& evaluation) const;
 
  private:
-  MapElites(const Config& config, int task_inputs, std::uint64_t seed);
+  friend StrategyBase<MapElites>;
+  MapElites(const Config& config, int task_inputs, std::uint64_t seed)
+      : StrategyBase(config, task_inputs, seed), grid_(map_grid(config)) {}
   void tell_impl(const std::vector<Evaluation>& results);
   void next_batch();
 
-  Config config_;
-  EvoParams params_;
-  Viability viable_;
   MapGrid grid_;
-  Rng rng_;
-  InnovationTracker innovation_;
-  std::int64_t generation_ = 0;
-  std::vector<Individual> members_;
   std::vector<Elite> elites_;
-  StrategyReport report_;
 };
 
 }  // namespace softevo::evo

@@ -13,7 +13,9 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/config.hpp"
@@ -102,5 +104,59 @@ std::int64_t read_state_head(WireReader& r, SearchKind kind, std::uint32_t versi
 void write_individual(WireWriter& w, const Individual& m);
 Individual read_individual(WireReader& r, const EvoParams& params,
                            const InnovationTracker& counters, const std::string& what);
+
+// ---- the base of the strategies other than NEAT ----------------------------------------------
+
+// What the strategies other than NEAT share (evo/map_elites, evo/afpo): the run's config and
+// the parameters derived from it, the generator, the innovation counters, the generation, its
+// members and the last report; tell() with the strong guarantee (a copy of the strategy is told
+// and then replaces it, so a throw leaves it as it was). `Derived` holds its own fields besides
+// and provides tell_impl(results) (it may be private, with StrategyBase<Derived> a friend).
+template <class Derived>
+class StrategyBase : public SearchStrategy {
+ public:
+  std::unique_ptr<SearchStrategy> clone() const override {
+    return std::make_unique<Derived>(derived());
+  }
+  std::int64_t generation() const override { return generation_; }
+  const EvoParams& params() const override { return params_; }
+  const std::vector<Individual>& ask() const override { return members_; }
+  void adopt_controller(std::int64_t id, const Genome& learned) override {
+    adopt_learned_controller(members_, id, learned, params_.shape);
+  }
+  void tell(const std::vector<Evaluation>& results) override {
+    Derived next = derived();
+    next.tell_impl(results);
+    static_cast<Derived&>(*this) = std::move(next);
+  }
+  const StrategyReport& report() const override { return report_; }
+
+ protected:
+  StrategyBase(const Config& config, int task_inputs, std::uint64_t seed)
+      : config_(config),
+        params_(evo_params(config, task_inputs)),
+        viable_(robot_viability(config.body)),
+        rng_(seed),
+        innovation_(params_.num_outputs) {}
+
+  // Generation 0: neat.pop_size random viable genomes (std::invalid_argument for a size < 1).
+  void draw_first_generation() {
+    if (config_.neat.pop_size < 1) throw std::invalid_argument("neat.pop_size must be >= 1");
+    members_ = random_individuals(static_cast<std::size_t>(config_.neat.pop_size), params_, viable_,
+                                  innovation_, rng_);
+  }
+
+  Config config_;
+  EvoParams params_;
+  Viability viable_;
+  Rng rng_;
+  InnovationTracker innovation_;
+  std::int64_t generation_ = 0;
+  std::vector<Individual> members_;
+  StrategyReport report_;
+
+ private:
+  const Derived& derived() const { return static_cast<const Derived&>(*this); }
+};
 
 }  // namespace softevo::evo
