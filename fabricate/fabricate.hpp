@@ -212,6 +212,10 @@ std::string stl_bytes(const Mesh& mesh);  // binary STL in mm
 std::vector<std::string> stl_paths(const Fabrication& fabrication, const std::string& out);
 std::vector<std::string> slice_paths(const Fabrication& fabrication, const std::string& dir);
 std::vector<std::string> mold_paths(const Mold& mold, const std::string& dir);
+// The directory `dir` of `option` (--slices, --mold), created with its parents if missing;
+// FabricateError naming both when it cannot be. Made before the first file is written, so that
+// a directory that cannot be made leaves no other output behind.
+void make_output_directory(const std::string& dir, const char* option);
 // Slice images: pixels [count] and their pitch [m]. Throws FabricateError naming --dpi and
 // --layer-um beyond Options::max_pixels.
 struct SliceSize {

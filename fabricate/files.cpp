@@ -30,14 +30,6 @@ void put_f32(std::string& out, double v) {
   out.append(b, 4);
 }
 
-void make_directory(const std::string& dir, const char* option) {
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec || !fs::is_directory(dir))
-    throw FabricateError(std::string("fabricate: ") + option + " " + dir +
-                         ": cannot create the directory" + (ec ? ": " + ec.message() : ""));
-}
-
 // Writes every (path, bytes) pair atomically, after checking every target first, so that a
 // refused target leaves nothing behind.
 void write_all(const std::vector<std::pair<std::string, std::string>>& files, Overwrite overwrite) {
@@ -54,6 +46,14 @@ void write_all(const std::vector<std::pair<std::string, std::string>>& files, Ov
 }
 
 }  // namespace
+
+void make_output_directory(const std::string& dir, const char* option) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir))
+    throw FabricateError(std::string("fabricate: ") + option + " " + dir +
+                         ": cannot create the directory" + (ec ? ": " + ec.message() : ""));
+}
 
 std::vector<std::string> stl_paths(const Fabrication& fab, const std::string& out) {
   std::string stem = out;
@@ -76,12 +76,19 @@ SliceSize slice_size(const Fabrication& fab) {
   const auto count = [](double length, double pitch) { return std::ceil(length / pitch - 1e-9); };
   const double w = count(g.planes[0].back(), size.pixel_x),
                h = count(g.planes[1].back(), size.pixel_y), l = count(g.planes[2].back(), o.layer);
+  // The figures as a person typed or would count them: 15 significant digits turn the 30 um
+  // that went through metres (30.000000000000004) back into 30, and keep whole counts whole.
+  const auto figure = [](double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.15g", v);
+    return std::string(text);
+  };
   if (w * h * l > static_cast<double>(o.max_pixels) || w > 1e6 || h > 1e6)
-    throw FabricateError(
-        "fabricate: --slices at --dpi " + std::to_string(o.dpi_x) + "," + std::to_string(o.dpi_y) +
-        " and --layer-um " + std::to_string(o.layer * 1e6) + " would be " + std::to_string(w) +
-        " x " + std::to_string(h) + " x " + std::to_string(l) + " pixels, more than " +
-        std::to_string(o.max_pixels) + " (the stated limit): lower --dpi or raise --layer-um");
+    throw FabricateError("fabricate: --slices at --dpi " + figure(o.dpi_x) + "," + figure(o.dpi_y) +
+                         " and --layer-um " + figure(o.layer * 1e6) + " would be " + figure(w) +
+                         " x " + figure(h) + " x " + figure(l) + " pixels, more than " +
+                         std::to_string(o.max_pixels) +
+                         " (the stated limit): lower --dpi or raise --layer-um");
   size.width = static_cast<int>(w);
   size.height = static_cast<int>(h);
   size.layers = static_cast<int>(l);
@@ -178,7 +185,7 @@ int write_slices(const Fabrication& fab, const std::string& dir, Overwrite overw
     values[std::to_string(label::kVoid)] = {{"kind", "void"}, {"fill", "support"}};
 
   const std::vector<std::string> names = slice_paths(fab, dir);
-  make_directory(dir, "--slices");
+  make_output_directory(dir, "--slices");
   for (const auto& name : names) check_output_target(name, overwrite);
   const std::string& palette_path = names.back();
   // The grid cell of every column and row once; a slice is then a table lookup per pixel.
@@ -202,7 +209,7 @@ int write_slices(const Fabrication& fab, const std::string& dir, Overwrite overw
 }
 
 std::vector<std::string> write_mold(const Mold& mold, const std::string& dir, Overwrite overwrite) {
-  make_directory(dir, "--mold");
+  make_output_directory(dir, "--mold");
   const std::vector<std::string> paths = mold_paths(mold, dir);
   std::vector<std::pair<std::string, std::string>> files;
   std::size_t k = 0;

@@ -78,6 +78,8 @@ Written fabricate_robot(const RobotFile& robot, const Provenance& provenance,
     for (const auto& p : mold_paths(*w.mold, request.mold)) targets.push_back(p);
   }
   for (const auto& p : targets) check_output_target(p, request.overwrite);
+  if (!request.slices.empty()) make_output_directory(request.slices, "--slices");
+  if (w.mold) make_output_directory(request.mold, "--mold");
   if (!request.output.empty()) {
     if (format == "3mf") {
       write_3mf(w.fabrication, request.output, request.overwrite);

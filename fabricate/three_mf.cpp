@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/input_file.hpp"
 #include "common/version.hpp"
 #include "fabricate/fabricate.hpp"
 
@@ -170,6 +171,17 @@ std::string utf8(LIB3MFRESULT (*get)(NMR::PLib3MFBase*, DWORD, LPSTR, ULONG, ULO
 
 CheckReport check_3mf(const std::string& path) {
   const std::string what = "fabricate --check " + path;
+  // Checked by name before lib3mf opens it: a FIFO would block its open forever, and for a file
+  // of another kind lib3mf says only "Could not read ZIP file".
+  const std::string irregular = not_a_regular_file(path);
+  if (irregular == "does not exist") throw FabricateError(what + ": no such file");
+  if (!irregular.empty()) throw FabricateError(what + ": " + irregular + ", not a 3MF file");
+  const FileMagic magic = file_magic(path);
+  if (magic != FileMagic::zip)
+    throw FabricateError(what + ": not a 3MF file (a 3MF file is a ZIP package)" +
+                         (magic == FileMagic::json ? "; this is JSON: a robot file?"
+                          : magic == FileMagic::hdf5 ? "; this is HDF5: a run archive or trace?"
+                                                     : ""));
   Handle model;
   check(NMR::lib3mf_createmodel(&model.p), nullptr, what);
   Handle reader;

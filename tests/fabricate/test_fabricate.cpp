@@ -7,8 +7,10 @@
 // and cores fill the mold box minus the body exactly. Bad input gets its clear error and leaves
 // no file. Random developed bodies always export to valid meshes (property test).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -617,10 +619,65 @@ TEST(Fabricate, BadInputIsAClearErrorAndWritesNothing) {
     write_slices(fab, dir.string(), Overwrite::refuse);
     ADD_FAILURE() << "no error";
   } catch (const FabricateError& e) {
-    EXPECT_NE(std::string(e.what()).find("--dpi"), std::string::npos) << e.what();
+    // The figures as given and as counted, in their shortest form (no "600.000000").
+    EXPECT_NE(std::string(e.what()).find("--dpi 600,300 and --layer-um 30 would be "),
+              std::string::npos)
+        << e.what();
+    EXPECT_EQ(std::string(e.what()).find(".000000"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(fs::exists(dir));
+  // A --slices or --mold directory that cannot be made (its parent is not there, even for
+  // root) is found before the 3MF is written: no output is left behind.
+  for (const bool mold : {false, true}) {
+    Request request;
+    request.output = (dir.parent_path() / "kept-out.3mf").string();
+    (mold ? request.mold : request.slices) = "/proc/softevo-no-such-directory/out";
+    try {
+      fabricate_robot(robot, provenance_of(robot), request);
+      ADD_FAILURE() << "no error";
+    } catch (const FabricateError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string(mold ? "--mold" : "--slices") +
+                                           " /proc/softevo-no-such-directory/out: cannot create "
+                                           "the directory"),
+                std::string::npos)
+          << e.what();
+    }
+    EXPECT_FALSE(fs::exists(request.output)) << request.output;
+  }
   fs::remove_all(dir.parent_path());
+}
+
+// `--check` of something that is not a 3MF file says what it is, and a FIFO never blocks the
+// reader (before, lib3mf opened it and waited for a writer forever).
+TEST(Fabricate, CheckOfAFileThatIsNotA3mfSaysWhatItIs) {
+  const fs::path dir = temp_dir("check");
+  const auto error_of = [](const fs::path& path) -> std::string {
+    try {
+      check_3mf(path.string());
+    } catch (const FabricateError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const fs::path fifo = dir / "pipe.3mf";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0) << std::strerror(errno);
+  EXPECT_NE(error_of(fifo).find("pipe.3mf: is a FIFO (named pipe), not a 3MF file"),
+            std::string::npos)
+      << error_of(fifo);
+  EXPECT_NE(error_of(dir).find("is a directory, not a 3MF file"), std::string::npos);
+  EXPECT_NE(error_of(dir / "missing.3mf").find("missing.3mf: no such file"), std::string::npos);
+  const fs::path robot = shipped_and_champions().front();
+  EXPECT_NE(error_of(robot).find("not a 3MF file (a 3MF file is a ZIP package); this is JSON: a "
+                                 "robot file?"),
+            std::string::npos)
+      << error_of(robot);
+  // A ZIP package that lib3mf cannot read is still lib3mf's error, naming the file.
+  const fs::path cut = dir / "cut.3mf";
+  std::ofstream(cut, std::ios::binary) << std::string("PK\x03\x04", 4) << std::string(60, '\0');
+  EXPECT_NE(error_of(cut).find("fabricate --check " + cut.string() + ": lib3mf: "),
+            std::string::npos)
+      << error_of(cut);
+  fs::remove_all(dir);
 }
 
 // Property: random CPPNs develop random bodies; each exports to closed, manifold meshes whose
