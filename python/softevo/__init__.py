@@ -170,7 +170,7 @@ def _robot_fabricate(self: Robot, path: str | os.PathLike | None = None, *,
 
     Returns a dict: files written, slices (count), voxels, chambers, groups (name, voxels,
     triangles, volume_mm3), channel_volume_mm3, split_z_mm, summary. FabricateError (a
-    ValueError) names the option or chamber on bad input; nothing is written then.
+    ValueError) names the keyword argument or chamber on bad input; nothing is written then.
     """
     if not isinstance(dpi, str):
         dpi = ",".join(repr(float(v)) for v in dpi)

@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "common/config.hpp"
@@ -104,6 +106,52 @@ RobotFile develop_genome(const py::bytes& encoded, const Config& config) {
   return worker::robot_file_of(config, evo::decode_genome(data), "");
 }
 
+// fabricate/ words its messages for `softevo fabricate`; Robot.fabricate's say its keyword
+// arguments instead ("channel_diameter 1.5 mm is not narrower ...", "pass force=True"), as
+// Python's evolve and config messages do. An option is replaced only as a word of its own (after
+// the start, a space, '(' or ','), so a path that contains "--scale" keeps it.
+std::string with_python_argument_names(const std::string& message) {
+  static constexpr std::pair<std::string_view, std::string_view> kNames[] = {
+      {"--channel-diameter", "channel_diameter"},
+      {"--layer-um", "layer_um"},
+      {"--scale", "scale"},
+      {"--wall", "wall"},
+      {"--dpi", "dpi"},
+      {"--split", "split"},
+      {"--slices", "slices"},
+      {"--mold", "mold"},
+      {"--format", "format"},
+      {"--force", "force=True"},
+      {"-o", "path"},
+  };
+  std::string out;
+  std::size_t i = 0;
+  if (message.rfind("fabricate: ", 0) == 0) {
+    out = "Robot.fabricate: ";
+    i = std::string_view("fabricate: ").size();
+  }
+  while (i < message.size()) {
+    const bool word_start =
+        i == 0 || message[i - 1] == ' ' || message[i - 1] == '(' || message[i - 1] == ',';
+    bool replaced = false;
+    if (word_start && message[i] == '-') {
+      for (const auto& [cli, python] : kNames) {
+        const std::size_t end = i + cli.size();
+        const bool word_end = end == message.size() || message[end] == ' ' || message[end] == ')' ||
+                              message[end] == ',' || message[end] == ':';
+        if (message.compare(i, cli.size(), cli) == 0 && word_end) {
+          out += python;
+          i = end;
+          replaced = true;
+          break;
+        }
+      }
+    }
+    if (!replaced) out += message[i++];
+  }
+  return out;
+}
+
 // Robot.fabricate (softevo/__init__.py checks the keyword names and the units are the CLI's).
 py::dict fabricate_robot(const RobotFile& robot, const std::string& output,
                          const std::string& format, double scale, double channel_diameter_mm,
@@ -121,10 +169,17 @@ py::dict fabricate_robot(const RobotFile& robot, const std::string& output,
   o.channel_diameter = channel_diameter_mm * 1e-3;
   o.wall = wall_mm * 1e-3;
   o.layer = layer_um * 1e-6;
-  fabricate::parse_dpi(dpi, o);
-  if (!split.empty()) fabricate::parse_split(split, o);
-  const fabricate::Written w =
-      fabricate::fabricate_robot(robot, fabricate::provenance_of(robot), request);
+  const fabricate::Written w = [&] {
+    try {
+      fabricate::parse_dpi(dpi, o);
+      if (!split.empty()) fabricate::parse_split(split, o);
+      return fabricate::fabricate_robot(robot, fabricate::provenance_of(robot), request);
+    } catch (const fabricate::FabricateError& e) {
+      throw fabricate::FabricateError(with_python_argument_names(e.what()));
+    } catch (const OutputFileError& e) {
+      throw OutputFileError(with_python_argument_names(e.what()));
+    }
+  }();
   py::dict d;
   d["files"] = w.files;
   d["slices"] = w.slices;

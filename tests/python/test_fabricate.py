@@ -77,20 +77,30 @@ def test_mold_pieces_are_closed_and_fill_the_box_minus_pour_hole_and_vents(tmp_p
     assert {f["file"] for f in info["files"]} >= {"mold-lower.stl", "mold-upper.stl", "core-0.stl"}
 
 
-def test_options_in_the_cli_units_and_bad_input_names_the_option(tmp_path):
+def test_options_in_the_cli_units_and_bad_input_names_the_argument(tmp_path):
+    # The messages name Robot.fabricate's keyword arguments, never the CLI's options.
     robot = softevo.load_robot(ROBOT)
-    with pytest.raises(softevo.FabricateError, match="--channel-diameter"):
+    with pytest.raises(softevo.FabricateError,
+                       match=r"^Robot\.fabricate: channel_diameter 10 mm is not narrower .*"
+                             r"lower channel_diameter or raise scale$"):
         robot.fabricate(tmp_path / "a.stl", channel_diameter=robot.voxel_size * 1e3)
-    with pytest.raises(softevo.FabricateError, match="--split"):
+    with pytest.raises(softevo.FabricateError, match=r"^Robot\.fabricate: split z=-5 mm"):
         robot.fabricate(tmp_path / "a.stl", mold=tmp_path / "m", split=-5)
-    with pytest.raises(softevo.FabricateError, match="--dpi"):
+    with pytest.raises(softevo.FabricateError,
+                       match=r"slices at dpi 6000,6000 and layer_um 1 would be .*"
+                             r"lower dpi or raise layer_um$"):
         robot.fabricate(slices=tmp_path / "s", dpi=(6000, 6000), layer_um=1)
-    with pytest.raises(softevo.FabricateError, match="format"):
+    with pytest.raises(softevo.FabricateError, match=r"path .*a\.obj: .*\(by the extension or "
+                                                     r"format\)"):
         robot.fabricate(tmp_path / "a.obj")
+    with pytest.raises(softevo.FabricateError, match=r"^Robot\.fabricate: scale must be"):
+        robot.fabricate(tmp_path / "a.stl", scale=float("nan"))
     assert list(tmp_path.iterdir()) == []  # nothing written, not even the directories
     robot.fabricate(tmp_path / "a.stl", scale=2)
-    with pytest.raises(softevo.OutputFileError):
+    with pytest.raises(softevo.OutputFileError) as existing:
         robot.fabricate(tmp_path / "a.stl")
+    assert "pass force=True to replace it" in str(existing.value)
+    assert "--" not in str(existing.value)
     robot.fabricate(tmp_path / "a.stl", force=True)
     # The extension in capitals is the same format, and the group's name replaces it.
     upper = robot.fabricate(tmp_path / "B.STL")
