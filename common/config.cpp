@@ -83,7 +83,8 @@ std::string range_text(const KeyDef& def, bool integer) {
   if (has_min)
     return std::string(kind) + (def.min_exclusive ? " > " : " >= ") + num(def.min) + unit;
   if (has_max) return std::string(kind) + " <= " + num(def.max) + unit;
-  return std::string(kind) + unit;
+  // Unbounded: a number must still be finite (nan and inf are refused).
+  return std::string(integer ? "integer" : "finite number") + unit;
 }
 
 std::string allowed_text(const KeyDef& def) {
@@ -99,9 +100,10 @@ std::string allowed_text(const KeyDef& def) {
           return "one of " + join(q);
         }
         if constexpr (std::is_same_v<T, std::vector<double>>) {
+          const std::string each = range_text(def, false);
           return std::string(def.list_length ? "array of " + std::to_string(def.list_length)
                                              : "non-empty array of") +
-                 " numbers, each " + range_text(def, false);
+                 (each == "finite number" ? " finite numbers" : " numbers, each " + each);
         }
         if constexpr (std::is_same_v<T, std::vector<std::int64_t>>) {
           return std::string(def.list_length ? "array of " + std::to_string(def.list_length)
