@@ -26,7 +26,7 @@ double cpu_seconds() {
 }
 
 void print_header(const PreparedRun& r, const DriverOptions& o) {
-  std::printf("%s %s (commit %s), %s\n", o.program.c_str(), kVersion, kGitCommit,
+  std::printf("%s %s (commit %s), %s\n", o.program.c_str(), kVersion, git_commit(),
               o.workers.c_str());
   // The resolved config is in the archive (/config, `softevo info`); -v prints it here too.
   std::printf("# config %s (config hash %s, experiment %s hash %s)%s\n", o.config_path.c_str(),
@@ -52,7 +52,7 @@ void print_header(const PreparedRun& r, const DriverOptions& o) {
 // Several runs in one job: one line per run instead of the config (each archive holds its own).
 void print_packed_header(const std::vector<PreparedRun*>& runs, const DriverOptions& o) {
   std::printf("%s %s (commit %s), %s, %zu runs in one pool (%s)\n", o.program.c_str(), kVersion,
-              kGitCommit, o.workers.c_str(), runs.size(), o.config_path.c_str());
+              git_commit(), o.workers.c_str(), runs.size(), o.config_path.c_str());
   for (const PreparedRun* r : runs) {
     const std::string what =
         r->already_complete ? "every generation archived"

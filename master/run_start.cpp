@@ -100,7 +100,7 @@ PreparedRun prepare_run(const Config& config, const RunOptions& options, int ran
 
   RunInfo& info = run.info;
   info.version = kVersion;
-  info.git_commit = kGitCommit;
+  info.git_commit = git_commit();
   info.physics_revision = physics::kPhysicsRevision;
   info.seed = config.run.seed;
   info.ranks = ranks;

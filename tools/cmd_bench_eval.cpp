@@ -154,7 +154,7 @@ int run_bench_ab(const BenchEvalArgs& a, const std::vector<ChampionRow>& rows) {
   std::fprintf(stderr,
                "A/B: baseline %s (commit %s) against this build (commit %s), %zu robots, %d "
                "run(s) each, interleaved\n",
-               a.baseline.c_str(), base_commit.c_str(), kGitCommit, rows.size(), a.runs);
+               a.baseline.c_str(), base_commit.c_str(), git_commit(), rows.size(), a.runs);
   struct Row {
     std::string name;
     ProcessEval base, ours;                     // fastest run of each build
@@ -221,7 +221,7 @@ int run_bench_ab(const BenchEvalArgs& a, const std::vector<ChampionRow>& rows) {
       char nums[96];
       std::snprintf(nums, sizeof nums, "%.3f,%.3f,%.3f", r.base.cpu_seconds, r.ours.cpu_seconds,
                     ratio[i]);
-      f << date << ',' << csv_field(cpu) << ',' << r.ours.simd << ',' << kGitCommit << ','
+      f << date << ',' << csv_field(cpu) << ',' << r.ours.simd << ',' << git_commit() << ','
         << base_commit << ',' << a.integrator << ',' << a.runs << ',' << csv_field(r.name) << ','
         << r.ours.voxels << ',' << r.ours.steps << ',' << r.ours.status << ',' << nums << '\n';
     }
@@ -230,7 +230,7 @@ int run_bench_ab(const BenchEvalArgs& a, const std::vector<ChampionRow>& rows) {
   if (a.json) {
     nlohmann::ordered_json j;
     j["cpu"] = cpu;
-    j["commit"] = kGitCommit;
+    j["commit"] = git_commit();
     j["baseline"] = a.baseline;
     j["baseline_commit"] = base_commit;
     j["integrator"] = a.integrator;
@@ -258,7 +258,8 @@ int run_bench_ab(const BenchEvalArgs& a, const std::vector<ChampionRow>& rows) {
     return kExitOk;
   }
   std::printf("CPU: %s; this build %s (SIMD %s), baseline %s; fastest of %d interleaved runs\n",
-              cpu.c_str(), kGitCommit, out.front().ours.simd.c_str(), base_commit.c_str(), a.runs);
+              cpu.c_str(), git_commit(), out.front().ours.simd.c_str(), base_commit.c_str(),
+              a.runs);
   std::printf("%-16s %6s %7s %12s %9s %8s  %s\n", "robot", "voxels", "steps", "baseline[s]",
               "this[s]", "speedup", "status");
   for (std::size_t i = 0; i < out.size(); ++i)

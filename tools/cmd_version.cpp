@@ -7,7 +7,7 @@
 namespace softevo::cli {
 
 std::string version_line() {
-  return std::string("softevo ") + kVersion + " (commit " + kGitCommit + ")";
+  return std::string("softevo ") + kVersion + " (commit " + git_commit() + ")";
 }
 
 void register_version(CLI::App& app, int& exit_code) {

@@ -45,7 +45,7 @@ int softevo_mpi_main(int argc, char** argv, MPI_Comm parent, const MpiMainHooks&
   CLI::App app{"softevo-mpi: distributed co-evolution of soft robot bodies and brains"};
   add_run_options(app, o);
   app.set_version_flag("--version",
-                       std::string("softevo-mpi ") + kVersion + " (commit " + kGitCommit + ")");
+                       std::string("softevo-mpi ") + kVersion + " (commit " + git_commit() + ")");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
