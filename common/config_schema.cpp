@@ -92,7 +92,7 @@ bool controller_init_not_random(const Config& c) {
 bool search_not_neat(const Config& c) {
   return c.search.strategy != SearchKind::neat;
 }
-constexpr const char* kNotMapElites = "search.strategy is not \"map_elites\"";
+constexpr const char* kMapElitesOnly = "search.strategy = \"map_elites\"";
 
 }  // namespace
 
@@ -540,29 +540,29 @@ std::vector<KeyDef> schema(Config& c) {
                  .key = "descriptors",
                  .target = &me.descriptors,
                  .allowed = map_descriptor_names()},
-                search_map_elites, kNotMapElites),
+                search_map_elites, kMapElitesOnly),
       only_when({.section = "map_elites", .key = "min", .target = &me.min}, search_map_elites,
-                kNotMapElites),
+                kMapElitesOnly),
       only_when({.section = "map_elites", .key = "max", .target = &me.max}, search_map_elites,
-                kNotMapElites),
+                kMapElitesOnly),
       only_when({.section = "map_elites", .key = "bins", .target = &me.bins, .min = 1, .max = 1e9},
-                search_map_elites, kNotMapElites),
+                search_map_elites, kMapElitesOnly),
       only_when({.section = "map_elites",
                  .key = "max_cells",
                  .target = &me.max_cells,
                  .min = 1,
                  .max = 1e7},
-                search_map_elites, kNotMapElites),
+                search_map_elites, kMapElitesOnly),
       only_when({.section = "map_elites",
                  .key = "crossover_probability",
                  .target = &me.crossover_probability,
                  .min = 0,
                  .max = 1},
-                search_map_elites, kNotMapElites),
+                search_map_elites, kMapElitesOnly),
       only_when({.section = "map_elites", .key = "qd_offset", .target = &me.qd_offset},
-                search_map_elites, kNotMapElites),
+                search_map_elites, kMapElitesOnly),
       only_when({.section = "afpo", .key = "age", .target = &c.afpo.age}, search_afpo,
-                "search.strategy is not \"afpo\""),
+                "search.strategy = \"afpo\""),
   };
   // The heightfield's numbers follow terrain.heightfield: their place in the canonical text.
   const auto heightfield = std::find_if(rows.begin(), rows.end(), [](const KeyDef& def) {

@@ -38,9 +38,11 @@ TEST(SearchConfig, NeatIsTheDefaultAndLeavesTheCanonicalTextAsItWas) {
 }
 
 TEST(SearchConfig, EachStrategysKeysApplyToItAlone) {
-  expect_error("[map_elites]\nbins = [4, 4]\n", "search.strategy is not \"map_elites\"");
-  expect_error("[afpo]\nage = \"body\"\n", "search.strategy is not \"afpo\"");
-  expect_error("[search]\nstrategy = \"afpo\"\n[map_elites]\nbins = [4, 4]\n", "map_elites.bins");
+  expect_error("[map_elites]\nbins = [4, 4]\n",
+               "map_elites.bins applies only when search.strategy = \"map_elites\"");
+  expect_error("[afpo]\nage = \"body\"\n", "afpo.age applies only when search.strategy = \"afpo\"");
+  expect_error("[search]\nstrategy = \"afpo\"\n[map_elites]\nbins = [4, 4]\n",
+               "map_elites.bins applies only when search.strategy = \"map_elites\"");
   expect_error("[search]\nstrategy = \"mapelites\"\n", "search.strategy");
   EXPECT_EQ(
       parse_config("[search]\nstrategy = \"afpo\"\n[afpo]\nage = \"body\"\n", "a.toml").afpo.age,
