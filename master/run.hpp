@@ -91,6 +91,13 @@ struct OptionNames {
   }
 };
 
+// The search strategy a run archive's config text names ("neat" for a text without one).
+std::string archived_strategy(const std::string& config_text);
+// Throws StartupError: `out`, evolved by strategy `archived`, was asked to continue with
+// `wanted`; a run keeps its strategy (the message names the options to leave out).
+[[noreturn]] void refuse_other_strategy(const std::string& out, const std::string& archived,
+                                        const std::string& wanted, const OptionNames& names);
+
 struct RunOptions {
   std::string out_path;
   OptionNames names;                    // for the messages

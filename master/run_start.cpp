@@ -49,19 +49,27 @@ std::string repair_hint(const std::string& out, const ArchiveCheck& check) {
 // check that follows would name the key only).
 void check_same_strategy(const std::string& out, const std::string& archive_text,
                          const Config& config, const OptionNames& names) {
-  std::string archived = "neat";  // texts of NEAT runs have no search.strategy
-  for (const auto& [key, value] : canonical_entries(archive_text))
-    if (key == "search.strategy") archived = value.substr(1, value.size() - 2);
+  const std::string archived = archived_strategy(archive_text);
   const std::string wanted = to_string(config.search.strategy);
-  if (archived != wanted)
-    throw StartupError(out + ": cannot resume: the archive was evolved by search strategy \"" +
-                       archived + "\", this run asks for \"" + wanted +
-                       "\" (search.strategy); a run keeps its strategy: leave out " + names.config +
-                       " and " + names.overrides + ", or give the new strategy another " +
-                       names.out);
+  if (archived != wanted) refuse_other_strategy(out, archived, wanted, names);
 }
 
 }  // namespace
+
+std::string archived_strategy(const std::string& config_text) {
+  std::string archived = "neat";  // texts of NEAT runs have no search.strategy
+  for (const auto& [key, value] : canonical_entries(config_text))
+    if (key == "search.strategy") archived = value.substr(1, value.size() - 2);
+  return archived;
+}
+
+void refuse_other_strategy(const std::string& out, const std::string& archived,
+                           const std::string& wanted, const OptionNames& names) {
+  throw StartupError(out + ": cannot resume: the archive was evolved by search strategy \"" +
+                     archived + "\", this run asks for \"" + wanted +
+                     "\" (search.strategy); a run keeps its strategy: leave out " + names.config +
+                     " and " + names.overrides + ", or give the new strategy another " + names.out);
+}
 
 std::string iso8601_now() {
   const std::time_t t = std::time(nullptr);

@@ -63,6 +63,17 @@ std::optional<Config> archived_config(const RunCommandOptions& o) {
   } catch (const std::exception& e) {
     throw master::StartupError(o.out_path + ": cannot resume: cannot read its config: " + e.what());
   }
+  // An override of the strategy would otherwise fail on the first key of the archive's own
+  // strategy ("map_elites.descriptors applies only when ..."), not saying why.
+  const std::string archived = master::archived_strategy(text);
+  for (const std::string& override : o.overrides) {
+    if (override.rfind("search.strategy=", 0) != 0) continue;
+    std::string wanted = override.substr(std::string("search.strategy=").size());
+    const auto quote_or_space = [](char c) { return c == '"' || c == '\'' || c == ' '; };
+    while (!wanted.empty() && quote_or_space(wanted.back())) wanted.pop_back();
+    wanted.erase(0, std::min(wanted.size(), wanted.find_first_not_of("\"' ")));
+    if (wanted != archived) master::refuse_other_strategy(o.out_path, archived, wanted, {});
+  }
   return parse_config(text, o.out_path + " (its /config)", run_overrides(o, -1));
 }
 

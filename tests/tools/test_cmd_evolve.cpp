@@ -231,6 +231,39 @@ TEST_F(CmdEvolve, ResumeOfAMissingArchiveIsAnErrorWithoutAConfig) {
   EXPECT_TRUE(fs::exists(fresh));
 }
 
+// --resume without --config takes the archive's own config; an override of its search strategy
+// is refused naming both strategies (before, the first map_elites key of the archive's config
+// failed as "applies only when ...", not saying that a run keeps its strategy).
+TEST_F(CmdEvolve, ResumeWithAnotherStrategyOverrideNamesBoth) {
+  const std::string out = file("map.h5");
+  const std::vector<std::string> map_elites = {
+      "--config",      config_,
+      "--out",         out,
+      "--generations", "1",
+      "--set",         "search.strategy=\"map_elites\"",
+      "--set",         "map_elites.descriptors=[\"voxels\"]",
+      "--set",         "map_elites.min=[0]",
+      "--set",         "map_elites.max=[125]",
+      "--set",         "map_elites.bins=[5]"};
+  const test::CommandResult start = evolve(map_elites);
+  ASSERT_EQ(start.code, 0) << start.output;
+  for (const std::string value : {"afpo", "\"afpo\"", "'neat'"}) {
+    const test::CommandResult r = evolve(
+        {"--out", out, "--resume", "--generations", "2", "--set", "search.strategy=" + value});
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find(out + ": cannot resume: the archive was evolved by search strategy "
+                                  "\"map_elites\", this run asks for "),
+              std::string::npos)
+        << r.output;
+  }
+  EXPECT_EQ(io::Archive(out).info().generations_done, 1);
+  // Naming the archive's own strategy is no change.
+  const test::CommandResult same = evolve(
+      {"--out", out, "--resume", "--generations", "2", "--set", "search.strategy=map_elites"});
+  EXPECT_EQ(same.code, 0) << same.output;
+  EXPECT_EQ(io::Archive(out).info().generations_done, 2);
+}
+
 // A run in which no robot is ever ok (every one diverged or exploded) is archived complete but
 // ends with exit 1, as one stopped by failed generations does (issue 39: it exited 0); the
 // warnings of `softevo evolve` carry its own name.
