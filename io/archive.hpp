@@ -278,6 +278,11 @@ class Archive {
   std::string config_text() const;
   std::vector<std::int64_t> generations() const;  // ascending
   GenerationRecord generation(std::int64_t g) const;
+  // The generation to take individual `id` from: `g` when given, else the last generation that
+  // holds `id` (a MAP-Elites elite or a NEAT elite stays in later generations under its id).
+  // ArchiveError when it is not there, naming the generations that hold it, or the span of the
+  // ids when none does. Reads only the id column of each generation.
+  std::int64_t generation_of(std::int64_t id, std::optional<std::int64_t> g = std::nullopt) const;
   std::vector<StatsRow> stats() const;
   std::optional<Checkpoint> checkpoint() const;
   // The `digest` attribute of /generations/<G> (generation_digest at write time); nullopt in

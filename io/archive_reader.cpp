@@ -2,6 +2,7 @@
 // stored (in the root, a segment file or a packed file), the statistics and the checkpoint, every
 // read bounded by the limits of docs/archive.md "Limits".
 #include <algorithm>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -171,6 +172,60 @@ StrategyReport read_strategy_group(const h5::Group& g, hsize_t n, const std::str
 }
 
 }  // namespace
+
+std::int64_t Archive::generation_of(std::int64_t id, std::optional<std::int64_t> g) const {
+  return archive_errors([&] {
+    const std::vector<std::int64_t> gens = generations();
+    if (gens.empty()) throw ArchiveError(path_ + ": the archive has no generation yet");
+    if (g && !std::binary_search(gens.begin(), gens.end(), *g))
+      throw ArchiveError(path_ + ": no generation " + std::to_string(*g) +
+                         "; the archive has generations " + std::to_string(gens.front()) + ".." +
+                         std::to_string(gens.back()));
+    // Generations holding `id`, ascending, and the span of all ids for the message.
+    std::vector<std::int64_t> holding;
+    std::int64_t lowest = INT64_MAX, highest = INT64_MIN;
+    for (const std::int64_t gen : gens) {
+      const std::string name = "generations/" + generation_group_name(gen);
+      require_segment(name);
+      const std::vector<std::int64_t> ids =
+          file_->open_group(name).open_dataset("id").read<std::int64_t>(ArchiveLimits::individuals);
+      if (std::find(ids.begin(), ids.end(), id) != ids.end()) holding.push_back(gen);
+      for (const std::int64_t i : ids) {
+        lowest = std::min(lowest, i);
+        highest = std::max(highest, i);
+      }
+    }
+    if (g && std::binary_search(holding.begin(), holding.end(), *g)) return *g;
+    if (!g && !holding.empty()) return holding.back();
+    const std::string span = lowest <= highest
+                                 ? " (the archive's ids run from " + std::to_string(lowest) +
+                                       " to " + std::to_string(highest) + ")"
+                                 : std::string();
+    if (holding.empty())
+      throw ArchiveError(path_ + ": " +
+                         (g ? "generation " + std::to_string(*g) + " has no individual with id " +
+                                  std::to_string(id) + ", nor has any other generation"
+                            : "no generation has an individual with id " + std::to_string(id)) +
+                         span);
+    // Runs of consecutive generations as "a..b", at most eight of them.
+    std::string list;
+    int runs = 0;
+    for (std::size_t i = 0; i < holding.size(); ++i) {
+      std::size_t j = i;
+      while (j + 1 < holding.size() && holding[j + 1] == holding[j] + 1) ++j;
+      if (++runs > 8) {
+        list += ", ...";
+        break;
+      }
+      list += (list.empty() ? "" : ", ") + std::to_string(holding[i]) +
+              (j > i ? ".." + std::to_string(holding[j]) : "");
+      i = j;
+    }
+    throw ArchiveError(path_ + ": generation " + std::to_string(*g) +
+                       " has no individual with id " + std::to_string(id) +
+                       "; it is in generation" + (holding.size() > 1 ? "s " : " ") + list);
+  });
+}
 
 GenerationRecord Archive::generation(std::int64_t gen) const {
   return archive_errors([&] {

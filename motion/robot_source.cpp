@@ -349,6 +349,9 @@ std::vector<ArchivedIndividual> archived_generation(const std::string& archive_p
 ArchivedIndividual archived_individual(const std::string& archive_path,
                                        std::optional<std::int64_t> generation,
                                        std::optional<std::int64_t> id) {
+  // With an id and no generation: the last generation that holds it (ArchiveError naming where
+  // the id is when the generation given does not hold it).
+  if (id) generation = io::Archive(archive_path).generation_of(*id, generation);
   std::vector<ArchivedIndividual> all = archived_generation(archive_path, generation);
   if (all.empty()) throw std::runtime_error(archive_path + ": generation has no individual");
   if (id) {

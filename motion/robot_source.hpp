@@ -88,8 +88,9 @@ std::vector<std::int64_t> archived_generations(const std::string& archive_path);
 // Every individual of one generation (default: the last), rows in id order.
 std::vector<ArchivedIndividual> archived_generation(const std::string& archive_path,
                                                     std::optional<std::int64_t> generation);
-// One individual: `id`, or (no id) the best of the generation (highest fitness, lowest id on
-// ties). Throws when the generation or id is not in the archive.
+// One individual: `id` (from `generation`, by default the last generation that holds it), or
+// (no id) the best of the generation (default: the last; highest fitness, lowest id on ties).
+// Throws when the generation or id is not in the archive, naming the generations that hold it.
 ArchivedIndividual archived_individual(const std::string& archive_path,
                                        std::optional<std::int64_t> generation,
                                        std::optional<std::int64_t> id);

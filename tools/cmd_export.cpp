@@ -45,7 +45,7 @@ void register_export(CLI::App& app, int& exit_code) {
   auto* best =
       cmd->add_flag("--best", a->best, "the best individual of the generation (the default)");
   auto* id =
-      cmd->add_option("--id", a->id, "the individual with this genome id")->check(at_least(0));
+      cmd->add_option("--id", a->id, "the individual with this genome id (from the last generation that holds it, unless --generation)")->check(at_least(0));
   best->excludes(id);
   auto* cell = cmd->add_option("--cell", a->cell,
                                "a MAP-Elites run: the elite of this cell of the generation's map "
@@ -65,6 +65,10 @@ void register_export(CLI::App& app, int& exit_code) {
       g = elite.generation;
     }
     a->best = a->id < 0;
+    // --id alone: the last generation that holds it (an elite stays under its id).
+    if (!a->best && a->cell.empty())
+      g = archive.generation_of(a->id,
+                                a->generation >= 0 ? std::optional(a->generation) : std::nullopt);
     const io::GenerationRecord rec = archive.generation(g);
     std::size_t row = rec.size();
     for (std::size_t i = 0; i < rec.size(); ++i) {

@@ -333,6 +333,46 @@ void write_three_generations(const std::string& p, RunInfo& info) {
   }
 }
 
+// An individual asked for by id alone comes from the last generation that holds it (an elite
+// keeps its id in later generations); a generation that does not hold it names those that do.
+TEST(Archive, GenerationOfAnIdIsTheLastHoldingItOrNamesWhereItIs) {
+  TmpDir d;
+  const std::string p = d.path + "/ids.h5";
+  RunInfo info = sample_info();
+  create_archive(p, info, "[run]\nseed = 3\n");
+  for (std::int64_t g = 0; g < 5; ++g) {
+    GenerationRecord r = sample_record(g, 2, 1);
+    // Id 5 in generations 0, 1, 3 and 4; every generation has one id of its own.
+    r.id = g == 2 ? std::vector<std::int64_t>{100 + g, 200} : std::vector<std::int64_t>{5, 100 + g};
+    info.generations_done = g + 1;
+    append_generation(p, info, r, StatsRow{static_cast<double>(g), r.best, r.mean, r.sd, 2, 1.0},
+                      Checkpoint{g + 1, {1}});
+  }
+  const Archive a(p);
+  EXPECT_EQ(a.generation_of(5), 4);
+  EXPECT_EQ(a.generation_of(5, 1), 1);
+  EXPECT_EQ(a.generation_of(200), 2);
+  EXPECT_EQ(a.generation_of(102, 2), 2);
+  const auto error_of = [&](std::int64_t id, std::optional<std::int64_t> g) -> std::string {
+    try {
+      a.generation_of(id, g);
+    } catch (const ArchiveError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_EQ(error_of(5, 2), p + ": generation 2 has no individual with id 5; it is in "
+                                "generations 0..1, 3..4");
+  EXPECT_EQ(error_of(200, 4), p + ": generation 4 has no individual with id 200; it is in "
+                                  "generation 2");
+  EXPECT_EQ(
+      error_of(7, std::nullopt),
+      p + ": no generation has an individual with id 7 (the archive's ids run from 5 to 200)");
+  EXPECT_EQ(error_of(7, 0), p + ": generation 0 has no individual with id 7, nor has any other "
+                                "generation (the archive's ids run from 5 to 200)");
+  EXPECT_EQ(error_of(5, 9), p + ": no generation 9; the archive has generations 0..4");
+}
+
 // While a run writes, the archive is a small root whose generations are links to one segment
 // file each; finish_archive packs it into one file with the same content and removes them.
 TEST(Archive, RootWithSegmentsReadsAsAndPacksIntoOneFile) {

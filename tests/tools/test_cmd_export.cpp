@@ -9,6 +9,7 @@
 #include <bit>
 #include <charconv>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -256,6 +257,45 @@ TEST_F(CmdExport, AMissingGenerationNamesTheOnesThatExistAndFitnessIsShortest) {
   const auto end = std::to_chars(shortest, shortest + sizeof shortest, best).ptr;
   EXPECT_NE(text.output.find("fitness " + std::string(shortest, end) + " ("), std::string::npos)
       << text.output;
+}
+
+// --id alone takes the individual from the last generation that holds it: an id of generation
+// 0 that later generations dropped is exported without --generation (before: "generation 2 has
+// no individual with id ..."); with a --generation that lacks it, the error names where it is.
+TEST_F(CmdExport, AnIdAloneComesFromTheLastGenerationThatHoldsIt) {
+  const std::string source =
+      std::getenv("SOFTEVO_SOURCE_DIR") ? std::getenv("SOFTEVO_SOURCE_DIR") : ".";
+  const std::string run = (dir_ / "three.h5").string();
+  const auto evolved = test::run_command(binary("softevo") + " evolve --progress never --config " +
+                                         source + "/tests/data/tiny-run.toml --out " + run);
+  ASSERT_EQ(evolved.code, 0) << evolved.output;
+  const io::Archive archive(run);
+  const std::vector<std::int64_t> gens = archive.generations();
+  ASSERT_EQ(gens.size(), 3u);
+  // The last generation holding each id of generation 0, counted here from the records.
+  std::map<std::int64_t, std::int64_t> last_holding;
+  for (const std::int64_t g : gens)
+    for (const std::int64_t id : archive.generation(g).id) last_holding[id] = g;
+  std::int64_t dropped = -1;
+  for (const std::int64_t id : archive.generation(0).id)
+    if (last_holding[id] < gens.back()) dropped = id;
+  ASSERT_GE(dropped, 0) << "every individual of generation 0 survived to the last";
+  const fs::path out = dir_ / "dropped.json";
+  const auto exported =
+      test::run_command(binary("softevo") + " export " + run + " --id " + std::to_string(dropped) +
+                        " -o " + out.string() + " --json");
+  ASSERT_EQ(exported.code, 0) << exported.output;
+  EXPECT_EQ(nlohmann::json::parse(exported.output)["generation"], last_holding[dropped])
+      << exported.output;
+  const auto missing = test::run_command(
+      binary("softevo") + " export " + run + " --id " + std::to_string(dropped) + " --generation " +
+      std::to_string(gens.back()) + " -o " + (dir_ / "none.json").string());
+  EXPECT_EQ(missing.code, 2) << missing.output;
+  EXPECT_NE(missing.output.find("has no individual with id " + std::to_string(dropped) +
+                                "; it is in generation"),
+            std::string::npos)
+      << missing.output;
+  EXPECT_FALSE(fs::exists(dir_ / "none.json"));
 }
 
 TEST_F(CmdExport, SoftevoMpiHasAVersionAndTheOutputSpellings) {
