@@ -1,5 +1,6 @@
 #include "tools/elite_cell.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 #include <vector>
 
@@ -19,7 +20,7 @@ EliteRow elite_of_cell(const io::Archive& archive, const std::string& cell_text,
   std::vector<std::int64_t> bins;
   std::string axes;
   for (const MapAxis& a : grid.axes)
-    axes += (axes.empty() ? "" : ",") + a.name + " 0.." + std::to_string(a.bins - 1);
+    axes += (axes.empty() ? "" : ", ") + a.name + " 0.." + std::to_string(a.bins - 1);
   const std::string usage = "--cell " + cell_text + ": give one bin per descriptor (" + axes + ")";
   std::size_t start = 0;
   while (start <= cell_text.size()) {
@@ -54,10 +55,20 @@ EliteRow elite_of_cell(const io::Archive& archive, const std::string& cell_text,
       return EliteRow{.generation = static_cast<std::int64_t>(map.values[r * k + 3]),
                       .id = static_cast<std::int64_t>(map.values[r * k + 1]),
                       .cell = cell};
-  throw std::invalid_argument("--cell " + cell_text +
-                              ": the cell is empty in the map after "
-                              "generation " +
-                              std::to_string(g));
+  // The cells that hold an elite, as bins, so that the next try can be one of them.
+  std::string held;
+  const std::size_t shown = std::min<std::size_t>(map.rows(), 12);
+  for (std::size_t r = 0; r < shown; ++r) {
+    std::string bins_text;
+    for (const std::int64_t b : grid.coordinates(static_cast<std::int64_t>(map.values[r * k])))
+      bins_text += (bins_text.empty() ? "" : ",") + std::to_string(b);
+    held += (held.empty() ? "" : " ") + bins_text;
+  }
+  if (map.rows() > shown) held += " ... (" + std::to_string(map.rows()) + " in all)";
+  throw std::invalid_argument(
+      "--cell " + cell_text + ": the cell is empty in the map after generation " +
+      std::to_string(g) +
+      (held.empty() ? std::string("; the map has no elite") : "; cells with an elite: " + held));
 }
 
 }  // namespace softevo::cli

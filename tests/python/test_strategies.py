@@ -93,6 +93,15 @@ def test_export_and_view_pick_an_elite_by_cell(tmp_path):
             args += ["-o", str(tmp_path / "x.json")] if command == "export" else ["--port", "0"]
             p = subprocess.run(args, capture_output=True, text=True, timeout=60)
             assert p.returncode == 2 and needle in p.stderr and "--cell" in p.stderr, p.stderr
+    # The empty cell's message lists the cells that hold an elite, as bins.
+    first = f"{int(np.asarray(m['bin_voxels'])[0])},{int(np.asarray(m['bin_height'])[0])}"
+    p = subprocess.run([str(binary("softevo")), "export", str(tmp_path / "m.h5"), "--cell",
+                        f"{empty // 5},{empty % 5}", "-o", str(tmp_path / "x.json")],
+                       capture_output=True, text=True, timeout=60)
+    assert f"; cells with an elite: {first}" in p.stderr, p.stderr
+    assert "(voxels 0..4, height 0..4)" in subprocess.run(
+        [str(binary("softevo")), "export", str(tmp_path / "m.h5"), "--cell", "9,9", "-o",
+         str(tmp_path / "x.json")], capture_output=True, text=True, timeout=60).stderr
 
 
 def test_analysis_places_every_run_in_the_map_of_a_map_elites_run(tmp_path):
