@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numbers
 import os
 import warnings
 
@@ -20,6 +21,21 @@ def _pandas():
     except ImportError:
         return None
     return pandas
+
+
+def _whole_number(method: str, name: str, value, optional: bool = False) -> int | None:
+    """`value` of argument `name` of Run.`method` as an int: TypeError naming both for anything
+    but an integer (a float, a string, a bool; None too unless `optional`), ValueError beyond the
+    archive's 64-bit ids and generations. int() alone would truncate 3.7 to 3 and take "3"."""
+    if value is None and optional:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        kind = "an int or None" if optional else "an int"
+        raise TypeError(f"Run.{method}: {name} must be {kind}, not {type(value).__name__} "
+                        f"({value!r})")
+    if not -2**63 <= int(value) < 2**63:
+        raise ValueError(f"Run.{method}: {name} = {int(value)} is beyond 64 bits")
+    return int(value)
 
 
 def _table(columns: dict[str, np.ndarray], names: list[str]):
@@ -195,6 +211,7 @@ class Run:
         if self.strategy != "map_elites":
             raise ValueError(f"{self.path}: a run of search strategy {self.strategy!r} has no "
                              "map (search.strategy = 'map_elites' has one)")
+        generation = _whole_number("map", "generation", generation, optional=True)
         m = self._archive.strategy_generation(generation)["map"]
         config = dict(self.config)
         names = list(config["map_elites.descriptors"])
@@ -226,15 +243,17 @@ class Run:
         the learned one, whose fitness is archived) developed with the archived config, as the
         run evaluated it (from `generation`, default the latest one it is in).
         KeyError when the archive has no such individual."""
-        return self._archive.robot(int(id), None if generation is None else int(generation))
+        return self._archive.robot(_whole_number("genome", "id", id),
+                                   _whole_number("genome", "generation", generation, True))
 
     def best(self, generation: int | None = None) -> tuple[int, int]:
         """(generation, id) of the fittest individual of `generation` (default: the last), the
         lowest id on ties."""
+        generation = _whole_number("best", "generation", generation, optional=True)
         c = self._all_columns()
         if len(c["id"]) == 0:
             raise KeyError(f"{self.path}: the archive has no generation yet")
-        g = int(c["generation"][-1]) if generation is None else int(generation)
+        g = int(c["generation"][-1]) if generation is None else generation
         rows = np.flatnonzero(c["generation"] == g)
         if len(rows) == 0:
             raise KeyError(f"{self.path}: no generation {g}")
@@ -247,6 +266,8 @@ class Run:
         population. Each entry: generation, id, fitness, status, voxels, chambers, species (NEAT),
         parent1, parent2, and a note where an id was carried over as an elite or a parent is
         not archived. `generation` defaults to the latest one the individual is in."""
+        id = _whole_number("lineage", "id", id)
+        generation = _whole_number("lineage", "generation", generation, optional=True)
         c = self._all_columns()
         gens, ids = c["generation"], c["id"]
         where: dict[int, list[int]] = {}

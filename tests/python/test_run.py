@@ -132,6 +132,22 @@ def test_bad_archives_and_ids(tiny_run, tmp_path):
         run.genome(1, generation=7)
     with pytest.raises(KeyError):
         run.lineage(999999)
+    # Arguments that are not whole numbers are named, never truncated (3.7 was read as 3) or
+    # passed on to the binding's own "incompatible function arguments".
+    for call, message in ((lambda: run.genome(1.7), r"Run\.genome: id must be an int, not float"),
+                          (lambda: run.genome("1"), r"Run\.genome: id must be an int, not str"),
+                          (lambda: run.genome(1, generation=0.5),
+                           r"Run\.genome: generation must be an int or None, not float"),
+                          (lambda: run.best("last"), r"Run\.best: generation must be an int"),
+                          (lambda: run.lineage(True), r"Run\.lineage: id must be an int, not bool"),
+                          (lambda: run.lineage(1, generation=[0]),
+                           r"Run\.lineage: generation must be an int or None, not list")):
+        with pytest.raises(TypeError, match=message):
+            call()
+    with pytest.raises(ValueError, match=r"Run\.genome: id = 10+ is beyond 64 bits"):
+        run.genome(10**30)
+    ids = run.individuals()["id"]
+    assert run.genome(np.int64(ids[0])).voxel_size > 0  # numpy integers are integers
 
 
 def test_run_as_a_context_manager(tiny_run):
