@@ -406,6 +406,11 @@ def main(argv: list[str] | None = None) -> int:
         TASKS[name] = pair
         TASK_TITLES[name] = f"{pair[0]} vs {pair[1]}"
 
+    if not pathlib.Path(args.runs_dir).is_dir():
+        ap.error(f"{args.runs_dir}: " + ("is a file; give the folder of the runs (one archive: "
+                                          "analysis/lineage.py or analysis/strategies.py)"
+                                          if pathlib.Path(args.runs_dir).exists()
+                                          else "no such folder"))
     runs, skipped = find_runs(args.runs_dir, verify=not args.no_verify)
     for msg in skipped:
         print(f"figures: skipped {msg}", file=sys.stderr)

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import math
 import pathlib
 import sys
 
@@ -38,6 +39,7 @@ import matplotlib  # noqa: E402
 
 matplotlib.use("Agg")  # headless
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 
 import softevo  # noqa: E402
@@ -189,23 +191,49 @@ def main(argv=None) -> int:
                         help="a robot walks when its fitness exceeds this [cm], default 5")
     parser.add_argument("--grid", help="two descriptors, e.g. chamber_count,actuated_fraction")
     args = parser.parse_args(argv)
-    paths = []
+    for option, value in (("--qd-offset", args.qd_offset), ("--walk-cm", args.walk_cm)):
+        if not math.isfinite(value):
+            parser.error(f"{option} {value}: give a finite number [cm]")
+    named, found = [], []  # archives given by name; .h5 files found in the folders given
     for r in args.runs:
         p = pathlib.Path(r)
-        paths += sorted(p.rglob("*.h5")) if p.is_dir() else [p]
+        if not p.exists():
+            parser.error(f"{r}: no such file or folder")
+        if p.is_dir():
+            # Segments of a run still writing (RUN.h5.d/) are read through RUN.h5.
+            found += sorted(q for q in p.rglob("*.h5") if not q.parent.name.endswith(".h5.d"))
+        else:
+            named.append(p)
+    out = pathlib.Path(args.out)
+    if out.exists() and not out.is_dir():
+        parser.error(f"-o {args.out}: exists and is not a folder")
+    # Every run is opened before anything is written. An archive named on the command line that
+    # cannot be read is an error (named, no traceback, no half-made output); a file found in a
+    # folder that is not a run archive (a trace, a damaged file) is left out, saying why.
+    paths, runs = [], []
+    for p in named + found:
+        try:
+            runs.append(softevo.open_run(p))
+            paths.append(p)
+        except (softevo.ArchiveError, OSError) as e:
+            if p in named:
+                print(f"strategies: {e}", file=sys.stderr)
+                return 2
+            print(f"strategies: skipped {e}", file=sys.stderr)
     if not paths:
         parser.error("no run archive given")
     grid = None
     if args.grid:
-        grid = Grid.named(args.grid.split(","))
+        names = [n.strip() for n in args.grid.split(",")]
+        unknown = [n for n in names if n not in DEFAULTS]
+        if len(names) != 2 or unknown:
+            parser.error(f"--grid {args.grid}: give two descriptors of "
+                         f"{', '.join(sorted(DEFAULTS))}" +
+                         (f" ({', '.join(map(repr, unknown))} is not one)" if unknown else ""))
+        grid = Grid.named(names)
     else:
-        for p in paths:
-            run = softevo.open_run(p)
-            if run.strategy == "map_elites":
-                grid = Grid.of_run(run)
-                break
+        grid = next((Grid.of_run(run) for run in runs if run.strategy == "map_elites"), None)
         grid = grid or Grid.named(["chamber_count", "actuated_fraction"])
-    out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     rows, curves = [], []
     for p in paths:
@@ -224,6 +252,8 @@ def main(argv=None) -> int:
         colour = COLOURS.get(summary["strategy"], "black")
         ax_qd.plot(g, [c[2] for c in curve], color=colour, label=summary["run"])
         ax_cov.plot(g, [100 * c[1] for c in curve], color=colour, label=summary["run"])
+    for ax in (ax_qd, ax_cov):  # generations are whole numbers: no 0.25 ticks on a short run
+        ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
     ax_qd.set_xlabel("generation")
     ax_qd.set_ylabel(f"QD score [cm] (offset {args.qd_offset:g} cm)")
     ax_cov.set_xlabel("generation")

@@ -144,3 +144,34 @@ def test_individuals_carry_the_strategys_columns_instead_of_species(tmp_path):
     placed = ind[ind["placed"] == 1]
     assert set(m.map()["id"]) <= set(placed["id"])
     assert (last["cell"] >= -1).all()
+
+
+def test_analysis_refuses_bad_arguments_by_name_and_writes_nothing(tmp_path):
+    """analysis/strategies.py: a named file that is not a run archive, a missing path, a
+    non-finite number, a bad --grid and an -o that is a file are exit 2 naming them, with no
+    traceback and no output written; a folder's non-archive .h5 files are skipped, saying so."""
+    import sys
+    softevo.evolve(TINY, workers=2, out=tmp_path / "runs" / "neat.h5")
+    (tmp_path / "runs" / "notes.h5").write_text("not an archive")
+    (tmp_path / "file").write_text("")
+    script = str(SOURCE_DIR / "analysis" / "strategies.py")
+    run = str(tmp_path / "runs" / "neat.h5")
+    for args, message in (([str(tmp_path / "runs" / "notes.h5")], "notes.h5: /: open file: not an HDF5"),
+                          ([run, str(tmp_path / "none.h5")], "none.h5: no such file or folder"),
+                          ([run, "--qd-offset", "nan"], "--qd-offset nan: give a finite number"),
+                          ([run, "--walk-cm", "inf"], "--walk-cm inf: give a finite number"),
+                          ([run, "--grid", "voxels,size"], "('size' is not one)"),
+                          ([run, "--grid", "voxels"], "--grid voxels: give two descriptors")):
+        done = subprocess.run([sys.executable, script, *args, "-o", str(tmp_path / "out")],
+                              capture_output=True, text=True, timeout=300)
+        assert done.returncode == 2 and message in done.stderr, (args, done.stderr)
+        assert "Traceback" not in done.stderr, done.stderr
+        assert not (tmp_path / "out").exists()
+    done = subprocess.run([sys.executable, script, run, "-o", str(tmp_path / "file")],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2 and "exists and is not a folder" in done.stderr, done.stderr
+    done = subprocess.run([sys.executable, script, str(tmp_path / "runs"), "-o",
+                           str(tmp_path / "out")], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert "strategies: skipped" in done.stderr and "notes.h5" in done.stderr, done.stderr
+    assert (tmp_path / "out" / "strategies.csv").read_text().count("\n") == 2  # header, neat

@@ -271,6 +271,19 @@ class SyntheticGrid(unittest.TestCase):
         self.assertEqual(result.returncode, 2)
         self.assertIn("no run archive", result.stderr)
 
+    def test_a_file_or_missing_folder_is_named(self):
+        # figures.py takes a folder: one archive given instead is named as a file (before, the
+        # message was "no run archive under RUN.h5"), a missing folder as missing.
+        archive = self.tmp / "one.h5"
+        archive.write_text("")
+        result = run_figures(archive, self.tmp / "none")
+        self.assertEqual(result.returncode, 2)
+        self.assertIn("one.h5: is a file; give the folder of the runs", result.stderr)
+        result = run_figures(self.tmp / "absent", self.tmp / "none")
+        self.assertEqual(result.returncode, 2)
+        self.assertIn("absent: no such folder", result.stderr)
+        self.assertFalse((self.tmp / "none").exists())
+
     def test_archives_failing_the_integrity_checks_are_skipped_with_the_reason(self):
         result = run_figures(self.runs, self.tmp / "verified")
         self.assertEqual(result.returncode, 2, result.stderr)
