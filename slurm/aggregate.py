@@ -25,7 +25,7 @@ def tasks_of(spec):
     return sorted(set(out))
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--softevo", required=True)
     ap.add_argument("--runs", required=True)
@@ -34,11 +34,26 @@ def main():
     ap.add_argument("--experiments", default=",".join(EXPERIMENTS),
                     help="comma-separated experiments of the grid, in array order")
     ap.add_argument("--seed-first", type=int, default=1, help="seed of each experiment's first task")
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     experiments = [e for e in a.experiments.split(",") if e]
+    # Checked before any archive is read: a typo in --array or --reps would otherwise end in a
+    # Python traceback, or in a grid of other experiments than the job ran.
+    try:
+        tasks = tasks_of(a.array)
+    except ValueError:
+        ap.error("--array %r: give task ranges such as 0-39, 0,10,20,30 or 0-3,10" % a.array)
+    if a.reps < 1:
+        ap.error("--reps %d: must be >= 1" % a.reps)
+    if not experiments:
+        ap.error("--experiments: give at least one experiment")
+    beyond = [t for t in tasks if t < 0 or t // a.reps >= len(experiments)]
+    if beyond:
+        ap.error("--array %s: task %d is outside the grid of %d experiments x %d repetitions "
+                 "(tasks 0-%d)" % (a.array, beyond[0], len(experiments), a.reps,
+                                   len(experiments) * a.reps - 1))
 
     rows, problems = [], []
-    for t in tasks_of(a.array):
+    for t in tasks:
         exp, seed = experiments[t // a.reps], t % a.reps + a.seed_first
         path = "%s/%s-%02d.h5" % (a.runs, exp, seed)
         r = subprocess.run([a.softevo, "info", path, "--json"], capture_output=True, text=True)
