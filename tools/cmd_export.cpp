@@ -44,8 +44,10 @@ void register_export(CLI::App& app, int& exit_code) {
       ->check(at_least(0));
   auto* best =
       cmd->add_flag("--best", a->best, "the best individual of the generation (the default)");
-  auto* id =
-      cmd->add_option("--id", a->id, "the individual with this genome id (from the last generation that holds it, unless --generation)")->check(at_least(0));
+  auto* id = cmd->add_option("--id", a->id,
+                             "the individual with this genome id (from the last generation that "
+                             "holds it, unless --generation)")
+                 ->check(at_least(0));
   best->excludes(id);
   auto* cell = cmd->add_option("--cell", a->cell,
                                "a MAP-Elites run: the elite of this cell of the generation's map "

@@ -147,7 +147,9 @@ void register_fabricate(CLI::App& app, int& exit_code) {
   cmd->add_option("--generation,-g", a->generation, "archive: generation (default: the last)")
       ->check(at_least(0));
   auto* best = cmd->add_flag("--best", a->best, "archive: the best individual (the default)");
-  auto* id = cmd->add_option("--id", a->id, "archive: the individual with this genome id (from the last generation that holds it, unless --generation)")
+  auto* id = cmd->add_option("--id", a->id,
+                             "archive: the individual with this genome id (from the last "
+                             "generation that holds it, unless --generation)")
                  ->check(at_least(0));
   best->excludes(id);
   cmd->add_option("--scale", a->scale, "printed voxel edge = voxel_size x SCALE (default 1)")

@@ -344,7 +344,11 @@ void register_render(CLI::App& app, int& exit_code) {
   add_seconds_option(*cmd, args->seconds, "simulated seconds when re-simulating");
   cmd->add_option("--generation", args->generation, "archive: generation (default the last)")
       ->check(at_least(0));
-  auto* id_opt = cmd->add_option("--id", args->id, "archive: individual id (from the last generation that holds it, unless --generation)")->check(at_least(0));
+  auto* id_opt =
+      cmd->add_option(
+             "--id", args->id,
+             "archive: individual id (from the last generation that holds it, unless --generation)")
+          ->check(at_least(0));
   cmd->add_flag("--best", args->best, "archive: the generation's best individual (default)")
       ->excludes(id_opt);
   cmd->add_option("--config", args->config_file,

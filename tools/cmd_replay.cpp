@@ -104,7 +104,10 @@ void register_replay(CLI::App& app, int& exit_code) {
   cmd->add_option("RUN", args->archive, "run archive (softevo.run/1 HDF5)")->required();
   cmd->add_option("--generation", args->generation, "generation (default: the last archived)")
       ->check(at_least(0));
-  auto* id_opt = cmd->add_option("--id", args->id, "individual id (from the last generation that holds it, unless --generation)")->check(at_least(0));
+  auto* id_opt =
+      cmd->add_option("--id", args->id,
+                      "individual id (from the last generation that holds it, unless --generation)")
+          ->check(at_least(0));
   auto* best_opt =
       cmd->add_flag("--best", args->best, "the generation's best individual (the default)");
   id_opt->excludes(best_opt);

@@ -174,7 +174,10 @@ void register_view(CLI::App& app, int& exit_code) {
                   "archive: generation (default the last)")
       ->check(at_least(0));
   auto* id_opt =
-      cmd->add_option("--id", args->request.id, "archive: individual id (from the last generation that holds it, unless --generation)")->check(at_least(0));
+      cmd->add_option(
+             "--id", args->request.id,
+             "archive: individual id (from the last generation that holds it, unless --generation)")
+          ->check(at_least(0));
   auto* best_opt =
       cmd->add_flag("--best", args->best, "archive: the generation's best individual (default)")
           ->excludes(id_opt);
