@@ -49,10 +49,7 @@ void register_export(CLI::App& app, int& exit_code) {
                              "holds it, unless --generation)")
                  ->check(at_least(0));
   best->excludes(id);
-  auto* cell = cmd->add_option("--cell", a->cell,
-                               "a MAP-Elites run: the elite of this cell of the generation's map "
-                               "(one 0-based bin per descriptor, e.g. 2,3)");
-  cell->excludes(best)->excludes(id);
+  add_cell_option(*cmd, a->cell, id, best);
   cmd->add_option("-o,--output,--out", a->out, "output robot file (.json)")->required();
   cmd->add_flag("--force", a->force, "replace an existing output file");
   cmd->add_flag("--json", a->json, "print one JSON object");

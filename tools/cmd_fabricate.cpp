@@ -31,6 +31,7 @@ struct FabricateArgs {
   std::optional<std::int64_t> generation;
   std::optional<std::int64_t> id;
   bool best = false;
+  std::string cell;  // a MAP-Elites run: the elite of this cell (tools/elite_cell.hpp)
   double scale = 1.0;
   double channel_mm = 1.5;
   std::string slices;
@@ -152,6 +153,7 @@ void register_fabricate(CLI::App& app, int& exit_code) {
                              "generation that holds it, unless --generation)")
                  ->check(at_least(0));
   best->excludes(id);
+  add_cell_option(*cmd, a->cell, id, best);
   cmd->add_option("--scale", a->scale, "printed voxel edge = voxel_size x SCALE (default 1)")
       ->check(finite_in(1e-6, 1e6));
   cmd->add_option("--channel-diameter", a->channel_mm,
@@ -171,8 +173,10 @@ void register_fabricate(CLI::App& app, int& exit_code) {
                   "read OUT.3mf back (lib3mf) and report its objects, volumes and cavities");
   cmd->add_flag("--force", a->force, "replace existing output files");
   cmd->add_flag("--json", a->json, "print one JSON object");
-  cmd->callback(
-      [&exit_code, a] { exit_code = a->check.empty() ? run_fabricate(*a) : run_check(*a); });
+  cmd->callback([&exit_code, a] {
+    if (a->check.empty()) select_cell(a->input, a->cell, a->generation, a->id);
+    exit_code = a->check.empty() ? run_fabricate(*a) : run_check(*a);
+  });
 }
 
 }  // namespace softevo::cli

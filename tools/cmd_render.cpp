@@ -61,6 +61,7 @@ struct RenderArgs {
   std::optional<std::int64_t> generation;
   std::optional<std::int64_t> id;
   bool best = false;
+  std::string cell;         // a MAP-Elites run: the elite of this cell (tools/elite_cell.hpp)
   std::string config_file;  // robot files: config to simulate with
   std::vector<std::string> overrides;
   std::string robot_file;              // traces: body for the chamber cells
@@ -349,8 +350,10 @@ void register_render(CLI::App& app, int& exit_code) {
              "--id", args->id,
              "archive: individual id (from the last generation that holds it, unless --generation)")
           ->check(at_least(0));
-  cmd->add_flag("--best", args->best, "archive: the generation's best individual (default)")
-      ->excludes(id_opt);
+  auto* best_opt =
+      cmd->add_flag("--best", args->best, "archive: the generation's best individual (default)")
+          ->excludes(id_opt);
+  add_cell_option(*cmd, args->cell, id_opt, best_opt);
   cmd->add_option("--config", args->config_file,
                   "robot file: config to simulate with (default: the robot file's run config, "
                   "else the thesis defaults)");
@@ -366,7 +369,10 @@ void register_render(CLI::App& app, int& exit_code) {
       ->type_name("[y=ROW]");
   cmd->add_flag("--force", args->force, "replace an existing output file");
   cmd->add_flag("--json", args->json, "print one JSON object describing what was written");
-  cmd->callback([&exit_code, args] { exit_code = run_render(*args); });
+  cmd->callback([&exit_code, args] {
+    select_cell(args->input, args->cell, args->generation, args->id);
+    exit_code = run_render(*args);
+  });
 }
 
 }  // namespace softevo::cli

@@ -181,11 +181,7 @@ void register_view(CLI::App& app, int& exit_code) {
   auto* best_opt =
       cmd->add_flag("--best", args->best, "archive: the generation's best individual (default)")
           ->excludes(id_opt);
-  cmd->add_option("--cell", args->cell,
-                  "archive of a MAP-Elites run: the elite of this cell of the generation's map "
-                  "(one 0-based bin per descriptor, e.g. 2,3)")
-      ->excludes(id_opt)
-      ->excludes(best_opt);
+  add_cell_option(*cmd, args->cell, id_opt, best_opt);
   cmd->add_option("--config", args->request.config_file,
                   "robot file: config to simulate with (default: the robot file's run config, "
                   "else the built-in thesis values)");
@@ -230,12 +226,7 @@ void register_view(CLI::App& app, int& exit_code) {
     if (args->request.seconds &&
         !(*args->request.seconds >= 0.0 && *args->request.seconds <= 3600.0))
       throw std::invalid_argument("view: --seconds must be within [0, 3600]");
-    if (!args->cell.empty()) {
-      const EliteRow elite =
-          elite_of_cell(io::Archive(args->input), args->cell, args->request.generation);
-      args->request.generation = elite.generation;
-      args->request.id = elite.id;
-    }
+    select_cell(args->input, args->cell, args->request.generation, args->request.id);
     exit_code = run_view(*args);
   });
 }

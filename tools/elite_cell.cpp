@@ -71,4 +71,24 @@ EliteRow elite_of_cell(const io::Archive& archive, const std::string& cell_text,
       (held.empty() ? std::string("; the map has no elite") : "; cells with an elite: " + held));
 }
 
+CLI::Option* add_cell_option(CLI::App& cmd, std::string& cell, CLI::Option* id, CLI::Option* best) {
+  return cmd
+      .add_option("--cell", cell,
+                  "archive of a MAP-Elites run: the elite of this cell of the generation's map "
+                  "(one 0-based bin per descriptor, e.g. 2,3)")
+      ->excludes(id)
+      ->excludes(best);
+}
+
+void select_cell(const std::string& path, const std::string& cell,
+                 std::optional<std::int64_t>& generation, std::optional<std::int64_t>& id) {
+  if (cell.empty()) return;
+  if (!io::is_run_archive(path))
+    throw std::invalid_argument("--cell " + cell + ": selects from a run archive; " + path +
+                                " is not one");
+  const EliteRow elite = elite_of_cell(io::Archive(path), cell, generation);
+  generation = elite.generation;
+  id = elite.id;
+}
+
 }  // namespace softevo::cli

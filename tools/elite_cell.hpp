@@ -1,10 +1,12 @@
-// `--cell i,j[,k]` of `softevo export` and `softevo view`: the elite of one cell of a MAP-Elites
-// map (docs/model.md §8.12.2), as the generation and id of its archived row.
+// `--cell i,j[,k]` of `softevo export`, `view`, `render` and `fabricate`: the elite of one cell of
+// a MAP-Elites map (docs/model.md §8.12.2), as the generation and id of its archived row.
 #pragma once
 
 #include <cstdint>
 #include <optional>
 #include <string>
+
+#include <CLI/CLI.hpp>
 
 #include "io/archive.hpp"
 
@@ -21,5 +23,13 @@ struct EliteRow {
 // run of another strategy, malformed text, a bin out of range or an empty cell.
 EliteRow elite_of_cell(const io::Archive& archive, const std::string& cell_text,
                        std::optional<std::int64_t> generation);
+
+// The --cell option of `cmd` into `cell`, excluding --id and --best (the same help everywhere).
+CLI::Option* add_cell_option(CLI::App& cmd, std::string& cell, CLI::Option* id, CLI::Option* best);
+
+// With `cell` given (not ""): `generation` and `id` become those of the elite of that cell of
+// the map after `generation` (default: the last) of the archive at `path`.
+void select_cell(const std::string& path, const std::string& cell,
+                 std::optional<std::int64_t>& generation, std::optional<std::int64_t>& id);
 
 }  // namespace softevo::cli

@@ -88,11 +88,25 @@ def test_export_and_view_pick_an_elite_by_cell(tmp_path):
     empty = next(c for c in range(25) if c not in set(np.asarray(m["cell"])))
     for cell, needle in ((f"{empty // 5},{empty % 5}", "the cell is empty"),
                          ("5,0", "give one bin per descriptor"), ("1", "give one bin")):
-        for command in ("export", "view"):
+        for command, output in (("export", ["-o", str(tmp_path / "x.json")]),
+                                ("view", ["--port", "0"]),
+                                ("render", ["-o", str(tmp_path / "x.png")]),
+                                ("fabricate", ["-o", str(tmp_path / "x.stl")])):
             args = [str(binary("softevo")), command, str(tmp_path / "m.h5"), "--cell", cell]
-            args += ["-o", str(tmp_path / "x.json")] if command == "export" else ["--port", "0"]
+            args += output
             p = subprocess.run(args, capture_output=True, text=True, timeout=60)
             assert p.returncode == 2 and needle in p.stderr and "--cell" in p.stderr, p.stderr
+    # render and fabricate take the elite of a cell as export does (its generation and id).
+    done = subprocess.run([str(binary("softevo")), "render", str(tmp_path / "m.h5"), "--cell",
+                           f"{i},{j}", "-o", str(tmp_path / "e.png")],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and (tmp_path / "e.png").stat().st_size > 1000, done.stderr
+    done = subprocess.run([str(binary("softevo")), "fabricate", str(tmp_path / "m.h5"), "--cell",
+                           f"{i},{j}", "-o", str(tmp_path / "e.stl"), "--json"],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["robot"].endswith(
+        f" gen {exported['generation']} id {exported['id']}"), done.stdout
     # The empty cell's message lists the cells that hold an elite, as bins.
     first = f"{int(np.asarray(m['bin_voxels'])[0])},{int(np.asarray(m['bin_height'])[0])}"
     p = subprocess.run([str(binary("softevo")), "export", str(tmp_path / "m.h5"), "--cell",
