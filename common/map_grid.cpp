@@ -67,12 +67,14 @@ std::vector<std::int64_t> MapGrid::coordinates(std::int64_t cell) const {
 MapGrid map_grid(const Config& config, const std::string& source) {
   const MapElitesConfig& m = config.map_elites;
   const auto fail = [&](const std::string& what) { throw ConfigError(source + ": " + what); };
+  const auto entries = [](std::size_t count) {
+    return std::to_string(count) + (count == 1 ? " entry" : " entries");
+  };
   const std::size_t n = m.descriptors.size();
-  if (n < 1 || n > 3)
-    fail("map_elites.descriptors has " + std::to_string(n) + " entries; a map has 1-3");
+  if (n < 1 || n > 3) fail("map_elites.descriptors has " + entries(n) + "; a map has 1-3");
   const auto same_length = [&](std::size_t size, const char* key) {
     if (size != n)
-      fail(std::string(key) + " has " + std::to_string(size) + " entries, map_elites.descriptors " +
+      fail(std::string(key) + " has " + entries(size) + ", map_elites.descriptors " +
            std::to_string(n) + " (one per descriptor)");
   };
   same_length(m.min.size(), "map_elites.min");

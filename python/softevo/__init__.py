@@ -251,11 +251,23 @@ def _override_list(overrides: Mapping[str, object] | Iterable[str] | None) -> li
     """{"neat.pop_size": 20} or ["neat.pop_size=20"] as "section.key=value" strings."""
     if overrides is None:
         return []
+    kinds = 'a dict {"section.key": value} or a list of "section.key=value" strings'
     if isinstance(overrides, Mapping):
+        for key in overrides:
+            if not isinstance(key, str):
+                raise TypeError(f"overrides: {kinds}; the key {key!r} "
+                                f"({type(key).__name__}) is not a string")
         return [f"{key}={_override_value(value)}" for key, value in overrides.items()]
     if isinstance(overrides, str):
         return [overrides]
-    return [str(o) for o in overrides]
+    if not isinstance(overrides, collections.abc.Iterable):
+        raise TypeError(f"overrides: {kinds}, not {type(overrides).__name__}")
+    items = list(overrides)
+    for item in items:
+        if not isinstance(item, str):
+            raise TypeError(f"overrides: {kinds}; the item {item!r} "
+                            f"({type(item).__name__}) is not a string")
+    return items
 
 
 def load_config(path: str | os.PathLike,

@@ -70,22 +70,34 @@ def _resolve(config, overrides, generations, population, seed, strategy=None):
         if strategy not in STRATEGIES:
             raise ValueError(f"strategy must be one of {', '.join(STRATEGIES)}, got {strategy!r}")
         extra.append(f"search.strategy={strategy}")
-    for key, value in (("run.generations", generations), ("neat.pop_size", population),
-                       ("run.seed", seed)):
+    shorthands = []  # (config key, argument name, value) given
+    for key, argument, value in (("run.generations", "generations", generations),
+                                 ("neat.pop_size", "population", population),
+                                 ("run.seed", "seed", seed)):
         if value is not None:
             if isinstance(value, bool) or not isinstance(value, int):
-                raise TypeError(f"{key.split('.')[1] if key != 'neat.pop_size' else 'population'}"
-                                f" must be an int, got {value!r}")
+                raise TypeError(f"{argument} must be an int, got {value!r}")
             extra.append(f"{key}={value}")
-    if isinstance(config, _softevo.Config):
-        name = config.experiment
-        if extra:
-            config = _softevo._parse_config(config.text, f"<Config {name}>", extra)
-        return config, name
-    if isinstance(config, (str, os.PathLike)):
-        path = _existing_file(config, "config file")
-        return (_softevo._load_config(path, extra),
-                os.path.splitext(os.path.basename(path))[0])
+            shorthands.append((key, argument, value))
+    try:
+        if isinstance(config, _softevo.Config):
+            name = config.experiment
+            if extra:
+                config = _softevo._parse_config(config.text, f"<Config {name}>", extra)
+            return config, name
+        if isinstance(config, (str, os.PathLike)):
+            path = _existing_file(config, "config file")
+            return (_softevo._load_config(path, extra),
+                    os.path.splitext(os.path.basename(path))[0])
+    except _softevo.ConfigError as e:
+        # A shorthand out of range is named as it was passed ("generations=-1: ..."), not as
+        # the override it becomes (overrides["run.generations"] = -1).
+        text = str(e)
+        for key, argument, value in shorthands:
+            text = text.replace(f'overrides["{key}"] = {value}', f"{argument}={value}")
+        if text == str(e):
+            raise
+        raise _softevo.ConfigError(text) from None
     raise TypeError(f"config: expected a path or a softevo.Config, got {type(config).__name__}")
 
 

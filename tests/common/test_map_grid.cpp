@@ -56,7 +56,7 @@ TEST(SearchConfig, BadDescriptorsNameTheKey) {
   expect_error(kMap + "bins = [0, 4]\n", "map_elites.bins[0]");
   expect_error(kMap + "bins = [200, 100]\n",
                "map_elites.bins = [200, 100] gives more cells than map_elites.max_cells = 10000");
-  expect_error(kMap + "bins = [4]\n", "map_elites.bins has 1 entries, map_elites.descriptors 2");
+  expect_error(kMap + "bins = [4]\n", "map_elites.bins has 1 entry, map_elites.descriptors 2");
   expect_error(kMap + "descriptors = [\"voxels\", \"height\", \"void_fraction\", \"elongation\"]\n",
                "map_elites.descriptors has 4 entries; a map has 1-3");
   expect_error("[task]\nkind = \"rotate\"\n" + kMap +

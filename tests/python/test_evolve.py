@@ -3,6 +3,7 @@
 and best robot, stops on request or Ctrl-C with a checkpoint, and resumes to the same bits."""
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -205,6 +206,17 @@ def test_bad_arguments(tiny_config, tmp_path):
         softevo.evolve(tmp_path / "absent.toml", out=tmp_path / "x.h5")
     with pytest.raises(softevo.ConfigError, match="pop_size"):
         softevo.evolve(tiny_config, out=tmp_path / "x.h5", overrides={"neat.pop_size": -3})
+    # A shorthand out of range is named as passed, not as the override it becomes.
+    for argument, value, key in (("generations", -1, "run.generations"),
+                                 ("population", 1, "neat.pop_size"), ("seed", -5, "run.seed")):
+        with pytest.raises(softevo.ConfigError,
+                           match=rf"^{argument}={value}: {key} = {value} is out of range"):
+            softevo.evolve(tiny_config, out=tmp_path / "x.h5", **{argument: value})
+    # overrides is a dict of "section.key" or a list of "section.key=value" strings.
+    for overrides, item in (([("neat.pop_size", 4)], "item ('neat.pop_size', 4) (tuple) is not"),
+                            ({3: 4}, "key 3 (int) is not a string"), (7, "strings, not int")):
+        with pytest.raises(TypeError, match=re.escape(item)):
+            softevo.evolve(tiny_config, out=tmp_path / "x.h5", overrides=overrides)
     assert not (tmp_path / "x.h5").exists()
 
 
