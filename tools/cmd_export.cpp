@@ -29,9 +29,9 @@ void register_export(CLI::App& app, int& exit_code) {
   auto* cmd = app.add_subcommand("export", "write an archived individual as a robot file");
   struct Args {
     std::string path;
-    std::int64_t generation = -1;
+    std::optional<std::int64_t> generation;
     bool best = false;
-    std::int64_t id = -1;
+    std::optional<std::int64_t> id;
     std::string cell;
     std::string out;
     bool force = false;
@@ -39,17 +39,7 @@ void register_export(CLI::App& app, int& exit_code) {
   };
   auto a = std::make_shared<Args>();
   cmd->add_option("RUN", a->path, "run archive (.h5)")->required();
-  cmd->add_option("--generation,-g", a->generation,
-                  "generation (default: the last archived generation)")
-      ->check(at_least(0));
-  auto* best =
-      cmd->add_flag("--best", a->best, "the best individual of the generation (the default)");
-  auto* id = cmd->add_option("--id", a->id,
-                             "the individual with this genome id (from the last generation that "
-                             "holds it, unless --generation)")
-                 ->check(at_least(0));
-  best->excludes(id);
-  add_cell_option(*cmd, a->cell, id, best);
+  add_individual_options(*cmd, a->generation, a->id, a->best, &a->cell, "");
   cmd->add_option("-o,--output,--out", a->out, "output robot file (.json)")->required();
   cmd->add_flag("--force", a->force, "replace an existing output file");
   cmd->add_flag("--json", a->json, "print one JSON object");
@@ -57,26 +47,24 @@ void register_export(CLI::App& app, int& exit_code) {
     const io::Archive archive(a->path);
     const std::vector<std::int64_t> gens = archive.generations();
     if (gens.empty()) throw io::ArchiveError(a->path + ": no evaluated generation");
-    std::int64_t g = a->generation >= 0 ? a->generation : gens.back();
+    std::int64_t g = a->generation.value_or(gens.back());
     if (!a->cell.empty()) {  // the elite's row: the generation that evaluated it
       const EliteRow elite = elite_of_cell(archive, a->cell, g);
       a->id = elite.id;
       g = elite.generation;
     }
-    a->best = a->id < 0;
+    a->best = !a->id;
     // --id alone: the last generation that holds it (an elite stays under its id).
-    if (!a->best && a->cell.empty())
-      g = archive.generation_of(a->id,
-                                a->generation >= 0 ? std::optional(a->generation) : std::nullopt);
+    if (!a->best && a->cell.empty()) g = archive.generation_of(*a->id, a->generation);
     const io::GenerationRecord rec = archive.generation(g);
     std::size_t row = rec.size();
     for (std::size_t i = 0; i < rec.size(); ++i) {
-      if (a->best ? (row == rec.size() || rec.fitness[i] > rec.fitness[row]) : rec.id[i] == a->id)
+      if (a->best ? (row == rec.size() || rec.fitness[i] > rec.fitness[row]) : rec.id[i] == *a->id)
         row = i;
     }
     if (row == rec.size())
       throw io::ArchiveError(a->path + ": generation " + std::to_string(g) +
-                             " has no individual with id " + std::to_string(a->id));
+                             " has no individual with id " + std::to_string(*a->id));
     const Config config = parse_config(archive.config_text(), a->path + ":/config");
     // A learning run's fitness is its learned controller's: the learned robot is exported.
     const evo::Genome genome =

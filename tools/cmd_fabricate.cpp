@@ -19,6 +19,7 @@
 #include "io/archive.hpp"
 #include "motion/robot_source.hpp"
 #include "tools/commands.hpp"
+#include "tools/elite_cell.hpp"
 
 namespace softevo::cli {
 
@@ -145,15 +146,7 @@ void register_fabricate(CLI::App& app, int& exit_code) {
                   "OUT.3mf (one object per material group) or OUT.stl (OUT-<group>.stl each)");
   cmd->add_option("--format", a->format, "3mf or stl (default: by the extension of OUT)")
       ->check(CLI::IsMember({"3mf", "stl"}));
-  cmd->add_option("--generation,-g", a->generation, "archive: generation (default: the last)")
-      ->check(at_least(0));
-  auto* best = cmd->add_flag("--best", a->best, "archive: the best individual (the default)");
-  auto* id = cmd->add_option("--id", a->id,
-                             "archive: the individual with this genome id (from the last "
-                             "generation that holds it, unless --generation)")
-                 ->check(at_least(0));
-  best->excludes(id);
-  add_cell_option(*cmd, a->cell, id, best);
+  add_individual_options(*cmd, a->generation, a->id, a->best, &a->cell, "archive: ");
   cmd->add_option("--scale", a->scale, "printed voxel edge = voxel_size x SCALE (default 1)")
       ->check(finite_in(1e-6, 1e6));
   cmd->add_option("--channel-diameter", a->channel_mm,

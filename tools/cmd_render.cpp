@@ -27,6 +27,7 @@
 #include "render/png.hpp"
 #include "render/render.hpp"
 #include "tools/commands.hpp"
+#include "tools/elite_cell.hpp"
 
 namespace softevo::cli {
 
@@ -343,17 +344,7 @@ void register_render(CLI::App& app, int& exit_code) {
                   "video or GIF frame rate (default 30; a GIF stores 1/fps in whole 1/100 s)")
       ->check(finite_in(0.01, 1000.0));
   add_seconds_option(*cmd, args->seconds, "simulated seconds when re-simulating");
-  cmd->add_option("--generation", args->generation, "archive: generation (default the last)")
-      ->check(at_least(0));
-  auto* id_opt =
-      cmd->add_option(
-             "--id", args->id,
-             "archive: individual id (from the last generation that holds it, unless --generation)")
-          ->check(at_least(0));
-  auto* best_opt =
-      cmd->add_flag("--best", args->best, "archive: the generation's best individual (default)")
-          ->excludes(id_opt);
-  add_cell_option(*cmd, args->cell, id_opt, best_opt);
+  add_individual_options(*cmd, args->generation, args->id, args->best, &args->cell, "archive: ");
   cmd->add_option("--config", args->config_file,
                   "robot file: config to simulate with (default: the robot file's run config, "
                   "else the thesis defaults)");

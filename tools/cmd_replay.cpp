@@ -11,6 +11,7 @@
 #include "common/eval_types.hpp"
 #include "common/round_trip.hpp"
 #include "tools/commands.hpp"
+#include "tools/elite_cell.hpp"
 #include "validation/replay.hpp"
 
 namespace softevo::cli {
@@ -102,15 +103,8 @@ void register_replay(CLI::App& app, int& exit_code) {
       "checks bit-identity with the archived fitness (exit 1 on mismatch)");
   auto args = std::make_shared<ReplayArgs>();
   cmd->add_option("RUN", args->archive, "run archive (softevo.run/1 HDF5)")->required();
-  cmd->add_option("--generation", args->generation, "generation (default: the last archived)")
-      ->check(at_least(0));
-  auto* id_opt =
-      cmd->add_option("--id", args->id,
-                      "individual id (from the last generation that holds it, unless --generation)")
-          ->check(at_least(0));
-  auto* best_opt =
-      cmd->add_flag("--best", args->best, "the generation's best individual (the default)");
-  id_opt->excludes(best_opt);
+  const auto [id_opt, best_opt] =
+      add_individual_options(*cmd, args->generation, args->id, args->best, nullptr, "");
   cmd->add_flag("--verify", args->verify,
                 "compare fitness, status and components bit for bit with the archive");
   cmd->add_flag("--all", args->all, "every individual of the generation (audit)")

@@ -170,18 +170,8 @@ void register_view(CLI::App& app, int& exit_code) {
       "HTTP + WebSocket server, or --export-html one self-contained page");
   auto args = std::make_shared<ViewArgs>();
   cmd->add_option("INPUT", args->input, "ROBOT.json, RUN.h5 or TRACE.h5")->required();
-  cmd->add_option("--generation", args->request.generation,
-                  "archive: generation (default the last)")
-      ->check(at_least(0));
-  auto* id_opt =
-      cmd->add_option(
-             "--id", args->request.id,
-             "archive: individual id (from the last generation that holds it, unless --generation)")
-          ->check(at_least(0));
-  auto* best_opt =
-      cmd->add_flag("--best", args->best, "archive: the generation's best individual (default)")
-          ->excludes(id_opt);
-  add_cell_option(*cmd, args->cell, id_opt, best_opt);
+  add_individual_options(*cmd, args->request.generation, args->request.id, args->best, &args->cell,
+                         "archive: ");
   cmd->add_option("--config", args->request.config_file,
                   "robot file: config to simulate with (default: the robot file's run config, "
                   "else the built-in thesis values)");

@@ -6,6 +6,7 @@
 
 #include "common/config.hpp"
 #include "common/map_grid.hpp"
+#include "tools/cli_checks.hpp"
 
 namespace softevo::cli {
 
@@ -71,13 +72,28 @@ EliteRow elite_of_cell(const io::Archive& archive, const std::string& cell_text,
       (held.empty() ? std::string("; the map has no elite") : "; cells with an elite: " + held));
 }
 
-CLI::Option* add_cell_option(CLI::App& cmd, std::string& cell, CLI::Option* id, CLI::Option* best) {
-  return cmd
-      .add_option("--cell", cell,
-                  "archive of a MAP-Elites run: the elite of this cell of the generation's map "
-                  "(one 0-based bin per descriptor, e.g. 2,3)")
-      ->excludes(id)
-      ->excludes(best);
+std::pair<CLI::Option*, CLI::Option*> add_individual_options(
+    CLI::App& cmd, std::optional<std::int64_t>& generation, std::optional<std::int64_t>& id,
+    bool& best, std::string* cell, const std::string& scope) {
+  cmd.add_option("--generation,-g", generation, scope + "generation (default: the last)")
+      ->check(at_least(0));
+  CLI::Option* id_option =
+      cmd.add_option("--id", id,
+                     scope +
+                         "the individual with this genome id (from the last generation "
+                         "that holds it, unless --generation)")
+          ->check(at_least(0));
+  CLI::Option* best_option =
+      cmd.add_flag("--best", best, scope + "the generation's best individual (the default)")
+          ->excludes(id_option);
+  if (cell != nullptr)
+    cmd.add_option("--cell", *cell,
+                   scope +
+                       "a MAP-Elites run: the elite of this cell of the generation's map "
+                       "(one 0-based bin per descriptor, e.g. 2,3)")
+        ->excludes(id_option)
+        ->excludes(best_option);
+  return {id_option, best_option};
 }
 
 void select_cell(const std::string& path, const std::string& cell,

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include <CLI/CLI.hpp>
 
@@ -24,8 +25,13 @@ struct EliteRow {
 EliteRow elite_of_cell(const io::Archive& archive, const std::string& cell_text,
                        std::optional<std::int64_t> generation);
 
-// The --cell option of `cmd` into `cell`, excluding --id and --best (the same help everywhere).
-CLI::Option* add_cell_option(CLI::App& cmd, std::string& cell, CLI::Option* id, CLI::Option* best);
+// Which archived individual a command takes: --generation (-g), --id, --best and, with `cell`,
+// --cell, with one spelling and one help text each in export, replay, render, view and
+// fabricate. `scope` starts each help ("archive: ") where the command also reads other inputs.
+// Returns the --id and --best options (for more exclusions, as replay's --all).
+std::pair<CLI::Option*, CLI::Option*> add_individual_options(
+    CLI::App& cmd, std::optional<std::int64_t>& generation, std::optional<std::int64_t>& id,
+    bool& best, std::string* cell, const std::string& scope);
 
 // With `cell` given (not ""): `generation` and `id` become those of the elite of that cell of
 // the map after `generation` (default: the last) of the archive at `path`.
