@@ -171,32 +171,50 @@ StrategyReport read_strategy_group(const h5::Group& g, hsize_t n, const std::str
   return s;
 }
 
+// Which generations an archive has, for a message about one it lacks: "the archive has
+// generations 0..9", or "the archive has no generation yet".
+std::string generations_text(const std::vector<std::int64_t>& gens) {
+  return gens.empty() ? std::string("the archive has no generation yet")
+                      : "the archive has generations " + std::to_string(gens.front()) + ".." +
+                            std::to_string(gens.back());
+}
+
 }  // namespace
 
 std::int64_t Archive::generation_of(std::int64_t id, std::optional<std::int64_t> g) const {
   return archive_errors([&] {
     const std::vector<std::int64_t> gens = generations();
-    if (gens.empty()) throw ArchiveError(path_ + ": the archive has no generation yet");
+    if (gens.empty()) throw ArchiveError(path_ + ": " + generations_text(gens));
     if (g && !std::binary_search(gens.begin(), gens.end(), *g))
-      throw ArchiveError(path_ + ": no generation " + std::to_string(*g) +
-                         "; the archive has generations " + std::to_string(gens.front()) + ".." +
-                         std::to_string(gens.back()));
+      throw ArchiveError(path_ + ": no generation " + std::to_string(*g) + "; " +
+                         generations_text(gens));
+    const auto ids_of = [&](std::int64_t gen) {
+      const std::string name = "generations/" + generation_group_name(gen);
+      require_segment(name);
+      return file_->open_group(name).open_dataset("id").read<std::int64_t>(
+          ArchiveLimits::individuals);
+    };
+    const auto holds = [&](std::int64_t gen) {
+      const std::vector<std::int64_t> ids = ids_of(gen);
+      return std::find(ids.begin(), ids.end(), id) != ids.end();
+    };
+    // The answer reads one id column, or as few as there are generations after the last one
+    // that holds `id`; every column is read only for the message when there is no answer.
+    if (g && holds(*g)) return *g;
+    if (!g)
+      for (auto gen = gens.rbegin(); gen != gens.rend(); ++gen)
+        if (holds(*gen)) return *gen;
     // Generations holding `id`, ascending, and the span of all ids for the message.
     std::vector<std::int64_t> holding;
     std::int64_t lowest = INT64_MAX, highest = INT64_MIN;
     for (const std::int64_t gen : gens) {
-      const std::string name = "generations/" + generation_group_name(gen);
-      require_segment(name);
-      const std::vector<std::int64_t> ids =
-          file_->open_group(name).open_dataset("id").read<std::int64_t>(ArchiveLimits::individuals);
+      const std::vector<std::int64_t> ids = ids_of(gen);
       if (std::find(ids.begin(), ids.end(), id) != ids.end()) holding.push_back(gen);
       for (const std::int64_t i : ids) {
         lowest = std::min(lowest, i);
         highest = std::max(highest, i);
       }
     }
-    if (g && std::binary_search(holding.begin(), holding.end(), *g)) return *g;
-    if (!g && !holding.empty()) return holding.back();
     const std::string span = lowest <= highest
                                  ? " (the archive's ids run from " + std::to_string(lowest) +
                                        " to " + std::to_string(highest) + ")"
@@ -234,10 +252,7 @@ GenerationRecord Archive::generation(std::int64_t gen) const {
       // Which ones there are, so that a mistyped --generation can be corrected (issue 39).
       const std::vector<std::int64_t> gens = generations();
       throw ArchiveError(path_ + ": no generation " + std::to_string(gen) + " (/" + name + "); " +
-                         (gens.empty()
-                              ? std::string("the archive has no generation yet")
-                              : "the archive has generations " + std::to_string(gens.front()) +
-                                    ".." + std::to_string(gens.back())));
+                         generations_text(gens));
     }
     require_segment(name);
     const h5::Group g = file_->open_group(name);
